@@ -1,0 +1,133 @@
+"""NemeSys mission codec: command dictionary, 100-bit BCH frames and frame sync. Sans-IO.
+
+Pure Python, no numpy (the batch path for Monte Carlo analysis lives in :mod:`codec.batch`
+and is imported separately), so the vehicle can import it within its memory budget.
+
+Typical use::
+
+    from codec import encode_frame, decode_frame
+    enc = encode_frame("circle", speed=0.5, depth=2, radius=5, direction="cw")
+    enc.frame.bits            # 100 '0'/'1' characters
+    dec = decode_frame(enc.frame.bits)
+    dec.command.params, dec.corrected
+"""
+
+from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
+from codec._dictionary import (
+    DICTIONARY,
+    FIELDS_PER_FRAME,
+    PATTERN_ID_BITS,
+    PATTERNS,
+    Command,
+    CommandDictionary,
+    Pattern,
+    make_command,
+)
+from codec._errors import CodecError, DecodeError, EncodeError, RejectReason
+from codec._fields import (
+    FIELD_BITS,
+    ChoiceScale,
+    Field,
+    NumericScale,
+    ParamValue,
+    Segment,
+    Snap,
+)
+from codec._frame import (
+    CODE,
+    CODEWORD_BITS,
+    CRC_BITS,
+    CRC_POLY,
+    DEFAULT_BITRATE_BPS,
+    DEFAULT_SYNC_TOLERANCE,
+    DELIMITER,
+    DELIMITER_BITS,
+    FRAME_BITS,
+    FRAME_BYTES,
+    GUARD_BITS,
+    MESSAGE_BITS,
+    PARITY_BITS,
+    PAYLOAD_BITS,
+    PREAMBLE,
+    PREAMBLE_BITS,
+    SYNC_BITS,
+    SYNC_WORD,
+    Decoded,
+    Encoded,
+    Frame,
+    Section,
+    airtime_s,
+    command_of_message,
+    crc4,
+    decode_codeword,
+    decode_frame,
+    encode_frame,
+    frame_of,
+    message_of,
+    parse_frame,
+    payload_of,
+    sections,
+)
+from codec._sync import Accepted, Event, FrameReceiver, Rejected
+
+__all__ = [
+    "CODE",
+    "CODEWORD_BITS",
+    "CRC_BITS",
+    "CRC_POLY",
+    "DEFAULT_BITRATE_BPS",
+    "DEFAULT_SYNC_TOLERANCE",
+    "DELIMITER",
+    "DELIMITER_BITS",
+    "DICTIONARY",
+    "FIELDS_PER_FRAME",
+    "FIELD_BITS",
+    "FRAME_BITS",
+    "FRAME_BYTES",
+    "GUARD_BITS",
+    "MESSAGE_BITS",
+    "PARITY_BITS",
+    "PATTERNS",
+    "PATTERN_ID_BITS",
+    "PAYLOAD_BITS",
+    "PREAMBLE",
+    "PREAMBLE_BITS",
+    "SYNC_BITS",
+    "SYNC_WORD",
+    "UNCORRECTABLE",
+    "Accepted",
+    "BCHCode",
+    "ChoiceScale",
+    "CodecError",
+    "Command",
+    "CommandDictionary",
+    "DecodeError",
+    "Decoded",
+    "EncodeError",
+    "Encoded",
+    "Event",
+    "Field",
+    "Frame",
+    "FrameReceiver",
+    "NumericScale",
+    "ParamValue",
+    "Pattern",
+    "RejectReason",
+    "Rejected",
+    "Section",
+    "Segment",
+    "Snap",
+    "TableDecoder",
+    "airtime_s",
+    "command_of_message",
+    "crc4",
+    "decode_codeword",
+    "decode_frame",
+    "encode_frame",
+    "frame_of",
+    "make_command",
+    "message_of",
+    "parse_frame",
+    "payload_of",
+    "sections",
+]

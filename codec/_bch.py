@@ -1,0 +1,226 @@
+"""Binary BCH codes over GF(2^m), shortened, systematic, MSB first.
+
+:class:`BCHCode` is the textbook code of the NemeSys paper for any ``t``: the generator is the
+least common multiple of the minimal polynomials of alpha^1 .. alpha^2t, encoding appends
+``(m(x) * x^r) mod g(x)`` to the message, and decoding computes the syndromes, runs
+Berlekamp-Massey for the error locator and finds its roots by Chien search.
+
+:class:`TableDecoder` is the fast path for codes with t <= 2 and a 16-bit (or shorter)
+remainder, such as the default (72, 56) code: the remainder of the received word modulo g(x)
+is a complete syndrome, so a dictionary from remainder to error pattern, holding the
+1 + n + n(n-1)/2 correctable patterns, replaces the algebra. Both are bounded-distance
+decoders: they correct every pattern of weight <= t and accept or reject every other pattern
+identically (the tests cross-check them and the bchlib and galois oracles).
+
+Bit conventions: codewords and messages are ``int``; bit i is the coefficient of x^i, so the
+highest-degree bit is sent first. A codeword is ``message << r | parity``, r = n - k.
+"""
+
+from __future__ import annotations
+
+from codec._gf2 import ChunkedRemainder, GF2m, degree, poly_mul
+
+#: Primitive polynomial of GF(2^8): x^8 + x^4 + x^3 + x^2 + 1 (bchlib's and galois' default).
+PRIM_POLY_GF256 = 0x11D
+
+#: ``n_corrected`` returned for a word the decoder cannot correct (galois' convention).
+UNCORRECTABLE = -1
+
+
+class BCHCode:
+    """Narrow-sense binary BCH code of designed distance 2t + 1, shortened to ``k`` bits.
+
+    Args:
+        t: number of correctable bit errors.
+        k: message length in bits (the full code is shortened by ``2^m - 1 - n``).
+        m: extension degree of the field.
+        prim_poly: primitive polynomial of GF(2^m).
+
+    Attributes:
+        n: codeword length (``k + r``).
+        k: message length.
+        t: correctable errors.
+        d: designed minimum distance ``2t + 1``.
+        r: parity bits, the degree of the generator.
+        generator_poly: g(x) (bit i = coefficient of x^i).
+    """
+
+    def __init__(self, t: int, k: int = 56, m: int = 8, prim_poly: int = PRIM_POLY_GF256) -> None:
+        if t < 1:
+            raise ValueError("t must be at least 1")
+        self.field = GF2m(m, prim_poly)
+        g = 1
+        done: set[int] = set()
+        for i in range(1, 2 * t + 1):
+            coset_rep = min(i * (1 << j) % self.field.order for j in range(m))
+            if coset_rep not in done:
+                done.add(coset_rep)
+                g = poly_mul(g, self.field.minimal_poly(i))
+        self.t = t
+        self.k = k
+        self.m = m
+        self.r = degree(g)
+        self.n = k + self.r
+        self.d = 2 * t + 1
+        self.generator_poly = g
+        if self.n > self.field.order:
+            raise ValueError(f"n = {self.n} exceeds the full length {self.field.order}")
+        self._parity = ChunkedRemainder(g, width=k, shift=self.r)
+        self._remainder = ChunkedRemainder(g, width=self.n)
+        self._msg_mask = (1 << k) - 1
+        self._cw_mask = (1 << self.n) - 1
+
+    def __repr__(self) -> str:
+        return (
+            f"<BCH code [{self.n}, {self.k}, {self.d}] over GF(2^{self.m}), t={self.t}, "
+            f"g={self.generator_poly:#x}>"
+        )
+
+    def encode(self, message: int) -> int:
+        """Systematic codeword of a ``k``-bit message: ``message << r | parity``."""
+        if not 0 <= message <= self._msg_mask:
+            raise ValueError(f"message does not fit in {self.k} bits")
+        return (message << self.r) | self._parity(message)
+
+    def remainder(self, received: int) -> int:
+        """``received(x) mod g(x)``; zero exactly for codewords."""
+        return self._remainder(received)
+
+    def syndromes(self, received: int) -> list[int]:
+        """S_1 .. S_2t, the received word evaluated at alpha^1 .. alpha^2t."""
+        return self._syndromes_of_remainder(self._remainder(received))
+
+    def _syndromes_of_remainder(self, rem: int) -> list[int]:
+        # g(alpha^j) = 0, so r(alpha^j) = (r mod g)(alpha^j): evaluate the short remainder.
+        exp, order = self.field.exp, self.field.order
+        powers = []
+        while rem:
+            low = rem & -rem
+            powers.append(low.bit_length() - 1)
+            rem ^= low
+        synd = [0] * (2 * self.t)
+        for j in range(1, 2 * self.t + 1, 2):
+            s = 0
+            for i in powers:
+                s ^= exp[(i * j) % order]
+            synd[j - 1] = s
+        for j in range(2, 2 * self.t + 1, 2):  # binary code: S_2j = S_j^2
+            synd[j - 1] = self.field.mul(synd[j // 2 - 1], synd[j // 2 - 1])
+        return synd
+
+    def error_locator(self, synd: list[int]) -> list[int]:
+        """Berlekamp-Massey: coefficients of Lambda(x), constant term first."""
+        f = self.field
+        lam = [1]
+        prev = [1]
+        length = 0
+        shift = 1
+        prev_disc = 1
+        for step, s in enumerate(synd):
+            disc = s
+            for i in range(1, length + 1):
+                if i < len(lam):
+                    disc ^= f.mul(lam[i], synd[step - i])
+            if disc == 0:
+                shift += 1
+                continue
+            coef = f.div(disc, prev_disc)
+            updated = lam + [0] * max(0, len(prev) + shift - len(lam))
+            for i, p in enumerate(prev):
+                updated[i + shift] ^= f.mul(coef, p)
+            if 2 * length <= step:
+                prev, prev_disc = lam, disc
+                length = step + 1 - length
+                shift = 1
+            else:
+                shift += 1
+            lam = updated
+        while len(lam) > 1 and lam[-1] == 0:
+            lam.pop()
+        return lam
+
+    def chien_search(self, lam: list[int]) -> list[int] | None:
+        """Error positions (bit indices, 0 = last parity bit) or ``None`` if Lambda does not
+        have exactly deg(Lambda) distinct roots inside the shortened length."""
+        f = self.field
+        terms = [(j, f.log[c]) for j, c in enumerate(lam) if c and j]
+        positions = []
+        for i in range(self.n):  # error at x^i <=> Lambda(alpha^-i) = 0
+            value = lam[0]
+            for j, log_c in terms:
+                value ^= f.exp[(log_c - i * j) % f.order]
+            if value == 0:
+                positions.append(i)
+        return positions if len(positions) == len(lam) - 1 else None
+
+    def decode(self, received: int) -> tuple[int, int]:
+        """Correct up to t errors.
+
+        Returns:
+            ``(message, n_corrected)``; ``n_corrected`` is :data:`UNCORRECTABLE` (-1) when
+            the word is beyond the decoder's reach, and ``message`` is then the uncorrected
+            message bits.
+        """
+        received &= self._cw_mask
+        rem = self._remainder(received)
+        if rem == 0:
+            return received >> self.r, 0
+        lam = self.error_locator(self._syndromes_of_remainder(rem))
+        if len(lam) - 1 > self.t:
+            return received >> self.r, UNCORRECTABLE
+        positions = self.chien_search(lam)
+        if positions is None:
+            return received >> self.r, UNCORRECTABLE
+        for i in positions:
+            received ^= 1 << i
+        return received >> self.r, len(positions)
+
+
+class TableDecoder:
+    """Syndrome-table decoder for a code with t <= 2 and r <= 16 (the default (72, 56) code).
+
+    The remainder of the received word modulo g(x) is computed from six 12-bit lookup tables
+    (the remainder is linear in the word), then one dictionary lookup gives the error pattern.
+    Memory: 6 x 4096 16-bit table entries (48 KiB) and 2628 dictionary entries.
+    """
+
+    CHUNK = 12
+
+    def __init__(self, code: BCHCode) -> None:
+        if code.t > 2 or code.r > 16:
+            raise ValueError("the table decoder handles t <= 2 and r <= 16 only")
+        if code.n > 6 * self.CHUNK:
+            raise ValueError(f"the table decoder handles n <= {6 * self.CHUNK}")
+        self.code = code
+        rem = ChunkedRemainder(code.generator_poly, width=6 * self.CHUNK, chunk=self.CHUNK)
+        self._t0, self._t1, self._t2, self._t3, self._t4, self._t5 = rem.tables
+        single = [code.remainder(1 << i) for i in range(code.n)]
+        errors: dict[int, int] = {}
+        for i, si in enumerate(single):
+            errors[si] = 1 << i
+        if code.t == 2:
+            for i in range(code.n):
+                for j in range(i + 1, code.n):
+                    errors[single[i] ^ single[j]] = (1 << i) | (1 << j)
+        expected = code.n + (code.n * (code.n - 1) // 2 if code.t == 2 else 0)
+        if 0 in errors or len(errors) != expected:
+            raise ValueError("correctable patterns do not have distinct syndromes")
+        self._errors = errors
+        self._r = code.r
+
+    def decode(self, received: int) -> tuple[int, int]:
+        """Same contract as :meth:`BCHCode.decode` (``received`` must fit in n bits)."""
+        syn = (
+            self._t0[received & 0xFFF]
+            ^ self._t1[(received >> 12) & 0xFFF]
+            ^ self._t2[(received >> 24) & 0xFFF]
+            ^ self._t3[(received >> 36) & 0xFFF]
+            ^ self._t4[(received >> 48) & 0xFFF]
+            ^ self._t5[received >> 60]
+        )
+        if not syn:
+            return received >> self._r, 0
+        error = self._errors.get(syn)
+        if error is None:
+            return received >> self._r, UNCORRECTABLE
+        return (received ^ error) >> self._r, error.bit_count()

@@ -1,0 +1,322 @@
+"""The command dictionary: pattern IDs and their fields, declared as data.
+
+Table ``tab:command_dict`` of the NemeSys paper gives eight patterns (IDs 0-7) with up to six
+parameters j1..j6; we add ``surface`` (ID 15), the safety abort. IDs 8-14 are free: adding a
+pattern is adding a :class:`Pattern` to :data:`PATTERNS`, nothing else.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+
+from codec._errors import EncodeError
+from codec._fields import (
+    COUNT,
+    DEPTH,
+    DIRECTION,
+    DURATION,
+    HEADING,
+    LENGTH,
+    SPEED,
+    Field,
+    ParamValue,
+    Snap,
+)
+
+#: Width of the pattern ID (bits) and the number of parameter fields in every frame.
+PATTERN_ID_BITS = 4
+FIELDS_PER_FRAME = 6
+
+
+@dataclass(frozen=True, repr=False)
+class Pattern:
+    """One entry of the command dictionary.
+
+    Attributes:
+        id: the 4-bit pattern ID.
+        name: identifier used by the API and the CLI (``box_orbit``).
+        label: the paper's wording (``box orbit``).
+        fields: parameters j1.. in wire order; fields after the last are sent as zero.
+        doc: what the vehicle does.
+    """
+
+    id: int
+    name: str
+    label: str
+    fields: tuple[Field, ...]
+    doc: str
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.id < 1 << PATTERN_ID_BITS:
+            raise ValueError(f"pattern ID {self.id} does not fit in {PATTERN_ID_BITS} bits")
+        if len(self.fields) > FIELDS_PER_FRAME:
+            raise ValueError(f"{self.name}: more than {FIELDS_PER_FRAME} fields")
+        names = [f.name for f in self.fields]
+        if len(set(names)) != len(names):
+            raise ValueError(f"{self.name}: duplicate field names {names}")
+
+    def __repr__(self) -> str:
+        return f"<Pattern {self.id} {self.name}>"
+
+    def field(self, name: str) -> Field:
+        for f in self.fields:
+            if f.name == name:
+                return f
+        raise KeyError(name)
+
+    @property
+    def defaults(self) -> dict[str, ParamValue]:
+        return {f.name: f.default for f in self.fields}
+
+
+# Shared field declarations (each pattern lists them in its own j1..j6 order).
+SPEED_F = Field("speed", "cruise speed", "m/s", SPEED, 0.5, "Speed through the water.")
+DEPTH_F = Field("depth", "target depth", "m", DEPTH, 5.0, "Depth held by the pattern (z, down).")
+DIR_F = Field("direction", "direction", "", DIRECTION, "cw", "Turning sense seen from above.")
+
+
+def _radius(doc: str, default: float = 5.0, name: str = "radius", label: str = "radius") -> Field:
+    return Field(name, label, "m", LENGTH, default, doc)
+
+
+def _count(name: str, label: str, default: int, doc: str) -> Field:
+    return Field(name, label, "", COUNT, default, doc)
+
+
+PATTERNS: tuple[Pattern, ...] = (
+    Pattern(
+        0,
+        "straight",
+        "straight",
+        (
+            SPEED_F,
+            DEPTH_F,
+            Field("duration", "duration", "s", DURATION, 60.0, "How long to run the line."),
+            Field("heading", "heading", "deg", HEADING, 0.0, "Course over the line, from north."),
+        ),
+        "Run a straight line on a heading for a time.",
+    ),
+    Pattern(
+        1,
+        "square",
+        "square",
+        (
+            SPEED_F,
+            DEPTH_F,
+            Field("side_span", "side span", "m", LENGTH, 10.0, "Length of each side."),
+            DIR_F,
+        ),
+        "Fly a closed square at constant depth.",
+    ),
+    Pattern(
+        2,
+        "lawnmower",
+        "lawnmower",
+        (
+            SPEED_F,
+            DEPTH_F,
+            Field("sweep_length", "sweep length", "m", LENGTH, 20.0, "Length of each lane."),
+            Field("lane_spacing", "lane spacing", "m", LENGTH, 5.0, "Distance between lanes."),
+            _count("laps", "# laps", 2, "Number of out-and-back lane pairs."),
+        ),
+        "Survey a box in parallel lanes (grid search).",
+    ),
+    Pattern(
+        3,
+        "circle",
+        "circle",
+        (SPEED_F, DEPTH_F, _radius("Radius of the circle."), DIR_F),
+        "Circle at constant depth.",
+    ),
+    Pattern(
+        4,
+        "spiral",
+        "spiral",
+        (
+            SPEED_F,
+            DEPTH_F,
+            _radius("Radius at the start.", 2.0, "initial_radius", "initial radius"),
+            _radius("Radius at the end.", 10.0, "final_radius", "final radius"),
+            _count("loops", "# loops", 3, "Number of loops from initial to final radius."),
+            DIR_F,
+        ),
+        "Planar spiral between two radii at constant depth.",
+    ),
+    Pattern(
+        5,
+        "helix",
+        "helix",
+        (
+            SPEED_F,
+            Field("start_depth", "start depth", "m", DEPTH, 2.0, "Depth at the first turn."),
+            Field("end_depth", "end depth", "m", DEPTH, 8.0, "Depth after the last turn."),
+            _radius("Radius of the helix."),
+            _count("turns", "turns", 3, "Number of full turns between the two depths."),
+            DIR_F,
+        ),
+        "Helix around a vertical axis between two depths (3D inspection).",
+    ),
+    Pattern(
+        6,
+        "hover",
+        "hover",
+        (
+            Field("duration", "duration", "s", DURATION, 60.0, "How long to hold station."),
+            DEPTH_F,
+            Field("heading", "heading", "deg", HEADING, 0.0, "Heading held, from north."),
+        ),
+        "Hold position, depth and heading.",
+    ),
+    Pattern(
+        7,
+        "box_orbit",
+        "box orbit",
+        (
+            SPEED_F,
+            DEPTH_F,
+            _radius("Half-width of the square orbit around the anchor."),
+            DIR_F,
+            _count("laps", "# laps", 2, "Number of orbits."),
+        ),
+        "Orbit a point on a square path.",
+    ),
+    Pattern(
+        15,
+        "surface",
+        "surface",
+        (),
+        "Abort: stop the pattern and rise to the surface.",
+    ),
+)
+
+
+class CommandDictionary(Mapping[str, Pattern]):
+    """Patterns by name, with lookup by ID; validated once at construction."""
+
+    def __init__(self, patterns: tuple[Pattern, ...]) -> None:
+        by_id: dict[int, Pattern] = {}
+        by_name: dict[str, Pattern] = {}
+        for p in patterns:
+            if p.id in by_id:
+                raise ValueError(f"pattern ID {p.id} used by {by_id[p.id].name} and {p.name}")
+            if p.name in by_name:
+                raise ValueError(f"pattern name {p.name} used twice")
+            by_id[p.id] = p
+            by_name[p.name] = p
+        self._by_id = by_id
+        self._by_name = by_name
+
+    def __getitem__(self, name: str) -> Pattern:
+        return self._by_name[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._by_name)
+
+    def __len__(self) -> int:
+        return len(self._by_name)
+
+    def by_id(self, pattern_id: int) -> Pattern | None:
+        return self._by_id.get(pattern_id)
+
+    def lookup(self, pattern: str | int) -> Pattern:
+        """Pattern by name (``box_orbit``, ``box-orbit``, ``Box Orbit``) or ID.
+
+        Raises:
+            EncodeError: no such pattern; the message lists the known ones.
+        """
+        found: Pattern | None
+        if isinstance(pattern, bool):
+            found = None
+        elif isinstance(pattern, int):
+            found = self._by_id.get(pattern)
+        elif isinstance(pattern, str):
+            key = pattern.strip().lower().replace("-", "_").replace(" ", "_")
+            found = self._by_name.get(key)
+            if found is None and key.isdigit():
+                found = self._by_id.get(int(key))
+        else:
+            found = None
+        if found is None:
+            known = ", ".join(f"{p.name} ({p.id})" for p in self._by_id.values())
+            raise EncodeError(f"unknown pattern {pattern!r}: known patterns are {known}")
+        return found
+
+
+#: The dictionary the vehicle and the console share.
+DICTIONARY = CommandDictionary(PATTERNS)
+
+
+@dataclass(frozen=True, slots=True, repr=False)
+class Command:
+    """A pattern with one valid code per field: exactly what goes on the wire.
+
+    Build it with :func:`make_command` (from physical values) or :meth:`from_codes`.
+    """
+
+    pattern: Pattern
+    codes: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        if len(self.codes) != len(self.pattern.fields):
+            raise ValueError(
+                f"{self.pattern.name} takes {len(self.pattern.fields)} codes, got {len(self.codes)}"
+            )
+        for f, code in zip(self.pattern.fields, self.codes, strict=True):
+            if not f.scale.is_valid_code(code):
+                raise ValueError(f"code {code} is not valid for {f.name}")
+
+    def __repr__(self) -> str:
+        return f"<Command {self.describe()}>"
+
+    @property
+    def params(self) -> dict[str, ParamValue]:
+        """Field name -> the value the vehicle will use (SI units)."""
+        return {f.name: f.value_of(c) for f, c in zip(self.pattern.fields, self.codes, strict=True)}
+
+    def describe(self) -> str:
+        """``square speed=0.5 m/s depth=2 m side_span=10 m direction=cw``."""
+        parts = [self.pattern.name]
+        for f, value in zip(self.pattern.fields, self.params.values(), strict=True):
+            text = value if isinstance(value, str) else format(value, ".10g")
+            parts.append(f"{f.name}={text}{' ' + f.unit if f.unit else ''}")
+        return " ".join(parts)
+
+
+def make_command(
+    pattern: str | int | Pattern,
+    params: Mapping[str, ParamValue],
+    dictionary: CommandDictionary = DICTIONARY,
+) -> tuple[Command, tuple[Snap, ...]]:
+    """Snap requested values to the dictionary and build the command.
+
+    Every field of the pattern must be given, and nothing else.
+
+    Returns:
+        The command and one :class:`Snap` per field, in field order (``snap.changed`` tells
+        which values moved).
+
+    Raises:
+        EncodeError: unknown pattern, missing or unknown parameter, or a value out of range;
+            the message names the parameter, its unit and what is allowed.
+    """
+    spec = pattern if isinstance(pattern, Pattern) else dictionary.lookup(pattern)
+    allowed = [f.name for f in spec.fields]
+    unknown = [name for name in params if name not in allowed]
+    if unknown:
+        takes = ", ".join(allowed) if allowed else "no parameters"
+        raise EncodeError(
+            f"{spec.name} has no parameter {', '.join(map(repr, unknown))}: it takes {takes}",
+            field=unknown[0],
+        )
+    missing = [f for f in spec.fields if f.name not in params]
+    if missing:
+        need = ", ".join(f"{f.name} ({f.scale.range_text(f.unit)})" for f in missing)
+        raise EncodeError(f"{spec.name} needs {need}", field=missing[0].name)
+    codes: list[int] = []
+    snaps: list[Snap] = []
+    for f in spec.fields:
+        code, sent = f.snap(params[f.name])
+        codes.append(code)
+        snaps.append(Snap(f.name, f.unit, params[f.name], sent))
+    return Command(spec, tuple(codes)), tuple(snaps)

@@ -1,0 +1,63 @@
+"""The codec's small error hierarchy.
+
+``EncodeError``: the caller asked for something the dictionary cannot express (unknown pattern,
+missing or unknown parameter, value outside a field's range). ``DecodeError``: the received bits
+are not a frame the vehicle may execute; ``reason`` says which check failed. Nothing else leaves
+the codec's public decode functions, whatever they are given.
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+
+class CodecError(Exception):
+    """Base class of every error the codec raises on purpose."""
+
+
+class EncodeError(CodecError, ValueError):
+    """A command cannot be encoded as requested.
+
+    Attributes:
+        field: the parameter at fault, or ``None`` when the pattern itself is at fault.
+    """
+
+    def __init__(self, message: str, *, field: str | None = None) -> None:
+        super().__init__(message)
+        self.field = field
+
+
+class RejectReason(StrEnum):
+    """Why a received frame was rejected. The value is the machine-readable code."""
+
+    #: Not a frame at all: wrong length, characters other than 0/1 (or hex), wrong type.
+    MALFORMED = "malformed"
+    #: The preamble + delimiter differ from the sync word in more bits than tolerated.
+    NO_SYNC = "no_sync"
+    #: More bit errors in the codeword than the BCH code can correct.
+    UNCORRECTABLE = "uncorrectable"
+    #: The BCH decoder produced a codeword whose CRC-4 does not match: a miscorrection.
+    CRC_MISMATCH = "crc_mismatch"
+    #: The pattern ID is not in the command dictionary.
+    UNKNOWN_PATTERN = "unknown_pattern"
+    #: A field holds a code that its quantization does not define.
+    FIELD_OUT_OF_RANGE = "field_out_of_range"
+    #: A field the pattern does not use is not zero.
+    UNUSED_FIELD_SET = "unused_field_set"
+
+
+class DecodeError(CodecError):
+    """A received frame was rejected; it must never be executed.
+
+    Attributes:
+        reason: which check failed.
+        field: the field at fault for the field checks, else ``None``.
+    """
+
+    def __init__(self, reason: RejectReason, message: str, *, field: str | None = None) -> None:
+        super().__init__(message)
+        self.reason = reason
+        self.field = field
+
+    def __repr__(self) -> str:
+        return f"DecodeError({self.reason.value}: {self})"

@@ -1,0 +1,156 @@
+"""Polynomials over GF(2) and the finite field GF(2^m), as Python ints.
+
+Convention used everywhere in the codec: a polynomial is an ``int`` whose bit ``i`` is the
+coefficient of ``x^i``. A bit string sent MSB first is therefore the polynomial whose
+highest-degree coefficient goes on the wire first (the convention of bchlib and galois).
+"""
+
+from __future__ import annotations
+
+from array import array
+from collections.abc import Sequence
+
+
+def degree(poly: int) -> int:
+    """Degree of a non-zero polynomial (``-1`` for the zero polynomial)."""
+    return poly.bit_length() - 1
+
+
+def poly_mod(value: int, modulus: int) -> int:
+    """Remainder of ``value(x)`` divided by ``modulus(x)`` (bit-serial; for tables and tests)."""
+    deg_m = degree(modulus)
+    while value and degree(value) >= deg_m:
+        value ^= modulus << (degree(value) - deg_m)
+    return value
+
+
+def poly_mul(a: int, b: int) -> int:
+    """Carry-less product of two polynomials."""
+    result = 0
+    while b:
+        if b & 1:
+            result ^= a
+        a <<= 1
+        b >>= 1
+    return result
+
+
+class ChunkedRemainder:
+    """``(value(x) * x^shift) mod modulus(x)`` for ``width``-bit values, by table lookups.
+
+    The remainder is linear in ``value``, so the value is cut into ``chunk``-bit pieces and
+    the remainders of the pieces (one table per piece position) are XORed. This is the
+    byte-table CRC idea, used here for the CRC-4, the BCH parity and the BCH syndrome.
+    """
+
+    __slots__ = ("_chunk", "_mask", "_shifts", "_tables", "modulus", "shift", "width")
+
+    def __init__(self, modulus: int, width: int, shift: int = 0, chunk: int = 8) -> None:
+        self.modulus = modulus
+        self.width = width
+        self.shift = shift
+        self._chunk = chunk
+        self._mask = (1 << chunk) - 1
+        self._shifts: tuple[int, ...] = tuple(range(0, width, chunk))
+        deg_m = degree(modulus)
+        typecode = "H" if deg_m <= 16 else "L"
+        self._tables: tuple[array[int], ...] = tuple(
+            _linear_table([poly_mod(1 << (s + i + shift), modulus) for i in range(chunk)], typecode)
+            for s in self._shifts
+        )
+
+    @property
+    def tables(self) -> Sequence[array[int]]:
+        """One table per chunk, lowest-order chunk first."""
+        return self._tables
+
+    def __call__(self, value: int) -> int:
+        mask = self._mask
+        rem = 0
+        for s, table in zip(self._shifts, self._tables, strict=True):
+            rem ^= table[(value >> s) & mask]
+        return rem
+
+
+def _linear_table(unit_images: Sequence[int], typecode: str) -> array[int]:
+    """Table of a GF(2)-linear map on ``len(unit_images)``-bit inputs, from the unit vectors."""
+    size = 1 << len(unit_images)
+    table = array(typecode, bytes(size * array(typecode).itemsize))
+    for v in range(1, size):
+        low = v & -v
+        table[v] = table[v ^ low] ^ unit_images[low.bit_length() - 1]
+    return table
+
+
+class GF2m:
+    """GF(2^m) with exp/log tables, built from a primitive polynomial.
+
+    Attributes:
+        m: extension degree.
+        prim_poly: primitive polynomial (bit ``i`` = coefficient of ``x^i``).
+        order: ``2^m - 1``, the multiplicative order of the primitive element alpha.
+    """
+
+    __slots__ = ("exp", "log", "m", "order", "prim_poly")
+
+    def __init__(self, m: int, prim_poly: int) -> None:
+        if degree(prim_poly) != m:
+            raise ValueError(f"primitive polynomial {prim_poly:#x} does not have degree {m}")
+        self.m = m
+        self.prim_poly = prim_poly
+        self.order = (1 << m) - 1
+        exp = [0] * (2 * self.order)
+        log = [0] * (1 << m)
+        x = 1
+        for i in range(self.order):
+            if x == 1 and i:
+                raise ValueError(f"{prim_poly:#x} is not primitive: alpha has order {i}")
+            exp[i] = x
+            log[x] = i
+            x <<= 1
+            if x >> m:
+                x ^= prim_poly
+        if x != 1:
+            raise ValueError(f"{prim_poly:#x} is not primitive")
+        exp[self.order :] = exp[: self.order]
+        self.exp = exp
+        self.log = log
+
+    def mul(self, a: int, b: int) -> int:
+        if a == 0 or b == 0:
+            return 0
+        return self.exp[self.log[a] + self.log[b]]
+
+    def div(self, a: int, b: int) -> int:
+        if b == 0:
+            raise ZeroDivisionError("division by zero in GF(2^m)")
+        if a == 0:
+            return 0
+        return self.exp[(self.log[a] - self.log[b]) % self.order]
+
+    def pow_alpha(self, e: int) -> int:
+        """alpha^e for any integer e."""
+        return self.exp[e % self.order]
+
+    def minimal_poly(self, e: int) -> int:
+        """Minimal polynomial over GF(2) of alpha^e (product over its cyclotomic coset)."""
+        coset = []
+        c = e % self.order
+        while c not in coset:
+            coset.append(c)
+            c = (c * 2) % self.order
+        # Multiply (x - alpha^c) over the coset with coefficients in GF(2^m).
+        coeffs = [1]  # coeffs[i] = coefficient of x^i
+        for c in coset:
+            root = self.exp[c]
+            nxt = [0] * (len(coeffs) + 1)
+            for i, a in enumerate(coeffs):
+                nxt[i + 1] ^= a
+                nxt[i] ^= self.mul(a, root)
+            coeffs = nxt
+        poly = 0
+        for i, a in enumerate(coeffs):
+            if a not in (0, 1):
+                raise ArithmeticError("minimal polynomial has a coefficient outside GF(2)")
+            poly |= a << i
+        return poly

@@ -1,0 +1,153 @@
+"""Incremental frame synchronisation: a sans-IO receiver for a continuous bit stream.
+
+Feed it bits or bytes in any chunking; it returns :class:`Accepted` and :class:`Rejected`
+events. It looks for the 24-bit sync word (preamble + delimiter) at every bit offset,
+tolerating up to ``sync_tolerance`` wrong bits. Because the preamble alternates, a copy of the
+sync word shifted by an even number of bits also comes close; the delimiter keeps every such
+shift at least 4 bits away, and the receiver, on a candidate, takes the best-matching offset
+among the next :data:`_LOOKAHEAD` bits before decoding. A candidate that then fails to decode
+is reported as :class:`Rejected` and the search resumes one bit later, so a false sync in
+noise never swallows the real frame that follows it. After an accepted frame the search
+resumes right after its codeword (the guard bits are not needed).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from codec._dictionary import DICTIONARY, CommandDictionary
+from codec._errors import DecodeError, RejectReason
+from codec._frame import (
+    CODEWORD_BITS,
+    DEFAULT_SYNC_TOLERANCE,
+    SYNC_BITS,
+    SYNC_WORD,
+    Decoded,
+    decode_codeword,
+)
+
+_SYNC_MASK = (1 << SYNC_BITS) - 1
+_CODEWORD_MASK = (1 << CODEWORD_BITS) - 1
+#: Header + codeword: what must have arrived before a candidate can be decoded.
+_NEEDED = SYNC_BITS + CODEWORD_BITS
+#: Offsets after a candidate also compared, to pick the best-aligned one (the delimiter span).
+_LOOKAHEAD = 8
+
+
+@dataclass(frozen=True, slots=True)
+class Accepted:
+    """A frame decoded and checked; ``offset`` is the stream index of its first bit."""
+
+    offset: int
+    decoded: Decoded
+
+
+@dataclass(frozen=True, slots=True)
+class Rejected:
+    """A sync word was found at ``offset`` but the frame failed a check (``error.reason``)."""
+
+    offset: int
+    error: DecodeError
+
+
+Event = Accepted | Rejected
+
+
+class FrameReceiver:
+    """Finds, decodes and checks frames in a bit stream. No I/O, no threads.
+
+    Args:
+        sync_tolerance: wrong bits allowed in preamble + delimiter (0..4).
+        dictionary: the command dictionary frames are checked against.
+    """
+
+    def __init__(
+        self,
+        *,
+        sync_tolerance: int = DEFAULT_SYNC_TOLERANCE,
+        dictionary: CommandDictionary = DICTIONARY,
+    ) -> None:
+        if not 0 <= sync_tolerance <= 4:
+            raise ValueError("sync_tolerance must be 0..4 (the delimiter guarantees 4)")
+        self.sync_tolerance = sync_tolerance
+        self.dictionary = dictionary
+        self._buf = 0  # unconsumed bits, oldest in the most significant place
+        self._len = 0  # number of bits in _buf
+        self._base = 0  # stream offset of the oldest bit in _buf
+
+    @property
+    def position(self) -> int:
+        """Total bits fed so far."""
+        return self._base + self._len
+
+    @property
+    def pending_bits(self) -> int:
+        """Bits held back while waiting for the rest of a possible frame."""
+        return self._len
+
+    def feed_bits(self, bits: str | Iterable[int]) -> list[Event]:
+        """Feed bits: a string of '0'/'1' or an iterable of 0/1 ints, first bit first.
+
+        Raises:
+            DecodeError: ``MALFORMED`` if any element is not a bit; nothing is consumed.
+        """
+        if isinstance(bits, str):
+            text = bits.replace(" ", "").replace("_", "")
+            if text.strip("01"):
+                raise DecodeError(RejectReason.MALFORMED, "bits must be '0' or '1'")
+            return self._feed(int(text, 2) if text else 0, len(text))
+        value = 0
+        count = 0
+        for bit in bits:
+            if type(bit) is not int or bit not in (0, 1):
+                raise DecodeError(RejectReason.MALFORMED, f"bits must be 0 or 1, got {bit!r}")
+            value = (value << 1) | bit
+            count += 1
+        return self._feed(value, count)
+
+    def feed_bytes(self, data: bytes | bytearray | memoryview) -> list[Event]:
+        """Feed bytes, each sent MSB first."""
+        raw = bytes(data)
+        return self._feed(int.from_bytes(raw, "big"), 8 * len(raw))
+
+    def _feed(self, value: int, count: int) -> list[Event]:
+        self._buf = (self._buf << count) | value
+        self._len += count
+        return self._scan()
+
+    def _scan(self) -> list[Event]:
+        events: list[Event] = []
+        buf, length, tol = self._buf, self._len, self.sync_tolerance
+        pos = 0
+        # Every decision below depends only on bits pos .. pos + 32 and the codeword, all of
+        # which have arrived, so any chunking of the stream gives the same events.
+        while length - pos >= SYNC_BITS + _LOOKAHEAD:
+            shift = length - SYNC_BITS
+            dist = (((buf >> (shift - pos)) & _SYNC_MASK) ^ SYNC_WORD).bit_count()
+            if dist > tol:
+                pos += 1
+                continue
+            best, best_dist = pos, dist
+            for cand in range(pos + 1, pos + _LOOKAHEAD + 1):
+                d = (((buf >> (shift - cand)) & _SYNC_MASK) ^ SYNC_WORD).bit_count()
+                if d < best_dist:
+                    best, best_dist = cand, d
+            if length - best < _NEEDED:
+                break  # wait for the rest of the codeword
+            pos = best
+            codeword = (buf >> (length - pos - _NEEDED)) & _CODEWORD_MASK
+            try:
+                decoded = decode_codeword(codeword, self.dictionary)
+            except DecodeError as err:
+                events.append(Rejected(self._base + pos, err))
+                pos += 1
+                continue
+            events.append(
+                Accepted(self._base + pos, Decoded(decoded.command, decoded.corrected, best_dist))
+            )
+            pos += _NEEDED
+        self._base += pos
+        self._len = length - pos
+        self._buf = buf & ((1 << self._len) - 1)
+        return events
