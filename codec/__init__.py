@@ -13,6 +13,7 @@ Typical use::
 """
 
 from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
+from codec._describe import describe_dictionary, describe_pattern, markdown_tables
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
@@ -123,9 +124,12 @@ __all__ = [
     "crc4",
     "decode_codeword",
     "decode_frame",
+    "describe_dictionary",
+    "describe_pattern",
     "encode_frame",
     "frame_of",
     "make_command",
+    "markdown_tables",
     "message_of",
     "parse_frame",
     "payload_of",

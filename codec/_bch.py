@@ -18,6 +18,9 @@ highest-degree bit is sent first. A codeword is ``message << r | parity``, r = n
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
+from types import MappingProxyType
+
 from codec._gf2 import ChunkedRemainder, GF2m, degree, poly_mul
 
 #: Primitive polynomial of GF(2^8): x^8 + x^4 + x^3 + x^2 + 1 (bchlib's and galois' default).
@@ -78,7 +81,7 @@ class BCHCode:
 
     def encode(self, message: int) -> int:
         """Systematic codeword of a ``k``-bit message: ``message << r | parity``."""
-        if not 0 <= message <= self._msg_mask:
+        if message >> self.k or message < 0:
             raise ValueError(f"message does not fit in {self.k} bits")
         return (message << self.r) | self._parity(message)
 
@@ -177,23 +180,19 @@ class BCHCode:
 
 
 class TableDecoder:
-    """Syndrome-table decoder for a code with t <= 2 and r <= 16 (the default (72, 56) code).
+    """Syndrome-table decoder for a (72, 56)-shaped code with t <= 2 (the default code).
 
-    The remainder of the received word modulo g(x) is computed from six 12-bit lookup tables
-    (the remainder is linear in the word), then one dictionary lookup gives the error pattern.
-    Memory: 6 x 4096 16-bit table entries (48 KiB) and 2628 dictionary entries.
+    The remainder of the received word modulo g(x) is a complete syndrome for these codes. It
+    is the XOR of nine byte-table lookups (one per codeword byte), and one dictionary lookup
+    then gives the error pattern. Memory: 9 x 256 table entries and 2628 dictionary entries.
     """
 
-    CHUNK = 12
+    N_BYTES = 9
 
     def __init__(self, code: BCHCode) -> None:
-        if code.t > 2 or code.r > 16:
-            raise ValueError("the table decoder handles t <= 2 and r <= 16 only")
-        if code.n > 6 * self.CHUNK:
-            raise ValueError(f"the table decoder handles n <= {6 * self.CHUNK}")
+        if code.t > 2 or code.r > 16 or code.n != 8 * self.N_BYTES:
+            raise ValueError("the table decoder handles 72-bit codes with t <= 2, r <= 16")
         self.code = code
-        rem = ChunkedRemainder(code.generator_poly, width=6 * self.CHUNK, chunk=self.CHUNK)
-        self._t0, self._t1, self._t2, self._t3, self._t4, self._t5 = rem.tables
         single = [code.remainder(1 << i) for i in range(code.n)]
         errors: dict[int, int] = {}
         for i, si in enumerate(single):
@@ -206,21 +205,77 @@ class TableDecoder:
         if 0 in errors or len(errors) != expected:
             raise ValueError("correctable patterns do not have distinct syndromes")
         self._errors = errors
-        self._r = code.r
-
-    def decode(self, received: int) -> tuple[int, int]:
-        """Same contract as :meth:`BCHCode.decode` (``received`` must fit in n bits)."""
-        syn = (
-            self._t0[received & 0xFFF]
-            ^ self._t1[(received >> 12) & 0xFFF]
-            ^ self._t2[(received >> 24) & 0xFFF]
-            ^ self._t3[(received >> 36) & 0xFFF]
-            ^ self._t4[(received >> 48) & 0xFFF]
-            ^ self._t5[received >> 60]
+        tables = ChunkedRemainder(code.generator_poly, width=code.n).tables
+        self.decode: Callable[[int], tuple[int, int]] = _make_int_decoder(tables, errors, code.r)
+        self.decode_bytes: Callable[[bytes], tuple[int, int]] = _make_bytes_decoder(
+            tables, errors, code.r
         )
+        self.decode.__doc__ = """Same contract as :meth:`BCHCode.decode`."""
+        self.decode_bytes.__doc__ = """Decode the codeword as 9 bytes, MSB first (the wire form).
+
+        Same result as :meth:`decode` of ``int.from_bytes(codeword, "big")``."""
+
+    @property
+    def error_patterns(self) -> Mapping[int, int]:
+        """Non-zero syndrome (remainder mod g) -> the correctable error pattern it stands for."""
+        return MappingProxyType(self._errors)
+
+
+# The decoders are closures with their tables bound as default arguments: local-variable
+# access is the cheapest lookup CPython has, and this is the per-frame hot path.
+
+
+def _make_int_decoder(
+    tables: Sequence[list[int]], errors: dict[int, int], r: int
+) -> Callable[[int], tuple[int, int]]:
+    t0, t1, t2, t3, t4, t5, t6, t7, t8 = tables
+
+    def decode(
+        received: int,
+        *,
+        t0: list[int] = t0, t1: list[int] = t1, t2: list[int] = t2,
+        t3: list[int] = t3, t4: list[int] = t4, t5: list[int] = t5,
+        t6: list[int] = t6, t7: list[int] = t7, t8: list[int] = t8,
+        get: Callable[[int], int | None] = errors.get, r: int = r,
+    ) -> tuple[int, int]:  # fmt: skip
+        b = received.to_bytes(9, "big")
+        syn = (
+            t0[b[0]] ^ t1[b[1]] ^ t2[b[2]] ^ t3[b[3]] ^ t4[b[4]]
+            ^ t5[b[5]] ^ t6[b[6]] ^ t7[b[7]] ^ t8[b[8]]
+        )  # fmt: skip
         if not syn:
-            return received >> self._r, 0
-        error = self._errors.get(syn)
+            return received >> r, 0
+        error = get(syn)
         if error is None:
-            return received >> self._r, UNCORRECTABLE
-        return (received ^ error) >> self._r, error.bit_count()
+            return received >> r, UNCORRECTABLE
+        return (received ^ error) >> r, error.bit_count()
+
+    return decode
+
+
+def _make_bytes_decoder(
+    tables: Sequence[list[int]], errors: dict[int, int], r: int
+) -> Callable[[bytes], tuple[int, int]]:
+    t0, t1, t2, t3, t4, t5, t6, t7, t8 = tables
+
+    def decode_bytes(
+        b: bytes,
+        *,
+        t0: list[int] = t0, t1: list[int] = t1, t2: list[int] = t2,
+        t3: list[int] = t3, t4: list[int] = t4, t5: list[int] = t5,
+        t6: list[int] = t6, t7: list[int] = t7, t8: list[int] = t8,
+        get: Callable[[int], int | None] = errors.get, r: int = r,
+    ) -> tuple[int, int]:  # fmt: skip
+        syn = (
+            t0[b[0]] ^ t1[b[1]] ^ t2[b[2]] ^ t3[b[3]] ^ t4[b[4]]
+            ^ t5[b[5]] ^ t6[b[6]] ^ t7[b[7]] ^ t8[b[8]]
+        )  # fmt: skip
+        received = int.from_bytes(b, "big")
+        if not syn:
+            return received >> r, 0
+        error = get(syn)
+        if error is None:
+            return received >> r, UNCORRECTABLE
+        return (received ^ error) >> r, error.bit_count()
+
+    return decode_bytes

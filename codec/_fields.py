@@ -53,6 +53,7 @@ class NumericScale:
     """
 
     segments: tuple[Segment, ...]
+    name: str = ""
     first_code: int = 0
     integer: bool = False
     period: float | None = None
@@ -103,6 +104,24 @@ class NumericScale:
             (b - a) / (a + b) for a, b in zip(self.values, self.values[1:], strict=False) if b > lo
         )
 
+    def error_text(self, unit: str) -> str:
+        """The worst-case snapping error, for listings: ``<= 2.44 % from 0.5 m``."""
+        u = f" {unit}" if unit else ""
+        if self.integer:
+            return "exact (whole numbers)"
+        rel = self.max_rel_error
+        if rel is not None:
+            return (
+                f"<= {rel * 100:.2f} % from {fmt(self.rel_error_from or 0)}{u} "
+                f"(<= {fmt(self.max_abs_error)}{u} absolute)"
+            )
+        halves = [fmt(float(Decimal(seg.step) / 2)) for seg in self.segments]
+        if len(halves) == 1:
+            return f"<= {halves[0]}{u}"
+        bounds = [fmt(float(seg.start)) for seg in self.segments[1:]]
+        parts = [f"<= {h}{u} below {b}{u}" for h, b in zip(halves, bounds, strict=False)]
+        return ", ".join([*parts, f"<= {halves[-1]}{u} above"])
+
     def is_valid_code(self, code: int) -> bool:
         return self.first_code <= code < self.first_code + len(self.values)
 
@@ -114,6 +133,11 @@ class NumericScale:
     def range_text(self, unit: str) -> str:
         """``0 to 107.5 m``."""
         u = f" {unit}" if unit else ""
+        if self.period is not None:
+            return (
+                f"{fmt(self.minimum)} to {fmt(self.maximum)}{u} "
+                f"(inputs -{fmt(self.period)} to {fmt(self.period)} are wrapped)"
+            )
         return f"{fmt(self.minimum)} to {fmt(self.maximum)}{u}"
 
     def describe(self) -> str:
@@ -191,6 +215,7 @@ class ChoiceScale:
     """An enumerated field: code ``i`` stands for ``choices[i]`` (case-insensitive input)."""
 
     choices: tuple[str, ...]
+    name: str = ""
 
     def __post_init__(self) -> None:
         if not 0 < len(self.choices) <= FIELD_CODES:
@@ -209,8 +234,11 @@ class ChoiceScale:
     def range_text(self, unit: str) -> str:
         return " or ".join(self.choices)
 
+    def error_text(self, unit: str) -> str:
+        return "exact"
+
     def describe(self) -> str:
-        return " | ".join(f"{c} ({i})" for i, c in enumerate(self.choices))
+        return ", ".join(f"{c} = {i}" for i, c in enumerate(self.choices))
 
     def snap(self, name: str, unit: str, requested: ParamValue) -> tuple[int, str]:
         text = requested.strip().lower() if isinstance(requested, str) else None
@@ -288,11 +316,11 @@ class Snap:
 # --- The shared quantizations ---------------------------------------------------------------
 
 #: Cruise speed: 0 to 2.55 m/s in 0.01 m/s steps.
-SPEED = NumericScale((Segment("0", "0.01", 256),))
+SPEED = NumericScale((Segment("0", "0.01", 256),), name="speed")
 
 #: Depth: 0.1 m steps to 4.9 m (tank, springs), then 0.5 m steps to 107.5 m (the vehicle's
 #: 100 m rating plus margin; the planner enforces the rating). 0.5 m and 1.0 m are exact.
-DEPTH = NumericScale((Segment("0", "0.1", 50), Segment("5", "0.5", 206)))
+DEPTH = NumericScale((Segment("0", "0.1", 50), Segment("5", "0.5", 206)), name="depth")
 
 #: Lengths, radii and spacings: 1-2.5-5 steps, each segment starting where its half-step is
 #: 2.5 % of the value, so the relative error stays below 2.5 % from 0.5 m to 750 m and every
@@ -309,21 +337,22 @@ LENGTH = NumericScale(
         Segment("100", "5", 20),
         Segment("200", "10", 56),
     ),
+    name="length",
     rel_error_from=0.5,
 )
 
 #: Heading: the full circle in 1.5 deg steps (every multiple of 7.5 deg is exact); codes
 #: 240-255 are invalid and rejected on decode.
-HEADING = NumericScale((Segment("0", "1.5", 240),), period=360.0)
+HEADING = NumericScale((Segment("0", "1.5", 240),), name="heading", period=360.0)
 
 #: Duration: 1 s steps to 59 s, 5 s steps to 595 s, 30 s steps to 3210 s (53.5 min).
 DURATION = NumericScale(
     (Segment("0", "1", 60), Segment("60", "5", 108), Segment("600", "30", 88)),
-    rel_error_from=10.0,
+    name="duration",
 )
 
 #: Counts (laps, loops, turns): the code is the count, 1-255; code 0 is invalid.
-COUNT = NumericScale((Segment("1", "1", 255),), first_code=1, integer=True)
+COUNT = NumericScale((Segment("1", "1", 255),), name="count", first_code=1, integer=True)
 
 #: Turning direction seen from above (NED, looking down +z): cw = north -> east -> south.
-DIRECTION = ChoiceScale(("cw", "ccw"))
+DIRECTION = ChoiceScale(("cw", "ccw"), name="direction")

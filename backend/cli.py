@@ -1,0 +1,279 @@
+"""The ``nemesys`` command line.
+
+Subcommands are dispatched through :data:`COMMANDS`; each handler returns the exit status.
+Exit status: 0 success, 1 a frame was rejected, 2 bad input (usage, out-of-range value).
+Errors are one line on standard error, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Callable, Sequence
+from typing import Any, TextIO
+
+from codec import (
+    DEFAULT_BITRATE_BPS,
+    DICTIONARY,
+    CodecError,
+    Decoded,
+    DecodeError,
+    EncodeError,
+    airtime_s,
+    decode_frame,
+    describe_dictionary,
+    encode_frame,
+    markdown_tables,
+    sections,
+)
+from codec._fields import fmt
+
+EXIT_OK = 0
+EXIT_REJECTED = 1
+EXIT_USAGE = 2
+
+
+class UsageError(Exception):
+    """Bad command-line input; reported on stderr with exit status 2."""
+
+
+# --- patterns -----------------------------------------------------------------------------
+
+
+def cmd_patterns(args: argparse.Namespace, out: TextIO) -> int:
+    if args.json:
+        json.dump(describe_dictionary(), out, indent=1)
+        out.write("\n")
+        return EXIT_OK
+    if args.markdown:
+        out.write(markdown_tables() + "\n")
+        return EXIT_OK
+    for p in describe_dictionary():
+        out.write(f"{p['id']:>2} {p['name']:<10} {p['doc']}\n")
+        if not p["fields"]:
+            out.write("     (no parameters)\n")
+        for f in p["fields"]:
+            out.write(
+                f"     j{f['j']} {f['name']:<14} {f['unit'] or '-':<4} {f['range']:<16} "
+                f"steps {f['steps']};  error {f['error']}\n"
+            )
+    return EXIT_OK
+
+
+# --- encode -------------------------------------------------------------------------------
+
+
+def _parse_assignments(items: Sequence[str]) -> dict[str, str]:
+    params: dict[str, str] = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise UsageError(f"parameters are name=value, got {item!r}")
+        if name in params:
+            raise UsageError(f"parameter {name!r} given twice")
+        params[name] = value
+    return params
+
+
+def _positive_rate(text: str) -> float:
+    try:
+        rate = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"bit rate must be a number in b/s, got {text!r}"
+        ) from None
+    if not rate > 0 or rate == float("inf"):
+        raise argparse.ArgumentTypeError(f"bit rate must be a positive number in b/s, got {text}")
+    return rate
+
+
+def _number_or_text(value: object) -> object:
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
+
+
+def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
+    enc = encode_frame(args.pattern, _parse_assignments(args.params))
+    cmd, frame = enc.command, enc.frame
+    airtime_ms = airtime_s(args.bitrate) * 1e3
+    bits = frame.bits
+    secs = sections(cmd.pattern)
+    if args.json:
+        doc: dict[str, Any] = {
+            "pattern": cmd.pattern.name,
+            "pattern_id": cmd.pattern.id,
+            "params": cmd.params,
+            "requested": {s.field: _number_or_text(s.requested) for s in enc.snaps},
+            "snapped": [str(s) for s in enc.snaps if s.changed],
+            "units": {f.name: f.unit for f in cmd.pattern.fields},
+            "bits": bits,
+            "hex": frame.hex,
+            "sections": [
+                {"name": s.name, "start": s.start, "bits": bits[s.start : s.start + s.length]}
+                for s in secs
+            ],
+            "bitrate_bps": args.bitrate,
+            "airtime_ms": airtime_ms,
+        }
+        json.dump(doc, out)
+        out.write("\n")
+        return EXIT_OK
+    out.write(f"{cmd.pattern.name} (ID {cmd.pattern.id})\n")
+    for snap in enc.snaps:
+        sent = snap.sent if isinstance(snap.sent, str) else fmt(snap.sent)
+        unit = f" {snap.unit}" if snap.unit else ""
+        note = f"   (requested {snap.requested}{unit})" if snap.changed else ""
+        out.write(f"  {snap.field:<15} {sent}{unit}{note}\n")
+    out.write(f"bits     {frame.grouped(cmd.pattern)}\n")
+    for s in secs:
+        out.write(f"  {s.name:<15} bits {s.start:>2}-{s.start + s.length - 1:<3} ")
+        out.write(f"{bits[s.start : s.start + s.length]}\n")
+    out.write(f"hex      {frame.hex}\n")
+    out.write(f"airtime  {airtime_ms:.3f} ms at {fmt(args.bitrate)} b/s\n")
+    return EXIT_OK
+
+
+# --- decode -------------------------------------------------------------------------------
+
+
+def _decoded_json(dec: Decoded) -> dict[str, Any]:
+    return {
+        "pattern": dec.command.pattern.name,
+        "pattern_id": dec.command.pattern.id,
+        "params": dec.command.params,
+        "corrected": dec.corrected,
+        "sync_errors": dec.sync_errors,
+    }
+
+
+def _decoded_text(dec: Decoded) -> str:
+    bits = "bit" if dec.corrected == 1 else "bits"
+    return f"{dec.command.describe()}  (corrected {dec.corrected} {bits})"
+
+
+def _decode_one(text: str, as_json: bool, out: TextIO, line: int | None) -> bool:
+    where = {"line": line} if line is not None else {}
+    try:
+        dec = decode_frame(text)
+    except DecodeError as err:
+        if as_json:
+            out.write(json.dumps({**where, "error": str(err), "reason": err.reason.value}) + "\n")
+        elif line is not None:
+            out.write(f"line {line}: rejected: {err}\n")
+        else:
+            raise
+        return False
+    if as_json:
+        out.write(json.dumps({**where, **_decoded_json(dec)}) + "\n")
+    else:
+        prefix = f"line {line}: " if line is not None else ""
+        out.write(prefix + _decoded_text(dec) + "\n")
+    return True
+
+
+def cmd_decode(args: argparse.Namespace, out: TextIO) -> int:
+    if args.frame == ["-"]:
+        all_ok = True
+        for number, raw in enumerate(sys.stdin, start=1):
+            text = raw.strip()
+            if not text or text.startswith("#"):
+                continue
+            all_ok &= _decode_one(text, args.json, out, number)
+        return EXIT_OK if all_ok else EXIT_REJECTED
+    return EXIT_OK if _decode_one("".join(args.frame), args.json, out, None) else EXIT_REJECTED
+
+
+# --- bench --------------------------------------------------------------------------------
+
+
+def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
+    if args.target == "codec":
+        from bench import codec as bench_codec
+
+        return bench_codec.run(out, quick=args.quick)
+    raise UsageError(f"unknown benchmark {args.target!r}")
+
+
+# --- dispatch -----------------------------------------------------------------------------
+
+Handler = Callable[[argparse.Namespace, TextIO], int]
+COMMANDS: dict[str, Handler] = {
+    "patterns": cmd_patterns,
+    "encode": cmd_encode,
+    "decode": cmd_decode,
+    "bench": cmd_bench,
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="nemesys", description="NemeSys mission codec and console tools."
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("patterns", help="list the command dictionary")
+    fmt_group = p.add_mutually_exclusive_group()
+    fmt_group.add_argument("--json", action="store_true", help="machine-readable output")
+    fmt_group.add_argument("--markdown", action="store_true", help="Markdown tables")
+
+    p = sub.add_parser(
+        "encode",
+        help="encode a command into a 100-bit frame",
+        description="Encode PATTERN with every parameter as name=value (units: m, m/s, s, deg).",
+    )
+    p.add_argument("pattern", metavar="PATTERN", help=", ".join(DICTIONARY))
+    p.add_argument("params", nargs="*", metavar="name=value")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument(
+        "--bitrate",
+        type=_positive_rate,
+        default=float(DEFAULT_BITRATE_BPS),
+        metavar="BPS",
+        help=f"link bit rate for the airtime (default {DEFAULT_BITRATE_BPS})",
+    )
+
+    p = sub.add_parser(
+        "decode",
+        help="decode a received frame",
+        description="Decode a frame given as 100 binary digits or 25 hex digits (spaces "
+        "between groups are ignored), or '-' to read one frame per line from standard input.",
+    )
+    p.add_argument("frame", nargs="+", metavar="BITS", help="the frame, or - for stdin")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+    p = sub.add_parser("bench", help="run a benchmark and print its table")
+    p.add_argument("target", choices=["codec"], help="what to benchmark")
+    p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
+    """Entry point of the ``nemesys`` console script; returns the exit status."""
+    stream = out if out is not None else sys.stdout
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse already printed its message
+        return int(exc.code) if isinstance(exc.code, int) else EXIT_USAGE
+    try:
+        return COMMANDS[args.command](args, stream)
+    except DecodeError as err:
+        print(f"nemesys {args.command}: rejected: {err}", file=sys.stderr)
+        return EXIT_REJECTED
+    except (EncodeError, UsageError, CodecError) as err:
+        print(f"nemesys {args.command}: {err}", file=sys.stderr)
+        return EXIT_USAGE
+    except BrokenPipeError:  # e.g. piped into head
+        return EXIT_OK
+    except KeyboardInterrupt:
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,42 @@
+"""Timing helpers shared by the benchmarks: interleaved rounds, medians."""
+
+from __future__ import annotations
+
+import statistics
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+
+def per_call_us(func: Callable[[Any], object], inputs: Sequence[Any], loops: int) -> float:
+    """Mean microseconds per call of ``func`` over ``loops`` passes through ``inputs``."""
+    start = time.perf_counter_ns()
+    for _ in range(loops):
+        for x in inputs:
+            func(x)
+    elapsed = time.perf_counter_ns() - start
+    return elapsed / 1e3 / (loops * len(inputs))
+
+
+def interleaved_medians(
+    cases: Mapping[str, tuple[Callable[[Any], object], Sequence[Any], int]], rounds: int
+) -> dict[str, float]:
+    """Median per-call microseconds of every case, measuring all cases once per round.
+
+    Interleaving rounds spreads a noisy neighbour's bursts over every case alike, so
+    ratios taken within one run stay meaningful on a shared machine.
+    """
+    samples: dict[str, list[float]] = {name: [] for name in cases}
+    for _ in range(rounds):
+        for name, (func, inputs, loops) in cases.items():
+            samples[name].append(per_call_us(func, inputs, loops))
+    return {name: statistics.median(values) for name, values in samples.items()}
+
+
+def table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
+    """A plain-text table with columns padded to width."""
+    widths = [max(len(h), *(len(r[i]) for r in rows)) for i, h in enumerate(headers)]
+    lines = ["  ".join(h.ljust(w) for h, w in zip(headers, widths, strict=True))]
+    lines.append("  ".join("-" * w for w in widths))
+    lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
+    return "\n".join(lines)

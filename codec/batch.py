@@ -1,0 +1,272 @@
+"""Vectorised encode, error injection and decode of many frames at once (numpy).
+
+For Monte Carlo analysis of the link (decode success and wrong-command rates against bit
+error rate). It runs the same framing and checks as :func:`codec.decode_frame`, in the same
+order (sync, BCH, CRC, pattern ID, fields), on arrays of frames; the tests cross-check it
+frame by frame against the scalar path. Not imported by :mod:`codec` itself, so the onboard
+path stays numpy-free.
+
+Frames are ``(N, 13)`` ``uint8`` arrays: 100 bits MSB first plus 4 zero pad bits, exactly
+:meth:`codec.Frame.to_bytes`. Messages are ``uint64`` arrays holding the 56-bit BCH message.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+from codec._dictionary import DICTIONARY, FIELDS_PER_FRAME, CommandDictionary
+from codec._errors import RejectReason
+from codec._fields import FIELD_BITS, FIELD_CODES
+from codec._frame import (
+    CODE,
+    CRC_POLY,
+    DEFAULT_SYNC_TOLERANCE,
+    FRAME_BITS,
+    FRAME_BYTES,
+    PAYLOAD_BITS,
+    SYNC_WORD,
+    _fast,
+)
+from codec._gf2 import ChunkedRemainder
+
+U8 = NDArray[np.uint8]
+U64 = NDArray[np.uint64]
+
+#: Status codes of :class:`BatchResult`: 0 is accepted, then the reasons in check order.
+STATUS_NAMES: Final = (
+    "accepted",
+    RejectReason.NO_SYNC.value,
+    RejectReason.UNCORRECTABLE.value,
+    RejectReason.CRC_MISMATCH.value,
+    RejectReason.UNKNOWN_PATTERN.value,
+    RejectReason.FIELD_OUT_OF_RANGE.value,
+    RejectReason.UNUSED_FIELD_SET.value,
+)
+ACCEPTED: Final = 0
+_NO_SYNC, _UNCORRECTABLE, _CRC, _UNKNOWN, _RANGE, _UNUSED = range(1, 7)
+
+_CW_FIRST_BYTE: Final = 3  # bits 24..95 are bytes 3..11
+_CW_BYTES: Final = 9
+_SYNC_BYTES: Final = np.array(
+    [(SYNC_WORD >> 16) & 0xFF, (SYNC_WORD >> 8) & 0xFF, SYNC_WORD & 0xFF], dtype=np.uint8
+)
+_POPCOUNT8: Final = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
+
+
+def _tables(rem: ChunkedRemainder) -> NDArray[np.uint16]:
+    """The remainder's byte tables, lowest-order byte first."""
+    return np.array(rem.tables[::-1], dtype=np.uint16)
+
+
+# Byte tables, lowest-order byte first: parity of the message, syndrome of the codeword,
+# CRC-4 of the payload.
+_PARITY_T: Final = _tables(ChunkedRemainder(CODE.generator_poly, width=CODE.k, shift=CODE.r))
+_SYNDROME_T: Final = _tables(ChunkedRemainder(CODE.generator_poly, width=CODE.n))
+_CRC_T: Final = _tables(ChunkedRemainder(CRC_POLY, width=PAYLOAD_BITS, shift=4))
+
+
+def _error_tables() -> tuple[U8, NDArray[np.int8]]:
+    size = 1 << CODE.r
+    patterns = np.zeros((size, _CW_BYTES), dtype=np.uint8)
+    counts = np.full(size, -1, dtype=np.int8)
+    counts[0] = 0
+    for syndrome, error in _fast.error_patterns.items():
+        patterns[syndrome] = np.frombuffer(error.to_bytes(_CW_BYTES, "big"), dtype=np.uint8)
+        counts[syndrome] = error.bit_count()
+    return patterns, counts
+
+
+_ERR_PATTERN, _ERR_COUNT = _error_tables()
+
+
+_VALIDITY_CACHE: dict[int, tuple[CommandDictionary, tuple[NDArray[np.bool_], ...]]] = {}
+
+
+def _validity(dictionary: CommandDictionary) -> tuple[NDArray[np.bool_], ...]:
+    """Per pattern ID: known?; per (ID, field, code): valid?; per (ID, field): used? (cached)."""
+    cached = _VALIDITY_CACHE.get(id(dictionary))
+    if cached is not None and cached[0] is dictionary:
+        return cached[1]
+    known = np.zeros(16, dtype=np.bool_)
+    valid = np.zeros((16, FIELDS_PER_FRAME, FIELD_CODES), dtype=np.bool_)
+    used = np.zeros((16, FIELDS_PER_FRAME), dtype=np.bool_)
+    for pattern in dictionary.values():
+        known[pattern.id] = True
+        for j in range(FIELDS_PER_FRAME):
+            if j < len(pattern.fields):
+                used[pattern.id, j] = True
+                scale = pattern.fields[j].scale
+                valid[pattern.id, j] = [scale.is_valid_code(c) for c in range(FIELD_CODES)]
+            else:
+                valid[pattern.id, j, 0] = True
+    _VALIDITY_CACHE[id(dictionary)] = (dictionary, (known, valid, used))
+    return known, valid, used
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Per-frame outcome of :func:`decode_frames`.
+
+    Attributes:
+        status: 0 accepted, else the index of the reason in :data:`STATUS_NAMES`.
+        corrected: codeword bits corrected (-1 where uncorrectable or not synced).
+        sync_errors: preamble + delimiter bits that differ from the sync word.
+        message: the corrected 56-bit message (meaningful where status is 0).
+    """
+
+    status: NDArray[np.uint8]
+    corrected: NDArray[np.int8]
+    sync_errors: NDArray[np.uint8]
+    message: U64
+
+    @property
+    def accepted(self) -> NDArray[np.bool_]:
+        accepted: NDArray[np.bool_] = self.status == ACCEPTED
+        return accepted
+
+
+def _bytes_to_u64(columns: U8) -> U64:
+    out = np.zeros(columns.shape[0], dtype=np.uint64)
+    for j in range(columns.shape[1]):
+        out = (out << np.uint64(8)) | columns[:, j].astype(np.uint64)
+    return out
+
+
+def _remainder(tables: NDArray[np.uint16], value: U64) -> NDArray[np.uint16]:
+    out = np.zeros(value.shape[0], dtype=np.uint16)
+    for j in range(tables.shape[0]):
+        out ^= tables[j][((value >> np.uint64(8 * j)) & np.uint64(0xFF)).astype(np.intp)]
+    return out
+
+
+def crc4_batch(payloads: U64) -> NDArray[np.uint16]:
+    """CRC-4 of each 52-bit payload."""
+    return _remainder(_CRC_T, payloads)
+
+
+def encode_messages(messages: U64) -> U8:
+    """Frames (N, 13) for 56-bit messages (payload + CRC-4 already in place)."""
+    messages = np.asarray(messages, dtype=np.uint64)
+    n = messages.shape[0]
+    parity = _remainder(_PARITY_T, messages)
+    frames = np.zeros((n, FRAME_BYTES), dtype=np.uint8)
+    frames[:, :3] = _SYNC_BYTES
+    frames[:, 3:10] = messages.astype(">u8").view(np.uint8).reshape(n, 8)[:, 1:]
+    frames[:, 10] = (parity >> 8).astype(np.uint8)
+    frames[:, 11] = (parity & 0xFF).astype(np.uint8)
+    return frames
+
+
+def messages_of_payloads(payloads: U64) -> U64:
+    """56-bit messages (payload << 4 | CRC-4) for 52-bit payloads."""
+    payloads = np.asarray(payloads, dtype=np.uint64)
+    return (payloads << np.uint64(4)) | crc4_batch(payloads).astype(np.uint64)
+
+
+def inject_errors(frames: U8, ber: float, rng: np.random.Generator) -> NDArray[np.int64]:
+    """Flip each of the 100 bits of every frame independently with probability ``ber``.
+
+    Changes ``frames`` in place and returns the number of bits flipped per frame. Error
+    positions are drawn sparsely (an exact uniform subset of the Binomial-distributed
+    number of errors), so low BERs cost little.
+    """
+    if not 0.0 <= ber <= 1.0:
+        raise ValueError(f"ber must be in [0, 1], got {ber}")
+    n = frames.shape[0]
+    total_bits = n * FRAME_BITS
+    k = int(rng.binomial(total_bits, ber))
+    positions = _distinct_positions(total_bits, k, rng)
+    _flip(frames, positions)
+    return np.bincount(positions // FRAME_BITS, minlength=n)
+
+
+def inject_weight(
+    frames: U8, weight: int, rng: np.random.Generator, first_bit: int = 0, end_bit: int = FRAME_BITS
+) -> None:
+    """Flip exactly ``weight`` distinct bits in ``[first_bit, end_bit)`` of every frame."""
+    span = end_bit - first_bit
+    if not 0 <= weight <= span:
+        raise ValueError(f"weight must be 0..{span}")
+    n = frames.shape[0]
+    if weight == 0:
+        return
+    # argsort of random keys gives a uniform random permutation per row; keep the first k.
+    keys = rng.random((n, span), dtype=np.float32)
+    chosen = np.argpartition(keys, weight - 1, axis=1)[:, :weight] + first_bit
+    rows = np.repeat(np.arange(n, dtype=np.int64), weight)
+    _flip(frames, rows * FRAME_BITS + chosen.reshape(-1))
+
+
+def _distinct_positions(total: int, k: int, rng: np.random.Generator) -> NDArray[np.int64]:
+    positions = np.unique(rng.integers(0, total, size=k, dtype=np.int64))
+    while positions.shape[0] < k:  # replace duplicates: the result is a uniform k-subset
+        extra = rng.integers(0, total, size=k - positions.shape[0], dtype=np.int64)
+        positions = np.unique(np.concatenate([positions, extra]))
+    return positions
+
+
+def _flip(frames: U8, positions: NDArray[np.int64]) -> None:
+    rows = positions // FRAME_BITS
+    bits = positions % FRAME_BITS
+    flat_byte = rows * FRAME_BYTES + bits // 8
+    masks = (0x80 >> (bits % 8)).astype(np.float64)
+    # Positions are distinct, so per byte the sum of the masks is their OR.
+    flips = np.bincount(flat_byte, weights=masks, minlength=frames.size).astype(np.uint8)
+    frames ^= flips.reshape(frames.shape)
+
+
+def decode_frames(
+    frames: U8,
+    *,
+    sync_tolerance: int = DEFAULT_SYNC_TOLERANCE,
+    dictionary: CommandDictionary = DICTIONARY,
+) -> BatchResult:
+    """Decode aligned frames with the checks of :func:`codec.decode_frame`."""
+    frames = np.asarray(frames, dtype=np.uint8)
+    if frames.ndim != 2 or frames.shape[1] != FRAME_BYTES:
+        raise ValueError(f"frames must have shape (N, {FRAME_BYTES})")
+    known, valid, used = _validity(dictionary)
+    sync_errors = (
+        _POPCOUNT8[frames[:, 0] ^ _SYNC_BYTES[0]]
+        + _POPCOUNT8[frames[:, 1] ^ _SYNC_BYTES[1]]
+        + _POPCOUNT8[frames[:, 2] ^ _SYNC_BYTES[2]]
+    )
+    codeword = frames[:, _CW_FIRST_BYTE : _CW_FIRST_BYTE + _CW_BYTES]
+    syndrome = np.zeros(frames.shape[0], dtype=np.uint16)
+    for j in range(_CW_BYTES):  # table j holds the j-th lowest byte's remainder
+        syndrome ^= _SYNDROME_T[j][codeword[:, _CW_BYTES - 1 - j]]
+    corrected = _ERR_COUNT[syndrome]
+    fixed = codeword ^ _ERR_PATTERN[syndrome]
+    message = _bytes_to_u64(fixed[:, :7])
+    payload = message >> np.uint64(4)
+    crc_ok = crc4_batch(payload) == (message & np.uint64(0xF))
+    pattern_id = (payload >> np.uint64(FIELDS_PER_FRAME * FIELD_BITS)).astype(np.intp)
+    range_ok = np.ones(frames.shape[0], dtype=np.bool_)
+    unused_ok = np.ones(frames.shape[0], dtype=np.bool_)
+    for j in range(FIELDS_PER_FRAME):
+        shift = np.uint64((FIELDS_PER_FRAME - 1 - j) * FIELD_BITS)
+        code = ((payload >> shift) & np.uint64(0xFF)).astype(np.intp)
+        ok = valid[pattern_id, j, code]
+        is_used = used[pattern_id, j]
+        # The scalar path reports the first failing field; a range failure in an earlier
+        # field wins over an unused-field failure in a later one.
+        unused_ok &= ok | is_used | ~range_ok
+        range_ok &= ok | ~is_used
+    status = np.select(
+        [
+            sync_errors > sync_tolerance,
+            corrected < 0,
+            ~crc_ok,
+            ~known[pattern_id],
+            ~range_ok,
+            ~unused_ok,
+        ],
+        [_NO_SYNC, _UNCORRECTABLE, _CRC, _UNKNOWN, _RANGE, _UNUSED],
+        default=ACCEPTED,
+    ).astype(np.uint8)
+    corrected = np.where(status == _NO_SYNC, np.int8(-1), corrected).astype(np.int8)
+    return BatchResult(status, corrected, sync_errors, message)
