@@ -61,3 +61,12 @@ class DecodeError(CodecError):
 
     def __repr__(self) -> str:
         return f"DecodeError({self.reason.value}: {self})"
+
+    # Value equality, so that receiver event lists can be compared (tests, replays).
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, DecodeError):
+            return NotImplemented
+        return (self.reason, str(self), self.field) == (other.reason, str(other), other.field)
+
+    def __hash__(self) -> int:
+        return hash((self.reason, str(self), self.field))

@@ -157,20 +157,21 @@ class NumericScale:
         Raises:
             EncodeError: not a finite number, out of range, or not whole for a count.
         """
-        number = _as_number(name, unit, requested)
+        u = f" {unit}" if unit else ""
+        number = _as_number(name, unit, requested, self.range_text(unit))
         if self.period is not None:
             if not -self.period <= number <= self.period:
                 raise EncodeError(
-                    f"{name} = {fmt(number)} {unit} is out of range: allowed "
-                    f"{fmt(-self.period)} to {fmt(self.period)} {unit} (wrapped into "
+                    f"{name} = {fmt(number)}{u} is out of range: allowed "
+                    f"{fmt(-self.period)} to {fmt(self.period)}{u} (wrapped into "
                     f"{self.describe()})",
                     field=name,
                 )
             number %= self.period
         elif not self.minimum <= number <= self.maximum:
             raise EncodeError(
-                f"{name} = {fmt(number)} {unit} is out of range: allowed "
-                f"{fmt(self.minimum)} to {fmt(self.maximum)} {unit} ({self.describe()})",
+                f"{name} = {fmt(number)}{u} is out of range: allowed "
+                f"{fmt(self.minimum)} to {fmt(self.maximum)}{u} ({self.describe()})",
                 field=name,
             )
         if self.integer and number != int(number):
@@ -189,24 +190,22 @@ class NumericScale:
         return self.first_code + i, self.value_of(self.first_code + i)
 
 
-def _as_number(name: str, unit: str, requested: ParamValue) -> float:
-    if isinstance(requested, bool):
-        raise EncodeError(f"{name} must be a number in {unit}, got {requested!r}", field=name)
-    if isinstance(requested, str):
-        try:
-            number = float(requested.strip())
-        except ValueError:
-            raise EncodeError(
-                f"{name} must be a number in {unit}, got {requested!r}", field=name
-            ) from None
-    elif isinstance(requested, int | float):
-        number = float(requested)
-    else:
-        raise EncodeError(
-            f"{name} must be a number in {unit}, got {type(requested).__name__}", field=name
-        )
+def _as_number(name: str, unit: str, requested: ParamValue, allowed: str) -> float:
+    """``requested`` as a finite float, or an :class:`EncodeError` saying what is allowed."""
+    unit_text = f" in {unit}" if unit else ""
+    problem = f"{name} must be a number{unit_text} ({allowed})"
+    if isinstance(requested, bool) or not isinstance(requested, str | int | float):
+        raise EncodeError(f"{problem}, got {type(requested).__name__}", field=name)
+    try:
+        number = float(requested.strip() if isinstance(requested, str) else requested)
+    except ValueError:
+        raise EncodeError(f"{problem}, got {requested!r}", field=name) from None
+    except OverflowError:  # an int too large for a float is far out of every range
+        raise EncodeError(f"{name} is out of range: allowed {allowed}", field=name) from None
     if not math.isfinite(number):
-        raise EncodeError(f"{name} must be a finite number, got {requested!r}", field=name)
+        raise EncodeError(
+            f"{name} must be a finite number ({allowed}), got {requested!r}", field=name
+        )
     return number
 
 

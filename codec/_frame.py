@@ -150,7 +150,11 @@ def airtime_s(bitrate_bps: float = DEFAULT_BITRATE_BPS, bits: int = FRAME_BITS) 
 
 @dataclass(frozen=True, slots=True)
 class Encoded:
-    """An encoded command: what was asked, what is sent, and the frame."""
+    """An encoded command: what was asked, what is sent, and the frame.
+
+    ``snaps`` has one entry per field when the command was built from requested values, and
+    is empty when a ready :class:`Command` was encoded (nothing was requested or snapped).
+    """
 
     command: Command
     snaps: tuple[Snap, ...]
@@ -212,10 +216,7 @@ def encode_frame(
         if params or kwargs:
             raise TypeError("a Command already holds its parameters")
         command = pattern
-        snaps = tuple(
-            Snap(f.name, f.unit, v, v)
-            for f, v in zip(command.pattern.fields, command.params.values(), strict=True)
-        )
+        snaps: tuple[Snap, ...] = ()
     else:
         command, snaps = make_command(pattern, {**(params or {}), **kwargs}, dictionary)
     return Encoded(command, snaps, frame_of(command))
@@ -262,8 +263,12 @@ def command_of_message(message: int, dictionary: CommandDictionary = DICTIONARY)
     return Command(pattern, tuple(codes))
 
 
-def decode_codeword(codeword: int, dictionary: CommandDictionary = DICTIONARY) -> Decoded:
+def decode_codeword(
+    codeword: int, dictionary: CommandDictionary = DICTIONARY, sync_errors: int = 0
+) -> Decoded:
     """Error-correct a 72-bit codeword and check it (fast table decoder).
+
+    ``sync_errors`` is passed through to the result (the caller measured it).
 
     Raises:
         DecodeError: uncorrectable, or any check of :func:`command_of_message`.
@@ -274,7 +279,7 @@ def decode_codeword(codeword: int, dictionary: CommandDictionary = DICTIONARY) -
             RejectReason.UNCORRECTABLE,
             f"more than {BCH_T} bit errors in the codeword: uncorrectable",
         )
-    return Decoded(command_of_message(message, dictionary), corrected)
+    return Decoded(command_of_message(message, dictionary), corrected, sync_errors)
 
 
 def parse_frame(frame: object) -> int:
@@ -327,15 +332,18 @@ def _parse_text(text: str) -> int:
     if compact[:2].lower() == "0x":
         compact = compact[2:]
     if len(compact) == FRAME_HEX_DIGITS:
-        try:
-            return int(compact, 16)
-        except ValueError:
-            raise _malformed(f"{compact!r} is not {FRAME_HEX_DIGITS} hex digits") from None
+        # int(..., 16) alone would also take a sign and non-ASCII digits.
+        if compact.strip(_HEX_DIGITS):
+            raise _malformed(f"{compact!r} is not {FRAME_HEX_DIGITS} hex digits (0-9, a-f)")
+        return int(compact, 16)
     shown = text if len(text) <= 40 else text[:37] + "..."
     raise _malformed(
         f"expected {FRAME_BITS} binary digits or {FRAME_HEX_DIGITS} hex digits, "
         f"got {len(compact)} characters: {shown!r}"
     )
+
+
+_HEX_DIGITS = "0123456789abcdefABCDEF"
 
 
 def _malformed(detail: str) -> DecodeError:
@@ -364,5 +372,4 @@ def decode_frame(
             f"preamble + delimiter differ from the sync word in {sync_errors} bits "
             f"(at most {sync_tolerance} tolerated)",
         )
-    decoded = decode_codeword(value >> GUARD_BITS, dictionary)
-    return Decoded(decoded.command, decoded.corrected, sync_errors)
+    return decode_codeword(value >> GUARD_BITS, dictionary, sync_errors)

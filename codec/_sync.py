@@ -33,6 +33,8 @@ _CODEWORD_MASK = (1 << CODEWORD_BITS) - 1
 _NEEDED = SYNC_BITS + CODEWORD_BITS
 #: Offsets after a candidate also compared, to pick the best-aligned one (the delimiter span).
 _LOOKAHEAD = 8
+#: Longest piece of input scanned at once (see ``_feed``).
+_SLICE_BITS = 1024
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,9 +114,16 @@ class FrameReceiver:
         return self._feed(int.from_bytes(raw, "big"), 8 * len(raw))
 
     def _feed(self, value: int, count: int) -> list[Event]:
-        self._buf = (self._buf << count) | value
-        self._len += count
-        return self._scan()
+        # Scan in slices so the working buffer stays short: shifting a big int costs time
+        # proportional to its length, which would make one huge feed quadratic.
+        events: list[Event] = []
+        while count > 0:
+            take = min(count, _SLICE_BITS)
+            count -= take
+            self._buf = (self._buf << take) | ((value >> count) & ((1 << take) - 1))
+            self._len += take
+            events += self._scan()
+        return events
 
     def _scan(self) -> list[Event]:
         events: list[Event] = []
