@@ -184,7 +184,8 @@ def inject_errors(frames: U8, ber: float, rng: np.random.Generator) -> NDArray[n
     if ber > SPARSE_BER_LIMIT:
         flips = rng.random((n, FRAME_BITS), dtype=np.float32) < np.float32(ber)
         frames ^= np.packbits(flips, axis=1)
-        return flips.sum(axis=1, dtype=np.int64)
+        counts: NDArray[np.int64] = flips.sum(axis=1, dtype=np.int64)
+        return counts
     total_bits = n * FRAME_BITS
     positions = _distinct_positions(total_bits, int(rng.binomial(total_bits, ber)), rng)
     _flip(frames, positions)
