@@ -1,7 +1,8 @@
 """The ``nemesys`` command line.
 
 Subcommands are dispatched through :data:`COMMANDS`; each handler returns the exit status.
-Exit status: 0 success, 1 a frame was rejected, 2 bad input (usage, out-of-range value).
+Exit status: 0 success, 1 a frame was rejected, 2 bad input (usage, out-of-range value),
+70 an internal error (a bug: reported in one line; ``NEMESYS_DEBUG=1`` shows the traceback).
 Errors are one line on standard error, never a traceback.
 """
 
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from collections.abc import Callable, Sequence
 from typing import Any, TextIO
@@ -32,6 +34,7 @@ from codec._fields import fmt
 EXIT_OK = 0
 EXIT_REJECTED = 1
 EXIT_USAGE = 2
+EXIT_INTERNAL = 70  # EX_SOFTWARE
 
 
 class UsageError(Exception):
@@ -273,6 +276,15 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
         return EXIT_OK
     except KeyboardInterrupt:
         return 130
+    except Exception as err:  # a bug of ours: one line for the user, details on request
+        if os.environ.get("NEMESYS_DEBUG"):
+            raise
+        print(
+            f"nemesys {args.command}: internal error: {type(err).__name__}: {err} "
+            "(set NEMESYS_DEBUG=1 for the traceback, and please report it)",
+            file=sys.stderr,
+        )
+        return EXIT_INTERNAL
 
 
 if __name__ == "__main__":

@@ -22,5 +22,5 @@ def test_quick_run_prints_the_full_table() -> None:
     ):
         line = next(ln for ln in text.splitlines() if row in ln)
         assert "met" in line or "MISSED" in line
-    assert "bchlib (C)" in text and "paper" in text and " 27 " in text
+    assert "bchlib (C, bytes)" in text and "paper" in text and " 27 " in text
     assert "n/a" not in text  # bchlib (the peer) was measured in the same run
