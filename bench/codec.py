@@ -64,7 +64,8 @@ def _bchlib_encoder() -> Callable[[bytes], object] | None:
         import bchlib
     except ImportError:
         return None
-    return bchlib.BCH(2, m=8).encode  # type: ignore[no-any-return]
+    encode: Callable[[bytes], object] = bchlib.BCH(2, m=8).encode
+    return encode
 
 
 def _batch_fps(n: int, ber: float, rounds: int) -> float:

@@ -184,7 +184,8 @@ class NumericScale:
         i = bisect_left(values, number)
         if i == len(values):
             # Only reachable for a circular scale, between the last value and the period.
-            i = 0 if self.period - number <= number - values[-1] else len(values) - 1  # type: ignore[operator]
+            period = self.period or 0.0
+            i = 0 if period - number <= number - values[-1] else len(values) - 1
         elif i > 0 and number - values[i - 1] < values[i] - number:
             i -= 1
         return self.first_code + i, self.value_of(self.first_code + i)

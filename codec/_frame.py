@@ -65,7 +65,8 @@ CODEWORD_MASK: Final = (1 << CODEWORD_BITS) - 1
 FRAME_MASK: Final = (1 << FRAME_BITS) - 1
 
 _crc4 = ChunkedRemainder(CRC_POLY, width=PAYLOAD_BITS, shift=CRC_BITS)
-_fast = TableDecoder(CODE)
+#: The fast decoder of :data:`CODE` (syndrome table), shared by the scalar and batch paths.
+FAST_DECODER: Final = TableDecoder(CODE)
 _PAD_BITS = FRAME_BYTES * 8 - FRAME_BITS
 
 
@@ -91,9 +92,9 @@ def sections(pattern: Pattern | None = None) -> tuple[Section, ...]:
         Section("pattern", SYNC_BITS, PATTERN_ID_BITS),
     ]
     start = SYNC_BITS + PATTERN_ID_BITS
+    fields = pattern.fields if pattern is not None else ()
     for j in range(FIELDS_PER_FRAME):
-        used = pattern is not None and j < len(pattern.fields)
-        name = pattern.fields[j].name if used else f"j{j + 1} (unused)"  # type: ignore[union-attr]
+        name = fields[j].name if j < len(fields) else f"j{j + 1} (unused)"
         out.append(Section(name, start, FIELD_BITS))
         start += FIELD_BITS
     out += [
@@ -273,7 +274,7 @@ def decode_codeword(
     Raises:
         DecodeError: uncorrectable, or any check of :func:`command_of_message`.
     """
-    message, corrected = _fast.decode(codeword & CODEWORD_MASK)
+    message, corrected = FAST_DECODER.decode(codeword & CODEWORD_MASK)
     if corrected == UNCORRECTABLE:
         raise DecodeError(
             RejectReason.UNCORRECTABLE,

@@ -25,11 +25,11 @@ from codec._frame import (
     CODE,
     CRC_POLY,
     DEFAULT_SYNC_TOLERANCE,
+    FAST_DECODER,
     FRAME_BITS,
     FRAME_BYTES,
     PAYLOAD_BITS,
     SYNC_WORD,
-    _fast,
 )
 from codec._gf2 import ChunkedRemainder
 
@@ -77,7 +77,7 @@ def _error_tables() -> tuple[U8, NDArray[np.int8]]:
     patterns = np.zeros((size, _CW_BYTES), dtype=np.uint8)
     counts = np.full(size, -1, dtype=np.int8)
     counts[0] = 0
-    for syndrome, error in _fast.error_patterns.items():
+    for syndrome, error in FAST_DECODER.error_patterns.items():
         patterns[syndrome] = np.frombuffer(error.to_bytes(_CW_BYTES, "big"), dtype=np.uint8)
         counts[syndrome] = error.bit_count()
     return patterns, counts
