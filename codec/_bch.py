@@ -79,6 +79,16 @@ class BCHCode:
             f"g={self.generator_poly:#x}>"
         )
 
+    @property
+    def parity_tables(self) -> tuple[list[int], ...]:
+        """Byte tables of the parity of a message, most significant message byte first."""
+        return self._parity.tables
+
+    @property
+    def remainder_tables(self) -> tuple[list[int], ...]:
+        """Byte tables of ``received mod g``, most significant codeword byte first."""
+        return self._remainder.tables
+
     def encode(self, message: int) -> int:
         """Systematic codeword of a ``k``-bit message: ``message << r | parity``."""
         if message >> self.k or message < 0:
@@ -205,7 +215,7 @@ class TableDecoder:
         if 0 in errors or len(errors) != expected:
             raise ValueError("correctable patterns do not have distinct syndromes")
         self._errors = errors
-        tables = ChunkedRemainder(code.generator_poly, width=code.n).tables
+        tables = code.remainder_tables
         self.decode: Callable[[int], tuple[int, int]] = _make_int_decoder(tables, errors, code.r)
         self.decode_bytes: Callable[[bytes], tuple[int, int]] = _make_bytes_decoder(
             tables, errors, code.r

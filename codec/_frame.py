@@ -64,7 +64,8 @@ DEFAULT_BITRATE_BPS: Final = 36_000
 CODEWORD_MASK: Final = (1 << CODEWORD_BITS) - 1
 FRAME_MASK: Final = (1 << FRAME_BITS) - 1
 
-_crc4 = ChunkedRemainder(CRC_POLY, width=PAYLOAD_BITS, shift=CRC_BITS)
+#: CRC-4 of a 52-bit payload, by byte tables (shared with the batch path).
+CRC4_REMAINDER: Final = ChunkedRemainder(CRC_POLY, width=PAYLOAD_BITS, shift=CRC_BITS)
 #: The fast decoder of :data:`CODE` (syndrome table), shared by the scalar and batch paths.
 FAST_DECODER: Final = TableDecoder(CODE)
 _PAD_BITS = FRAME_BYTES * 8 - FRAME_BITS
@@ -72,7 +73,7 @@ _PAD_BITS = FRAME_BYTES * 8 - FRAME_BITS
 
 def crc4(payload: int) -> int:
     """CRC-4 of the 52-bit payload: ``(payload(x) * x^4) mod (x^4 + x + 1)``."""
-    return _crc4(payload)
+    return CRC4_REMAINDER(payload)
 
 
 @dataclass(frozen=True, slots=True)
@@ -189,7 +190,7 @@ def payload_of(command: Command) -> int:
 def message_of(command: Command) -> int:
     """The 56-bit BCH message: payload then its CRC-4."""
     payload = payload_of(command)
-    return (payload << CRC_BITS) | _crc4(payload)
+    return (payload << CRC_BITS) | CRC4_REMAINDER(payload)
 
 
 def frame_of(command: Command) -> Frame:
@@ -231,7 +232,7 @@ def command_of_message(message: int, dictionary: CommandDictionary = DICTIONARY)
             field (in that order).
     """
     payload = message >> CRC_BITS
-    if _crc4(payload) != message & 0xF:
+    if CRC4_REMAINDER(payload) != message & 0xF:
         raise DecodeError(
             RejectReason.CRC_MISMATCH,
             "CRC-4 mismatch after error correction: more errors than the code can correct",

@@ -147,14 +147,12 @@ class FrameReceiver:
             pos = best
             codeword = (buf >> (length - pos - _NEEDED)) & _CODEWORD_MASK
             try:
-                decoded = decode_codeword(codeword, self.dictionary)
+                decoded = decode_codeword(codeword, self.dictionary, best_dist)
             except DecodeError as err:
                 events.append(Rejected(self._base + pos, err))
                 pos += 1
                 continue
-            events.append(
-                Accepted(self._base + pos, Decoded(decoded.command, decoded.corrected, best_dist))
-            )
+            events.append(Accepted(self._base + pos, decoded))
             pos += _NEEDED
         self._base += pos
         self._len = length - pos

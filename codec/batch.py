@@ -23,15 +23,13 @@ from codec._errors import RejectReason
 from codec._fields import FIELD_BITS, FIELD_CODES
 from codec._frame import (
     CODE,
-    CRC_POLY,
+    CRC4_REMAINDER,
     DEFAULT_SYNC_TOLERANCE,
     FAST_DECODER,
     FRAME_BITS,
     FRAME_BYTES,
-    PAYLOAD_BITS,
     SYNC_WORD,
 )
-from codec._gf2 import ChunkedRemainder
 
 U8 = NDArray[np.uint8]
 U64 = NDArray[np.uint64]
@@ -60,16 +58,15 @@ _SYNC_BYTES: Final = np.array(
 _POPCOUNT8: Final = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
 
 
-def _tables(rem: ChunkedRemainder) -> NDArray[np.uint16]:
-    """The remainder's byte tables, lowest-order byte first."""
-    return np.array(rem.tables[::-1], dtype=np.uint16)
+def _tables(tables: tuple[list[int], ...]) -> NDArray[np.uint16]:
+    """Byte tables as one array, most significant byte first (as in :mod:`codec._gf2`)."""
+    return np.array(tables, dtype=np.uint16)
 
 
-# Byte tables, lowest-order byte first: parity of the message, syndrome of the codeword,
-# CRC-4 of the payload.
-_PARITY_T: Final = _tables(ChunkedRemainder(CODE.generator_poly, width=CODE.k, shift=CODE.r))
-_SYNDROME_T: Final = _tables(ChunkedRemainder(CODE.generator_poly, width=CODE.n))
-_CRC_T: Final = _tables(ChunkedRemainder(CRC_POLY, width=PAYLOAD_BITS, shift=4))
+# The scalar path's byte tables: parity of the message, syndrome of the codeword, CRC-4.
+_PARITY_T: Final = _tables(CODE.parity_tables)
+_SYNDROME_T: Final = _tables(CODE.remainder_tables)
+_CRC_T: Final = _tables(CRC4_REMAINDER.tables)
 
 
 def _error_tables() -> tuple[U8, NDArray[np.int8]]:
@@ -140,9 +137,12 @@ def _bytes_to_u64(columns: U8) -> U64:
 
 
 def _remainder(tables: NDArray[np.uint16], value: U64) -> NDArray[np.uint16]:
+    """XOR of the byte tables indexed by the bytes of ``value`` (MSB-first tables)."""
     out = np.zeros(value.shape[0], dtype=np.uint16)
+    last = tables.shape[0] - 1
     for j in range(tables.shape[0]):
-        out ^= tables[j][((value >> np.uint64(8 * j)) & np.uint64(0xFF)).astype(np.intp)]
+        shift = np.uint64(8 * (last - j))
+        out ^= tables[j][((value >> shift) & np.uint64(0xFF)).astype(np.intp)]
     return out
 
 
@@ -245,8 +245,8 @@ def decode_frames(
     )
     codeword = frames[:, _CW_FIRST_BYTE : _CW_FIRST_BYTE + _CW_BYTES]
     syndrome = np.zeros(frames.shape[0], dtype=np.uint16)
-    for j in range(_CW_BYTES):  # table j holds the j-th lowest byte's remainder
-        syndrome ^= _SYNDROME_T[j][codeword[:, _CW_BYTES - 1 - j]]
+    for j in range(_CW_BYTES):
+        syndrome ^= _SYNDROME_T[j][codeword[:, j]]
     corrected = _ERR_COUNT[syndrome]
     fixed = codeword ^ _ERR_PATTERN[syndrome]
     message = _bytes_to_u64(fixed[:, :7])
@@ -260,9 +260,9 @@ def decode_frames(
         code = ((payload >> shift) & np.uint64(0xFF)).astype(np.intp)
         ok = valid[pattern_id, j, code]
         is_used = used[pattern_id, j]
-        # The scalar path reports the first failing field; a range failure in an earlier
-        # field wins over an unused-field failure in a later one.
-        unused_ok &= ok | is_used | ~range_ok
+        # Unused fields always follow the used ones, so the scalar path's "first failing
+        # field" is a range failure whenever there is one: np.select's order gives that.
+        unused_ok &= ok | is_used
         range_ok &= ok | ~is_used
     status = np.select(
         [
