@@ -200,6 +200,10 @@ def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
         from bench import codec as bench_codec
 
         return bench_codec.run(out, quick=args.quick)
+    if args.target == "planner":
+        from bench import planner as bench_planner
+
+        return bench_planner.run(out, quick=args.quick)
     raise UsageError(f"unknown benchmark {args.target!r}")
 
 
@@ -251,7 +255,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
 
     p = sub.add_parser("bench", help="run a benchmark and print its table")
-    p.add_argument("target", choices=["codec"], help="what to benchmark")
+    p.add_argument("target", choices=["codec", "planner"], help="what to benchmark")
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
     return parser
 

@@ -1,0 +1,72 @@
+"""Immutable value records for the onboard path, without :mod:`dataclasses`.
+
+The vehicle imports :mod:`codec` and :mod:`planner` and must stay within a tight memory budget
+(``nemesys bench planner`` measures it). ``import dataclasses`` pulls in :mod:`inspect`,
+:mod:`ast`, :mod:`dis` and :mod:`tokenize`, about 1.2 MB of resident memory before a single
+frame is decoded, so the onboard types derive from this small base instead. A record declares
+its fields in ``__slots__`` (with annotations for the type checker), sets them once in
+``__init__`` through :func:`init`, and gets value equality, hashing, a readable ``repr`` and
+immutability from the slots.
+
+The fields are the public names in ``__slots__`` along the MRO, in the order of the class's
+annotations (``__slots__`` itself is kept sorted), which must be the order of ``__init__``'s
+parameters: :meth:`Record.__reduce__` (pickle, :mod:`copy`) passes them back positionally.
+"""
+
+from __future__ import annotations
+
+_FIELDS: dict[type, tuple[str, ...]] = {}
+
+#: Sets an attribute on a record during ``__init__`` (records refuse ``setattr`` otherwise).
+init = object.__setattr__
+
+
+def _fields(cls: type) -> tuple[str, ...]:
+    names = _FIELDS.get(cls)
+    if names is None:
+        found: list[str] = []
+        for klass in reversed(cls.__mro__):
+            slots = klass.__dict__.get("__slots__", ())
+            slots = (slots,) if isinstance(slots, str) else tuple(slots)
+            # Not inspect.get_annotations: importing inspect costs what this module saves.
+            annotated = klass.__dict__.get("__annotations__", {})  # noqa: RUF063
+            found.extend(n for n in annotated if n in slots)
+            found.extend(n for n in slots if n not in annotated)
+        names = _FIELDS[cls] = tuple(n for n in found if not n.startswith("_"))
+    return names
+
+
+class Record:
+    """Base class: fields are the public names in ``__slots__`` along the MRO."""
+
+    __slots__ = ()
+
+    def __setattr__(self, name: str, value: object) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable: cannot set {name!r}")
+
+    def __delattr__(self, name: str) -> None:
+        raise AttributeError(f"{type(self).__name__} is immutable: cannot delete {name!r}")
+
+    def _values(self) -> tuple[object, ...]:
+        return tuple(getattr(self, n) for n in _fields(type(self)))
+
+    def __eq__(self, other: object) -> bool:
+        if other.__class__ is not self.__class__:
+            return NotImplemented
+        assert isinstance(other, Record)
+        return self._values() == other._values()
+
+    def __hash__(self) -> int:
+        return hash((type(self), self._values()))
+
+    def __repr__(self) -> str:
+        args = ", ".join(f"{n}={getattr(self, n)!r}" for n in _fields(type(self)))
+        return f"{type(self).__name__}({args})"
+
+    def __reduce__(self) -> tuple[type, tuple[object, ...]]:
+        # Rebuilt through __init__ (which validates): pickle and copy work as for a dataclass.
+        return type(self), self._values()
+
+    def as_dict(self) -> dict[str, object]:
+        """Field name -> value (shallow)."""
+        return {n: getattr(self, n) for n in _fields(type(self))}
