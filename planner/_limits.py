@@ -88,12 +88,6 @@ class PolygonFence(Record):
             raise ValueError(f"a geofence polygon needs at least 3 vertices, got {len(pts)}")
         if not all(math.isfinite(v) for p in pts for v in p):
             raise ValueError("geofence polygon vertices must be finite numbers")
-        area2 = sum(
-            pts[i][0] * pts[(i + 1) % len(pts)][1] - pts[(i + 1) % len(pts)][0] * pts[i][1]
-            for i in range(len(pts))
-        )
-        if abs(area2) < 1e-9:
-            raise ValueError("the geofence polygon has no area")
         n = len(pts)
         for i in range(n):
             for j in range(i + 1, n):
@@ -101,6 +95,12 @@ class PolygonFence(Record):
                     continue
                 if _segments_cross(pts[i], pts[(i + 1) % n], pts[j], pts[(j + 1) % n]):
                     raise ValueError(f"the geofence polygon crosses itself (edges {i} and {j})")
+        area2 = sum(
+            pts[i][0] * pts[(i + 1) % len(pts)][1] - pts[(i + 1) % len(pts)][0] * pts[i][1]
+            for i in range(len(pts))
+        )
+        if abs(area2) < 1e-9:
+            raise ValueError("the geofence polygon has no area")
         init(self, "vertices", pts)
 
     def contains(self, x_m: float, y_m: float) -> bool:

@@ -1,0 +1,37 @@
+"""``nemesys bench planner`` prints every pattern's row with its targets and the memory
+comparison (figures are not asserted: timings belong to the benchmark, not the tests)."""
+
+from __future__ import annotations
+
+import io
+
+from bench import planner as bench_planner
+from codec import DICTIONARY
+
+
+def test_quick_run_prints_every_pattern_and_the_memory_rows() -> None:
+    out = io.StringIO()
+    assert bench_planner.run(out, quick=True) == 0
+    text = out.getvalue()
+    lines = text.splitlines()
+    for name in DICTIONARY:
+        row = next(ln for ln in lines if ln.startswith(name + " "))
+        cells = row.split()
+        assert int(cells[1]) >= 1  # waypoints
+        assert float(cells[2]) > 0 and float(cells[3]) > 0  # total and per-waypoint us
+        assert row.count("met") + row.count("MISSED") == 2
+    assert "1620 ms" in text and "26 ms" in text and "15 ms/wp" in text
+    bare = next(ln for ln in lines if ln.startswith("bare interpreter"))
+    onboard = next(ln for ln in lines if ln.startswith("import codec + planner"))
+    bare_mb = float(bare.split(" MB")[0].split()[-1])
+    onboard_mb = float(onboard.split(" MB")[0].split()[-1])
+    assert 1.0 < bare_mb < onboard_mb  # the onboard process does load something
+    assert "paper 13.2 MB" in onboard
+
+
+def test_running_square_state_is_on_the_square() -> None:
+    current, state = bench_planner.running_square()
+    assert current.pattern == "square"
+    # 30 s in at 0.5 m/s: on the square's body, at its depth
+    assert abs(state.z_m - 5.0) < 1e-9
+    assert abs(max(abs(state.x_m), abs(state.y_m)) - 5.0) < 1e-6
