@@ -157,11 +157,19 @@ class _Build:
         return sum(math.hypot(xs[i + 1] - xs[i], ys[i + 1] - ys[i]) for i in range(len(xs) - 1))
 
     def join(
-        self, state: VehicleState, entry: tuple[float, float, float], z: float, mark: float
+        self,
+        state: VehicleState,
+        entry: tuple[float, float, float],
+        z: float,
+        mark: float,
+        speed_mps: float,
     ) -> int:
-        """Dubins transit from the vehicle's pose to ``entry``; returns the body start index."""
-        speed = state.speed_mps
-        jx, jy, _ = dubins((state.x_m, state.y_m, state.heading_rad), entry, turn_radius_m(speed))
+        """Dubins transit from the vehicle's pose to ``entry``; returns the body start index.
+
+        The join is flown at the commanded ``speed_mps``, so its turns use that speed's radius.
+        """
+        pose = (state.x_m, state.y_m, state.heading_rad)
+        jx, jy, _ = dubins(pose, entry, turn_radius_m(speed_mps))
         self.xs.extend(jx)
         self.ys.extend(jy)
         self.zb.extend([z] * len(jx))
@@ -247,14 +255,14 @@ def _entry_angle(
     """Bearing from the anchor of the point where the vehicle joins a circle of ``radius_m``.
 
     From outside: the tangent point reached in the commanded sense, at least ``lead_m`` of arc
-    ahead of the vehicle's own bearing. From well inside: the circle point ahead of the
-    vehicle's heading.
+    ahead of the vehicle's own bearing. From well inside: abeam on the side the pattern turns
+    to, which a half-turn towards that side reaches tangentially (no loop when the radius
+    allows it).
     """
     dx, dy = state.x_m - anchor[0], state.y_m - anchor[1]
     d = math.hypot(dx, dy)
     if d < 0.5 * radius_m or d < EPS_M:
-        h = state.heading_rad
-        return math.atan2(dy + radius_m * math.sin(h), dx + radius_m * math.cos(h))
+        return state.heading_rad + sense * math.pi / 2
     lead = min(math.pi / 2, lead_m / radius_m) if radius_m > 0 else 0.0
     return math.atan2(dy, dx) + sense * max(math.acos(min(1.0, radius_m / d)), lead)
 
@@ -318,7 +326,7 @@ def _plan_square(
         else (math.atan2(ny - corners[side][1], nx - corners[side][0]))
     )
     b = _Build(state)
-    start = b.join(state, (ex, ey, entry_heading), depth, mark0)
+    start = b.join(state, (ex, ey, entry_heading), depth, mark0, speed)
     perimeter = 8.0 * half_m
     repeat = laps == 0
     laps_out = 1 if repeat else laps
@@ -351,6 +359,16 @@ def _extra_laps(z0: float, depth: float, transit_m: float, lap_m: float, speed: 
     ramp_s = abs(depth - z0) / DEPTH_RATE_MPS
     spare = ramp_s - transit_m / speed
     return max(0, math.ceil(spare / (lap_m / speed) - 1e-9)) if spare > 0 else 0
+
+
+def _round_pose(
+    anchor: tuple[float, float], r: float, dr: float, sense: int, bearing: float
+) -> tuple[float, float, float]:
+    """Pose ``(x, y, heading)`` on a circle or spiral of radius ``r`` (``dr`` = dr/dtheta) at
+    ``bearing`` from the anchor, moving in ``sense``."""
+    ca, sa = math.cos(bearing), math.sin(bearing)
+    heading = math.atan2(dr * sa + sense * r * ca, dr * ca - sense * r * sa)
+    return anchor[0] + r * ca, anchor[1] + r * sa, heading
 
 
 def _circle_shape(
@@ -400,18 +418,27 @@ def _plan_circle_like(
         theta = 0.0
         if r0 > 0.0:
             phi0 = _entry_angle(anchor, r0, sense, state, lead)
+            if math.hypot(state.x_m - ax, state.y_m - ay) < 0.5 * r0:
+                # from well inside, take the shorter of the abeam and the straight-ahead entry
+                pose = (state.x_m, state.y_m, state.heading_rad)
+                dr0 = (r1 - r0) / total
+                ahead = math.atan2(
+                    state.y_m - ay + r0 * math.sin(pose[2]), state.x_m - ax + r0 * math.cos(pose[2])
+                )
+                turn = turn_radius_m(speed)
+                phi0 = min(
+                    (phi0, ahead),
+                    key=lambda f: dubins(pose, _round_pose(anchor, r0, dr0, sense, f), turn)[2],
+                )
         elif math.hypot(ax - state.x_m, ay - state.y_m) > EPS_M:
             phi0 = math.atan2(ay - state.y_m, ax - state.x_m)
         else:
             phi0 = state.heading_rad
     dr = (r1 - r0) / total
-    r = r0 + dr * theta
-    a = phi0 + sense * theta
-    ca, sa = math.cos(a), math.sin(a)
-    entry_heading = math.atan2(dr * sa + sense * r * ca, dr * ca - sense * r * sa)
+    entry = _round_pose(anchor, r0 + dr * theta, dr, sense, phi0 + sense * theta)
     b = _Build(state)
     entry_z = z0 + (z1 - z0) * theta / total
-    start = b.join(state, (ax + r * ca, ay + r * sa, entry_heading), entry_z, theta / TAU)
+    start = b.join(state, entry, entry_z, theta / TAU, speed)
     if shape == "circle":
         laps = 1 + _extra_laps(state.z_m, z0, b.length_m(), _polygon_circumference(r0), speed)
         for lap in range(laps):
@@ -520,7 +547,7 @@ def _plan_lawnmower(command: Command, p: Params, state: VehicleState, current: P
         c = lanes[lane]
         ex, ey = ox + a_entry * ux + c * vx, oy + a_entry * uy + c * vy
         h = axis if lane % 2 == 0 else axis + math.pi
-        start = b.join(state, (ex, ey, h), depth, entry_mark)
+        start = b.join(state, (ex, ey, h), depth, entry_mark, speed)
         first = lane
     else:
         ox, oy, axis = state.x_m, state.y_m, state.heading_rad
