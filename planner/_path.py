@@ -13,6 +13,8 @@ from planner._geometry import heading_deg
 
 #: Distances and depth differences below this are treated as zero (m).
 EPS_M = 1e-6
+#: Passes of a path closer than this to the nearest are told apart by time (m).
+SAME_PLACE_M = 0.5
 
 
 class VehicleState(Record):
@@ -231,11 +233,20 @@ class Path(Record):
         speed = 0.0 if finished else self.speeds[i]
         return Setpoint(t_s, x, y, z, speed, self.course_deg(i))
 
-    def locate(self, x_m: float, y_m: float, z_m: float, hint: int | None = None) -> float:
+    def locate(
+        self,
+        x_m: float,
+        y_m: float,
+        z_m: float,
+        hint: int | None = None,
+        t_s: float | None = None,
+    ) -> float:
         """Fractional waypoint index of the path point nearest to ``(x, y, z)``.
 
-        With ``hint`` (the segment guidance is tracking) only that segment is used; otherwise
-        every segment is searched (the first nearest wins).
+        With ``hint`` (the segment guidance is tracking) only that segment is used. Otherwise
+        every segment is searched; where the path passes the same place more than once (laps
+        of a box orbit, a flat helix), the pass whose times are nearest ``t_s`` (seconds into
+        the plan) wins among those within :data:`SAME_PLACE_M` of the nearest.
         """
         xs, ys, zs = self.xs, self.ys, self.zs
         n = len(xs)
@@ -245,7 +256,7 @@ class Path(Record):
             candidates: range = range(hint, hint + 1)
         else:
             candidates = range(n - 1)
-        best_d, best = math.inf, 0.0
+        found: list[tuple[float, int, float]] = []
         for i in candidates:
             ax, ay, az = xs[i], ys[i], zs[i]
             dx, dy, dz = xs[i + 1] - ax, ys[i + 1] - ay, zs[i + 1] - az
@@ -256,10 +267,16 @@ class Path(Record):
                 else min(1.0, max(0.0, ((x_m - ax) * dx + (y_m - ay) * dy + (z_m - az) * dz) / den))
             )
             ex, ey, ez = ax + f * dx - x_m, ay + f * dy - y_m, az + f * dz - z_m
-            d = ex * ex + ey * ey + ez * ez
-            if d < best_d:
-                best_d, best = d, i + f
-        return best
+            found.append((math.sqrt(ex * ex + ey * ey + ez * ez), i, f))
+        nearest = min(found)
+        if t_s is None:
+            return nearest[1] + nearest[2]
+        times = self.times
+        close = [c for c in found if c[0] <= nearest[0] + SAME_PLACE_M]
+        _, i, f = min(
+            close, key=lambda c: abs(times[c[1]] + c[2] * (times[c[1] + 1] - times[c[1]]) - t_s)
+        )
+        return i + f
 
     def mark_at(self, index: float) -> float:
         """Progress mark at a fractional waypoint index."""
@@ -323,8 +340,10 @@ def timed(  # noqa: PLR0915 (one flat loop: the planner's hot path)
         x1, y1, zt = xs[i], ys[i], zb[i]
         h = hypot(x1 - px, y1 - py)
         if h < EPS_M:
+            # a vertical step of the pattern itself; a repeated point is dropped (a ramp in
+            # progress carries on along the next segment rather than stopping here)
             dz = zt - z
-            if dz >= EPS_M or dz <= -EPS_M:
+            if (zt - zp >= EPS_M or zt - zp <= -EPS_M) and (dz >= EPS_M or dz <= -EPS_M):
                 t += abs(dz) / rate_mps
                 ax(x1)
                 ay(y1)

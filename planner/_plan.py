@@ -127,7 +127,7 @@ class Plan(Record):
         path = self.path
         if self.pattern == "hover":
             return path.mark_at_time(state.t_s - self.t0_s)
-        index = path.locate(state.x_m, state.y_m, state.z_m, state.segment)
+        index = path.locate(state.x_m, state.y_m, state.z_m, state.segment, state.t_s - self.t0_s)
         if index < path.body_start:
             return path.marks[path.body_start]
         return path.mark_at(index)
@@ -476,7 +476,7 @@ def _sample_spiral(
     ``radii`` and the depth over ``depths`` as theta goes from 0 to ``total``. A helix (constant
     radius) is sampled uniformly; a spiral's step uses the local radius of curvature of the
     Archimedean spiral, ``(r^2 + b^2)^1.5 / (r^2 + 2 b^2)`` with ``b = dr/dtheta``, taken at the
-    smaller radius of the step.
+    smaller radius of the step, and no chord lets the tangent turn more than MAX_STEP_RAD.
     """
     ax, ay, phi0, sense = frame
     r0, r1 = radii
@@ -496,13 +496,14 @@ def _sample_spiral(
             zb.append(z0 + dz * th)
             ms.append(th / TAU)
         return
-    tol8 = 8.0 * CHORD_TOL_M * 0.9
+    tol8 = 8.0 * CHORD_TOL_M * 0.8  # the sagitta formula is a first-order estimate
     b2 = dr * dr
     while theta < total - 1e-12:
         r = r0 + dr * theta
         rr = max(0.0, r + dr * MAX_STEP_RAD) if dr < 0.0 else r
         k2 = rr * rr + b2
-        step = min(MAX_STEP_RAD, math.sqrt(tol8 * k2**0.5 / (rr * rr + 2.0 * b2)))
+        # the tangent turns (1 + b^2 / (r^2 + b^2)) times as fast as theta: cap its turn too
+        step = min(MAX_STEP_RAD / (1.0 + b2 / k2), math.sqrt(tol8 * k2**0.5 / (rr * rr + 2.0 * b2)))
         theta = min(total, theta + step)
         r = r0 + dr * theta
         a = phi0 + sense * theta
