@@ -13,7 +13,6 @@ Typical use::
 """
 
 from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
-from codec._describe import describe_dictionary, describe_pattern, markdown_tables
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
@@ -71,6 +70,10 @@ from codec._frame import (
     sections,
 )
 from codec._sync import Accepted, Event, FrameReceiver, Rejected
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from codec._describe import describe_dictionary, describe_pattern, markdown_tables
 
 __all__ = [
     "CODE",
@@ -137,3 +140,19 @@ __all__ = [
     "payload_of",
     "sections",
 ]
+
+# The listing helpers are imported on first use: the console needs them, the vehicle does not.
+# (Hidden from the type checker, which sees the imports above, so that a misspelt name imported
+# from codec is still an error and not an ``object``.)
+_LAZY = ("describe_dictionary", "describe_pattern", "markdown_tables")
+
+if not TYPE_CHECKING:
+
+    def __getattr__(name: str) -> object:
+        if name not in _LAZY:
+            raise AttributeError(f"module 'codec' has no attribute {name!r}")
+        from codec import _describe
+
+        value = getattr(_describe, name)
+        globals()[name] = value
+        return value

@@ -18,10 +18,13 @@ highest-degree bit is sent first. A codeword is ``message << r | parity``, r = n
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
 from types import MappingProxyType
 
 from codec._gf2 import ChunkedRemainder, GF2m, degree, poly_mul
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Callable, Mapping, Sequence
 
 #: Primitive polynomial of GF(2^8): x^8 + x^4 + x^3 + x^2 + 1 (bchlib's and galois' default).
 PRIM_POLY_GF256 = 0x11D
@@ -69,7 +72,8 @@ class BCHCode:
         if self.n > self.field.order:
             raise ValueError(f"n = {self.n} exceeds the full length {self.field.order}")
         self._parity = ChunkedRemainder(g, width=k, shift=self.r)
-        self._remainder = ChunkedRemainder(g, width=self.n)
+        # Bytes 0..k/8-1 of a codeword are the message bytes: the same tables as the parity's.
+        self._remainder = ChunkedRemainder(g, width=self.n, share=self._parity)
         self._msg_mask = (1 << k) - 1
         self._cw_mask = (1 << self.n) - 1
 
@@ -194,52 +198,80 @@ class TableDecoder:
 
     The remainder of the received word modulo g(x) is a complete syndrome for these codes. It
     is the XOR of nine byte-table lookups (one per codeword byte), and one dictionary lookup
-    then gives the error pattern. Memory: 9 x 256 table entries and 2628 dictionary entries.
+    then gives the error pattern. Memory: the code's byte tables (9 x 256 entries, 7 of them
+    shared with the encoder) and a dictionary of 2628 entries (about 240 KB), built the first
+    time a word has a non-zero syndrome: a process that only sees clean frames never holds it.
     """
 
     N_BYTES = 9
 
     def __init__(self, code: BCHCode) -> None:
-        if code.t > 2 or code.r > 16 or code.n != 8 * self.N_BYTES:
-            raise ValueError("the table decoder handles 72-bit codes with t <= 2, r <= 16")
+        if code.t > 2 or code.r > 16 or code.r % 8 or code.n != 8 * self.N_BYTES:
+            raise ValueError(
+                "the table decoder handles 72-bit codes with t <= 2 and r = 8 or 16 parity bits"
+            )
         self.code = code
-        single = [code.remainder(1 << i) for i in range(code.n)]
-        errors: dict[int, int] = {}
-        for i, si in enumerate(single):
-            errors[si] = 1 << i
-        if code.t == 2:
-            for i in range(code.n):
-                for j in range(i + 1, code.n):
-                    errors[single[i] ^ single[j]] = (1 << i) | (1 << j)
-        expected = code.n + (code.n * (code.n - 1) // 2 if code.t == 2 else 0)
-        if 0 in errors or len(errors) != expected:
-            raise ValueError("correctable patterns do not have distinct syndromes")
-        self._errors = errors
-        tables = code.remainder_tables
-        self.decode: Callable[[int], tuple[int, int]] = _make_int_decoder(tables, errors, code.r)
-        self.decode_bytes: Callable[[bytes], tuple[int, int]] = _make_bytes_decoder(
-            tables, errors, code.r
+        self._errors: dict[int, int] | None = None
+        self.decode: Callable[[int], tuple[int, int]]
+        self.decode_bytes: Callable[[bytes], tuple[int, int]]
+        self.decode, self.decode_bytes = _make_decoders(
+            code.remainder_tables, code.r, self._error_table
         )
         self.decode.__doc__ = """Same contract as :meth:`BCHCode.decode`."""
         self.decode_bytes.__doc__ = """Decode the codeword as 9 bytes, MSB first (the wire form).
 
         Same result as :meth:`decode` of ``int.from_bytes(codeword, "big")``."""
 
+    def _error_table(self) -> dict[int, int]:
+        errors = self._errors
+        if errors is None:
+            errors = self._errors = _correctable_errors(self.code)
+        return errors
+
     @property
     def error_patterns(self) -> Mapping[int, int]:
         """Non-zero syndrome (remainder mod g) -> the correctable error pattern it stands for."""
-        return MappingProxyType(self._errors)
+        return MappingProxyType(self._error_table())
+
+
+def _correctable_errors(code: BCHCode) -> dict[int, int]:
+    """Syndrome -> error pattern, for every pattern of weight 1 .. t (t <= 2)."""
+    single = [code.remainder(1 << i) for i in range(code.n)]
+    errors: dict[int, int] = {}
+    for i, si in enumerate(single):
+        errors[si] = 1 << i
+    if code.t == 2:
+        for i in range(code.n):
+            si, bit = single[i], 1 << i
+            for j in range(i + 1, code.n):
+                errors[si ^ single[j]] = bit | (1 << j)
+    expected = code.n + (code.n * (code.n - 1) // 2 if code.t == 2 else 0)
+    if 0 in errors or len(errors) != expected:
+        raise ValueError("correctable patterns do not have distinct syndromes")
+    return errors
 
 
 # The decoders are closures over their tables: cell variables are read almost as fast as
 # locals and, unlike default arguments, cost nothing per call. This is the per-frame hot path.
+# ``get`` starts as a stand-in that builds the error dictionary on the first non-zero syndrome
+# and rebinds ``get`` (shared by both decoders) to the dictionary's own lookup: no per-call
+# test, and the dictionary costs no memory until a word needs correcting.
 
 
-def _make_int_decoder(
-    tables: Sequence[list[int]], errors: dict[int, int], r: int
-) -> Callable[[int], tuple[int, int]]:
+def _make_decoders(
+    tables: Sequence[list[int]], r: int, error_table: Callable[[], dict[int, int]]
+) -> tuple[Callable[[int], tuple[int, int]], Callable[[bytes], tuple[int, int]]]:
     t0, t1, t2, t3, t4, t5, t6, t7, t8 = tables
-    get = errors.get
+    from_bytes = int.from_bytes
+    k_bytes = 9 - r // 8  # the message bytes of the 9-byte codeword
+    get: Callable[[int], int | None]
+
+    def first_lookup(syndrome: int) -> int | None:
+        nonlocal get
+        get = error_table().get
+        return get(syndrome)
+
+    get = first_lookup
 
     def decode(received: int) -> tuple[int, int]:
         b = received.to_bytes(9, "big")
@@ -254,26 +286,16 @@ def _make_int_decoder(
             return received >> r, UNCORRECTABLE
         return (received ^ error) >> r, error.bit_count()
 
-    return decode
-
-
-def _make_bytes_decoder(
-    tables: Sequence[list[int]], errors: dict[int, int], r: int
-) -> Callable[[bytes], tuple[int, int]]:
-    t0, t1, t2, t3, t4, t5, t6, t7, t8 = tables
-    get = errors.get
-    from_bytes = int.from_bytes
-
     def decode_bytes(b: bytes) -> tuple[int, int]:
         syn = (
             t0[b[0]] ^ t1[b[1]] ^ t2[b[2]] ^ t3[b[3]] ^ t4[b[4]]
             ^ t5[b[5]] ^ t6[b[6]] ^ t7[b[7]] ^ t8[b[8]]
         )  # fmt: skip
         if not syn:
-            return from_bytes(b[:7], "big"), 0
+            return from_bytes(b[:k_bytes], "big"), 0
         error = get(syn)
         if error is None:
-            return from_bytes(b[:7], "big"), UNCORRECTABLE
+            return from_bytes(b[:k_bytes], "big"), UNCORRECTABLE
         return (from_bytes(b, "big") ^ error) >> r, error.bit_count()
 
-    return decode_bytes
+    return decode, decode_bytes

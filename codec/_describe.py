@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Any
+from codec._dictionary import DICTIONARY, CommandDictionary
+from codec._fields import ChoiceScale
 
-from codec._dictionary import DICTIONARY, CommandDictionary, Pattern
-from codec._fields import ChoiceScale, Field
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from typing import Any
+
+    from codec._dictionary import Pattern
+    from codec._fields import Field
 
 
 def describe_field(f: Field, position: int) -> dict[str, Any]:

@@ -7,8 +7,7 @@ pattern is adding a :class:`Pattern` to :data:`PATTERNS`, nothing else.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping
 
 from codec._errors import EncodeError
 from codec._fields import (
@@ -23,14 +22,18 @@ from codec._fields import (
     ParamValue,
     Snap,
 )
+from codec._record import Record, init
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Iterator
 
 #: Width of the pattern ID (bits) and the number of parameter fields in every frame.
 PATTERN_ID_BITS = 4
 FIELDS_PER_FRAME = 6
 
 
-@dataclass(frozen=True, repr=False)
-class Pattern:
+class Pattern(Record):
     """One entry of the command dictionary.
 
     Attributes:
@@ -41,20 +44,26 @@ class Pattern:
         doc: what the vehicle does.
     """
 
+    __slots__ = ("doc", "fields", "id", "label", "name")
     id: int
     name: str
     label: str
     fields: tuple[Field, ...]
     doc: str
 
-    def __post_init__(self) -> None:
-        if not 0 <= self.id < 1 << PATTERN_ID_BITS:
-            raise ValueError(f"pattern ID {self.id} does not fit in {PATTERN_ID_BITS} bits")
-        if len(self.fields) > FIELDS_PER_FRAME:
-            raise ValueError(f"{self.name}: more than {FIELDS_PER_FRAME} fields")
-        names = [f.name for f in self.fields]
+    def __init__(self, id: int, name: str, label: str, fields: tuple[Field, ...], doc: str) -> None:
+        if not 0 <= id < 1 << PATTERN_ID_BITS:
+            raise ValueError(f"pattern ID {id} does not fit in {PATTERN_ID_BITS} bits")
+        if len(fields) > FIELDS_PER_FRAME:
+            raise ValueError(f"{name}: more than {FIELDS_PER_FRAME} fields")
+        names = [f.name for f in fields]
         if len(set(names)) != len(names):
-            raise ValueError(f"{self.name}: duplicate field names {names}")
+            raise ValueError(f"{name}: duplicate field names {names}")
+        init(self, "id", id)
+        init(self, "name", name)
+        init(self, "label", label)
+        init(self, "fields", fields)
+        init(self, "doc", doc)
 
     def __repr__(self) -> str:
         return f"<Pattern {self.id} {self.name}>"
@@ -247,24 +256,25 @@ class CommandDictionary(Mapping[str, Pattern]):
 DICTIONARY = CommandDictionary(PATTERNS)
 
 
-@dataclass(frozen=True, slots=True, repr=False)
-class Command:
+class Command(Record):
     """A pattern with one valid code per field: exactly what goes on the wire.
 
-    Build it with :func:`make_command` (from physical values) or :meth:`from_codes`.
+    Build it with :func:`make_command` (from physical values) or ``Command(pattern, codes)``.
     """
 
+    __slots__ = ("codes", "pattern")
     pattern: Pattern
     codes: tuple[int, ...]
 
-    def __post_init__(self) -> None:
-        if len(self.codes) != len(self.pattern.fields):
-            raise ValueError(
-                f"{self.pattern.name} takes {len(self.pattern.fields)} codes, got {len(self.codes)}"
-            )
-        for f, code in zip(self.pattern.fields, self.codes, strict=True):
+    def __init__(self, pattern: Pattern, codes: tuple[int, ...]) -> None:
+        fields = pattern.fields
+        if len(codes) != len(fields):
+            raise ValueError(f"{pattern.name} takes {len(fields)} codes, got {len(codes)}")
+        for f, code in zip(fields, codes, strict=True):
             if not f.scale.is_valid_code(code):
                 raise ValueError(f"code {code} is not valid for {f.name}")
+        init(self, "pattern", pattern)
+        init(self, "codes", codes)
 
     def __repr__(self) -> str:
         return f"<Command {self.describe()}>"

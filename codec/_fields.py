@@ -12,10 +12,9 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_left
-from dataclasses import dataclass, field
-from decimal import Decimal
 
 from codec._errors import EncodeError
+from codec._record import Record, init
 
 #: Width of every parameter field on the wire (bits).
 FIELD_BITS = 8
@@ -30,17 +29,55 @@ def fmt(value: float) -> str:
     return format(value, ".10g")
 
 
-@dataclass(frozen=True, slots=True)
-class Segment:
+def exact_decimal(text: str) -> tuple[int, int]:
+    """A decimal string as ``(numerator, denominator)``, the denominator a power of ten.
+
+    ``"0.025"`` is ``(25, 1000)``. A sign and an exponent (``"-1.5e-3"``) are accepted;
+    ``"-0"`` is plain zero. ``numerator / denominator`` is then the correctly rounded float:
+    int true division is correctly rounded, like ``float(Decimal(text))``.
+
+    Raises:
+        ValueError: not a decimal number.
+    """
+    mantissa, has_exp, exp = text.strip().lower().partition("e")
+    sign = mantissa[:1] if mantissa[:1] in ("+", "-") else ""
+    whole, _, frac = mantissa[len(sign) :].partition(".")
+    exp_digits = exp[1:] if exp[:1] in ("+", "-") else exp
+    if not _is_digits(whole + frac) or (has_exp and not _is_digits(exp_digits)):
+        raise ValueError(f"{text!r} is not a decimal number")
+    shift = len(frac) - (int(exp) if has_exp else 0)
+    numerator = int(sign + whole + frac)
+    if shift < 0:
+        return numerator * 10**-shift, 1
+    return numerator, 10**shift
+
+
+def _is_digits(text: str) -> bool:
+    return text.isascii() and text.isdigit()
+
+
+class Segment(Record):
     """``count`` values ``start, start + step, ...`` (decimal strings, exact)."""
 
+    __slots__ = ("count", "start", "step")
     start: str
     step: str
     count: int
 
+    def __init__(self, start: str, step: str, count: int) -> None:
+        init(self, "start", start)
+        init(self, "step", step)
+        init(self, "count", count)
 
-@dataclass(frozen=True)
-class NumericScale:
+    def exact(self) -> tuple[int, int, int]:
+        """``(a, b, d)`` with value ``i`` equal to ``(a + i * b) / d`` exactly."""
+        a, da = exact_decimal(self.start)
+        b, db = exact_decimal(self.step)
+        d = max(da, db)  # both powers of ten
+        return a * (d // da), b * (d // db), d
+
+
+class NumericScale(Record):
     """A numeric quantization: code ``first_code + i`` stands for ``values[i]``.
 
     Attributes:
@@ -52,32 +89,92 @@ class NumericScale:
         rel_error_from: lower end of the range over which :attr:`max_rel_error` is stated.
     """
 
+    __slots__ = (
+        "_count",
+        "_max",
+        "_min",
+        "_pieces",
+        "_table",
+        "first_code",
+        "integer",
+        "name",
+        "period",
+        "rel_error_from",
+        "segments",
+    )
     segments: tuple[Segment, ...]
-    name: str = ""
-    first_code: int = 0
-    integer: bool = False
-    period: float | None = None
-    rel_error_from: float | None = None
-    values: tuple[float, ...] = field(init=False, repr=False, compare=False)
+    name: str
+    first_code: int
+    integer: bool
+    period: float | None
+    rel_error_from: float | None
+    # Private: the segments as exact integers (count, a, b, d), value i = (a + i * b) / d; the
+    # number of values, the first and last; the table of values, built on first use (the
+    # vehicle decodes without it).
+    _pieces: tuple[tuple[int, int, int, int], ...]
+    _count: int
+    _min: float
+    _max: float
+    _table: tuple[float, ...] | None
 
-    def __post_init__(self) -> None:
-        values: list[float] = []
-        for seg in self.segments:
-            start, step = Decimal(seg.start), Decimal(seg.step)
-            if values and float(start) <= values[-1]:
+    def __init__(
+        self,
+        segments: tuple[Segment, ...],
+        name: str = "",
+        first_code: int = 0,
+        integer: bool = False,
+        period: float | None = None,
+        rel_error_from: float | None = None,
+    ) -> None:
+        init(self, "segments", segments)
+        init(self, "name", name)
+        init(self, "first_code", first_code)
+        init(self, "integer", integer)
+        init(self, "period", period)
+        init(self, "rel_error_from", rel_error_from)
+        pieces: list[tuple[int, int, int, int]] = []
+        count = 0
+        first: float | None = None
+        last: float | None = None
+        for seg in segments:
+            a, b, d = seg.exact()
+            if last is not None and a / d <= last:
                 raise ValueError(f"segment starting at {seg.start} overlaps the previous one")
-            values.extend(float(start + i * step) for i in range(seg.count))
-        if self.first_code + len(values) > FIELD_CODES:
-            raise ValueError(f"{len(values)} values do not fit in {FIELD_BITS} bits")
-        object.__setattr__(self, "values", tuple(values))
+            if seg.count > 0:
+                pieces.append((seg.count, a, b, d))
+                count += seg.count
+                last = (a + (seg.count - 1) * b) / d
+                if first is None:
+                    first = a / d
+        if first is None or last is None:
+            raise ValueError("a numeric scale needs at least one value")
+        if first_code + count > FIELD_CODES:
+            raise ValueError(f"{count} values do not fit in {FIELD_BITS} bits")
+        init(self, "_pieces", tuple(pieces))
+        init(self, "_count", count)
+        init(self, "_min", first)
+        init(self, "_max", last)
+        init(self, "_table", None)
+
+    @property
+    def values(self) -> tuple[float, ...]:
+        """The representable values, in code order (not a field: not compared, not shown).
+
+        Each is the float nearest to its exact decimal value. Built on first use.
+        """
+        table = self._table
+        if table is None:
+            table = tuple((a + i * b) / d for count, a, b, d in self._pieces for i in range(count))
+            init(self, "_table", table)
+        return table
 
     @property
     def minimum(self) -> float:
-        return self.values[0]
+        return self._min
 
     @property
     def maximum(self) -> float:
-        return self.values[-1]
+        return self._max
 
     @property
     def is_linear(self) -> bool:
@@ -115,7 +212,7 @@ class NumericScale:
                 f"<= {rel * 100:.2f} % from {fmt(self.rel_error_from or 0)}{u} "
                 f"(<= {fmt(self.max_abs_error)}{u} absolute)"
             )
-        halves = [fmt(float(Decimal(seg.step) / 2)) for seg in self.segments]
+        halves = [fmt(b / (2 * d)) for _, b, d in (seg.exact() for seg in self.segments)]
         if len(halves) == 1:
             return f"<= {halves[0]}{u}"
         bounds = [fmt(float(seg.start)) for seg in self.segments[1:]]
@@ -123,12 +220,46 @@ class NumericScale:
         return ", ".join([*parts, f"<= {halves[-1]}{u} above"])
 
     def is_valid_code(self, code: int) -> bool:
-        return self.first_code <= code < self.first_code + len(self.values)
+        return self.first_code <= code < self.first_code + self._count
 
     def value_of(self, code: int) -> float | int:
-        """The value a (valid) code stands for."""
-        value = self.values[code - self.first_code]
-        return int(value) if self.integer else value
+        """The value a valid code stands for (the same float as in :attr:`values`).
+
+        Raises:
+            IndexError: the code is not valid.
+        """
+        i = code - self.first_code
+        if i >= 0:
+            for count, a, b, d in self._pieces:
+                if i < count:
+                    value = (a + i * b) / d
+                    return int(value) if self.integer else value
+                i -= count
+        raise IndexError(f"code {code} is not valid for {self.name or 'this scale'}")
+
+    def represents(self, value: ParamValue) -> bool:
+        """Whether :meth:`snap` sends ``value`` unchanged (it is one of the values).
+
+        Decided from the segments, without building the table of values.
+        """
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return False
+        try:
+            x = float(value)
+        except OverflowError:
+            return False
+        if not self._min <= x <= self._max:  # also refuses inf and nan
+            return False
+        if (self.integer and not x.is_integer()) or (
+            self.period is not None and not 0 <= x < self.period
+        ):
+            return False
+        for count, a, b, d in self._pieces:
+            near = round((x * d - a) / b) if b else 0
+            for i in (near - 1, near, near + 1):
+                if 0 <= i < count and (a + i * b) / d == x:
+                    return True
+        return False
 
     def range_text(self, unit: str) -> str:
         """``0 to 107.5 m``."""
@@ -144,7 +275,8 @@ class NumericScale:
         """Range and steps in one line, e.g. ``0..2.55 step 0.01``."""
         parts = []
         for seg in self.segments:
-            last = float(Decimal(seg.start) + (seg.count - 1) * Decimal(seg.step))
+            a, b, d = seg.exact()
+            last = (a + (seg.count - 1) * b) / d
             parts.append(f"{fmt(float(seg.start))}..{fmt(last)} step {seg.step}")
         text = ", ".join(parts)
         if self.period is not None:
@@ -188,7 +320,8 @@ class NumericScale:
             i = 0 if period - number <= number - values[-1] else len(values) - 1
         elif i > 0 and number - values[i - 1] < values[i] - number:
             i -= 1
-        return self.first_code + i, self.value_of(self.first_code + i)
+        value = values[i]
+        return self.first_code + i, int(value) if self.integer else value
 
 
 def _as_number(name: str, unit: str, requested: ParamValue, allowed: str) -> float:
@@ -210,16 +343,18 @@ def _as_number(name: str, unit: str, requested: ParamValue, allowed: str) -> flo
     return number
 
 
-@dataclass(frozen=True)
-class ChoiceScale:
+class ChoiceScale(Record):
     """An enumerated field: code ``i`` stands for ``choices[i]`` (case-insensitive input)."""
 
+    __slots__ = ("choices", "name")
     choices: tuple[str, ...]
-    name: str = ""
+    name: str
 
-    def __post_init__(self) -> None:
-        if not 0 < len(self.choices) <= FIELD_CODES:
+    def __init__(self, choices: tuple[str, ...], name: str = "") -> None:
+        if not 0 < len(choices) <= FIELD_CODES:
             raise ValueError("a choice field needs 1 to 256 choices")
+        init(self, "choices", choices)
+        init(self, "name", name)
 
     @property
     def integer(self) -> bool:
@@ -230,6 +365,10 @@ class ChoiceScale:
 
     def value_of(self, code: int) -> str:
         return self.choices[code]
+
+    def represents(self, value: ParamValue) -> bool:
+        """Whether :meth:`snap` sends ``value`` unchanged (it is one of the choices)."""
+        return isinstance(value, str) and value in self.choices and value.strip().lower() == value
 
     def range_text(self, unit: str) -> str:
         return " or ".join(self.choices)
@@ -253,8 +392,7 @@ class ChoiceScale:
 Scale = NumericScale | ChoiceScale
 
 
-@dataclass(frozen=True)
-class Field:
+class Field(Record):
     """One parameter of a pattern.
 
     Attributes:
@@ -266,6 +404,7 @@ class Field:
         doc: the parameter's meaning for the operator.
     """
 
+    __slots__ = ("default", "doc", "label", "name", "scale", "unit")
     name: str
     label: str
     unit: str
@@ -273,10 +412,17 @@ class Field:
     default: ParamValue
     doc: str
 
-    def __post_init__(self) -> None:
-        _, snapped = self.scale.snap(self.name, self.unit, self.default)
-        if snapped != self.default:
-            raise ValueError(f"default of {self.name} ({self.default!r}) is not representable")
+    def __init__(
+        self, name: str, label: str, unit: str, scale: Scale, default: ParamValue, doc: str
+    ) -> None:
+        if not scale.represents(default):
+            raise ValueError(f"default of {name} ({default!r}) is not representable")
+        init(self, "name", name)
+        init(self, "label", label)
+        init(self, "unit", unit)
+        init(self, "scale", scale)
+        init(self, "default", default)
+        init(self, "doc", doc)
 
     def snap(self, requested: ParamValue) -> tuple[int, ParamValue]:
         """``(code, sent value)`` for a requested value; see the scale's ``snap``."""
@@ -286,14 +432,20 @@ class Field:
         return self.scale.value_of(code)
 
 
-@dataclass(frozen=True, slots=True)
-class Snap:
+class Snap(Record):
     """What happened to one requested value: ``requested 12.34 m, sent 12.5 m``."""
 
+    __slots__ = ("field", "requested", "sent", "unit")
     field: str
     unit: str
     requested: ParamValue
     sent: ParamValue
+
+    def __init__(self, field: str, unit: str, requested: ParamValue, sent: ParamValue) -> None:
+        init(self, "field", field)
+        init(self, "unit", unit)
+        init(self, "requested", requested)
+        init(self, "sent", sent)
 
     @property
     def changed(self) -> bool:

@@ -17,9 +17,7 @@ significant bit is bit 0 of the frame.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from typing import Final
+from collections.abc import Sequence
 
 from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
 from codec._dictionary import (
@@ -34,6 +32,12 @@ from codec._dictionary import (
 from codec._errors import DecodeError, RejectReason
 from codec._fields import FIELD_BITS, ParamValue, Snap
 from codec._gf2 import ChunkedRemainder
+from codec._record import Record, init
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Mapping
+    from typing import Final
 
 PREAMBLE: Final = 0xAAAA
 PREAMBLE_BITS: Final = 16
@@ -76,13 +80,18 @@ def crc4(payload: int) -> int:
     return CRC4_REMAINDER(payload)
 
 
-@dataclass(frozen=True, slots=True)
-class Section:
+class Section(Record):
     """A named bit range of the frame, for display: ``bits[start:start + length]``."""
 
+    __slots__ = ("length", "name", "start")
     name: str
     start: int
     length: int
+
+    def __init__(self, name: str, start: int, length: int) -> None:
+        init(self, "name", name)
+        init(self, "start", start)
+        init(self, "length", length)
 
 
 def sections(pattern: Pattern | None = None) -> tuple[Section, ...]:
@@ -106,15 +115,16 @@ def sections(pattern: Pattern | None = None) -> tuple[Section, ...]:
     return tuple(out)
 
 
-@dataclass(frozen=True, slots=True)
-class Frame:
+class Frame(Record):
     """A 100-bit frame. ``value``'s most significant bit is the first bit on the wire."""
 
+    __slots__ = ("value",)
     value: int
 
-    def __post_init__(self) -> None:
-        if not 0 <= self.value <= FRAME_MASK:
+    def __init__(self, value: int) -> None:
+        if not 0 <= value <= FRAME_MASK:
             raise ValueError(f"a frame holds {FRAME_BITS} bits")
+        init(self, "value", value)
 
     @property
     def bits(self) -> str:
@@ -150,21 +160,25 @@ def airtime_s(bitrate_bps: float = DEFAULT_BITRATE_BPS, bits: int = FRAME_BITS) 
     return bits / bitrate_bps
 
 
-@dataclass(frozen=True, slots=True)
-class Encoded:
+class Encoded(Record):
     """An encoded command: what was asked, what is sent, and the frame.
 
     ``snaps`` has one entry per field when the command was built from requested values, and
     is empty when a ready :class:`Command` was encoded (nothing was requested or snapped).
     """
 
+    __slots__ = ("command", "frame", "snaps")
     command: Command
     snaps: tuple[Snap, ...]
     frame: Frame
 
+    def __init__(self, command: Command, snaps: tuple[Snap, ...], frame: Frame) -> None:
+        init(self, "command", command)
+        init(self, "snaps", snaps)
+        init(self, "frame", frame)
 
-@dataclass(frozen=True, slots=True)
-class Decoded:
+
+class Decoded(Record):
     """An accepted frame.
 
     Attributes:
@@ -173,9 +187,15 @@ class Decoded:
         sync_errors: preamble + delimiter bits that differed from the sync word.
     """
 
+    __slots__ = ("command", "corrected", "sync_errors")
     command: Command
     corrected: int
-    sync_errors: int = 0
+    sync_errors: int
+
+    def __init__(self, command: Command, corrected: int, sync_errors: int = 0) -> None:
+        init(self, "command", command)
+        init(self, "corrected", corrected)
+        init(self, "sync_errors", sync_errors)
 
 
 def payload_of(command: Command) -> int:

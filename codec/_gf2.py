@@ -7,7 +7,9 @@ highest-degree coefficient goes on the wire first (the convention of bchlib and 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Sequence
 
 
 def degree(poly: int) -> int:
@@ -41,19 +43,35 @@ class ChunkedRemainder:
     of the bytes (one 256-entry table per byte position) are XORed: the byte-table CRC idea,
     used here for the CRC-4, the BCH parity and the BCH syndrome. Indexing the bytes of
     ``value.to_bytes()`` is several times faster in CPython than shifting and masking.
+
+    ``share``: another remainder by the same modulus whose tables are reused where they
+    cover the same bit positions (equal tables are then the same list objects).
     """
 
     __slots__ = ("_msb_first", "_nbytes", "modulus", "shift", "width")
 
-    def __init__(self, modulus: int, width: int, shift: int = 0) -> None:
+    def __init__(
+        self, modulus: int, width: int, shift: int = 0, share: ChunkedRemainder | None = None
+    ) -> None:
         self.modulus = modulus
         self.width = width
         self.shift = shift
         self._nbytes = (width + 7) // 8
-        tables = [
-            _linear_table([poly_mod(1 << (8 * j + i + shift), modulus) for i in range(8)])
-            for j in range(self._nbytes)
-        ]
+        # A table depends only on the modulus and the bit offset of its byte, so a remainder
+        # over an overlapping range (the BCH syndrome over the parity's message bytes) can
+        # reuse another's tables instead of holding equal copies.
+        known: dict[int, list[int]] = {}
+        if share is not None and share.modulus == modulus:
+            for j, shared in enumerate(reversed(share.tables)):
+                known[8 * j + share.shift] = shared
+        tables = []
+        for j in range(self._nbytes):
+            offset = 8 * j + shift
+            table = known.get(offset)
+            if table is None:
+                units = [poly_mod(1 << (offset + i), modulus) for i in range(8)]
+                table = known[offset] = _linear_table(units)
+            tables.append(table)
         self._msb_first: tuple[list[int], ...] = tuple(reversed(tables))
 
     @property

@@ -9,16 +9,31 @@ its fields in ``__slots__`` (with annotations for the type checker), sets them o
 immutability from the slots.
 
 The fields are the public names in ``__slots__`` along the MRO, in the order of the class's
-annotations (``__slots__`` itself is kept sorted), which must be the order of ``__init__``'s
-parameters: :meth:`Record.__reduce__` (pickle, :mod:`copy`) passes them back positionally.
+annotations (``__slots__`` itself is kept sorted): that order shows in ``repr`` and
+:meth:`Record.as_dict`. Private slots (``_cache``) hold derived state and are no part of
+equality, hashing or ``repr``. Pickling and :mod:`copy` restore every slot without calling
+``__init__``, as they do for a frozen dataclass.
 """
 
 from __future__ import annotations
 
 _FIELDS: dict[type, tuple[str, ...]] = {}
+_SLOTS: dict[type, tuple[str, ...]] = {}
 
 #: Sets an attribute on a record during ``__init__`` (records refuse ``setattr`` otherwise).
 init = object.__setattr__
+
+
+def _own_slots(klass: type) -> tuple[str, ...]:
+    """The attribute names of the slots ``klass`` itself declares (private names mangled)."""
+    slots = klass.__dict__.get("__slots__", ())
+    names = (slots,) if isinstance(slots, str) else tuple(slots)
+    prefix = "_" + klass.__name__.lstrip("_")
+    return tuple(
+        prefix + n if n.startswith("__") and not n.endswith("__") else n
+        for n in names
+        if n not in ("__dict__", "__weakref__")
+    )
 
 
 def _fields(cls: type) -> tuple[str, ...]:
@@ -26,14 +41,28 @@ def _fields(cls: type) -> tuple[str, ...]:
     if names is None:
         found: list[str] = []
         for klass in reversed(cls.__mro__):
-            slots = klass.__dict__.get("__slots__", ())
-            slots = (slots,) if isinstance(slots, str) else tuple(slots)
+            slots = _own_slots(klass)
             # Not inspect.get_annotations: importing inspect costs what this module saves.
             annotated = klass.__dict__.get("__annotations__", {})  # noqa: RUF063
             found.extend(n for n in annotated if n in slots)
             found.extend(n for n in slots if n not in annotated)
         names = _FIELDS[cls] = tuple(n for n in found if not n.startswith("_"))
     return names
+
+
+def _slots(cls: type) -> tuple[str, ...]:
+    names = _SLOTS.get(cls)
+    if names is None:
+        names = _SLOTS[cls] = tuple(n for k in reversed(cls.__mro__) for n in _own_slots(k))
+    return names
+
+
+def _restore(cls: type[Record], state: tuple[tuple[str, object], ...]) -> Record:
+    """Unpickle (and copy) a record: its slots as they were, without ``__init__``."""
+    record = object.__new__(cls)
+    for name, value in state:
+        init(record, name, value)
+    return record
 
 
 class Record:
@@ -63,9 +92,10 @@ class Record:
         args = ", ".join(f"{n}={getattr(self, n)!r}" for n in _fields(type(self)))
         return f"{type(self).__name__}({args})"
 
-    def __reduce__(self) -> tuple[type, tuple[object, ...]]:
-        # Rebuilt through __init__ (which validates): pickle and copy work as for a dataclass.
-        return type(self), self._values()
+    def __reduce__(self) -> tuple[object, ...]:
+        cls = type(self)
+        state = tuple((n, getattr(self, n)) for n in _slots(cls) if hasattr(self, n))
+        return _restore, (cls, state)
 
     def as_dict(self) -> dict[str, object]:
         """Field name -> value (shallow)."""

@@ -13,9 +13,6 @@ resumes right after its codeword (the guard bits are not needed).
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
-
 from codec._dictionary import DICTIONARY, CommandDictionary
 from codec._errors import DecodeError, RejectReason
 from codec._frame import (
@@ -26,6 +23,11 @@ from codec._frame import (
     Decoded,
     decode_codeword,
 )
+from codec._record import Record, init
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from collections.abc import Iterable
 
 _SYNC_MASK = (1 << SYNC_BITS) - 1
 _CODEWORD_MASK = (1 << CODEWORD_BITS) - 1
@@ -37,20 +39,28 @@ _LOOKAHEAD = 8
 _SLICE_BITS = 1024
 
 
-@dataclass(frozen=True, slots=True)
-class Accepted:
+class Accepted(Record):
     """A frame decoded and checked; ``offset`` is the stream index of its first bit."""
 
+    __slots__ = ("decoded", "offset")
     offset: int
     decoded: Decoded
 
+    def __init__(self, offset: int, decoded: Decoded) -> None:
+        init(self, "offset", offset)
+        init(self, "decoded", decoded)
 
-@dataclass(frozen=True, slots=True)
-class Rejected:
+
+class Rejected(Record):
     """A sync word was found at ``offset`` but the frame failed a check (``error.reason``)."""
 
+    __slots__ = ("error", "offset")
     offset: int
     error: DecodeError
+
+    def __init__(self, offset: int, error: DecodeError) -> None:
+        init(self, "offset", offset)
+        init(self, "error", error)
 
 
 Event = Accepted | Rejected

@@ -286,3 +286,47 @@ def test_error_locator_and_chien_search_find_the_errors(rng: random.Random, t: i
             assert len(lam) - 1 == weight
             assert lam[0] == 1
             assert code.chien_search(lam) == positions
+
+
+# --- memory: shared byte tables, correction table built on first use -------------------------
+
+
+def test_remainder_shares_the_parity_tables() -> None:
+    code = BCHCode(t=2, k=56)
+    parity, remainder = code.parity_tables, code.remainder_tables
+    assert len(parity) == 7 and len(remainder) == 9
+    assert all(r is p for r, p in zip(remainder, parity, strict=False))  # message bytes
+    assert remainder[7] == [b << 8 for b in range(256)]  # parity bytes: already reduced
+    assert remainder[8] == list(range(256))
+    for j, table in enumerate(reversed(remainder)):
+        assert table[1] == poly_mod(1 << (8 * j), code.generator_poly)
+
+
+def test_table_decoder_builds_its_error_table_on_the_first_error(rng: random.Random) -> None:
+    decoder = TableDecoder(BCHCode(t=2, k=56))
+    msg = rng.getrandbits(56)
+    cw = CODE.encode(msg)
+    assert decoder.decode(cw) == (msg, 0)
+    assert decoder.decode_bytes(cw.to_bytes(9, "big")) == (msg, 0)
+    assert decoder._errors is None
+    assert decoder.decode_bytes((cw ^ 0b11 << 20).to_bytes(9, "big")) == (msg, 2)
+    assert decoder._errors is not None and len(decoder._errors) == 2628
+    assert decoder.decode(cw ^ 1 << 71) == (msg, 1)
+    assert decoder.decode(cw ^ 0b111) == CODE.decode(cw ^ 0b111)
+    fresh = TableDecoder(BCHCode(t=2, k=56))
+    assert fresh.decode(cw ^ 0b111) == CODE.decode(cw ^ 0b111)  # a miss builds it too
+    assert fresh._errors is not None
+    assert fresh.error_patterns == decoder.error_patterns
+
+
+def test_table_decoder_for_the_single_error_72_64_code(rng: random.Random) -> None:
+    code = BCHCode(t=1, k=64)
+    assert (code.n, code.r) == (72, 8)
+    decoder = TableDecoder(code)
+    for _ in range(200):
+        msg = rng.getrandbits(64)
+        cw = code.encode(msg)
+        for received in (cw, cw ^ 1 << rng.randrange(72), cw ^ random_error(rng, 72, 2)):
+            expected = code.decode(received)
+            assert decoder.decode(received) == expected
+            assert decoder.decode_bytes(received.to_bytes(9, "big")) == expected

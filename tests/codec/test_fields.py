@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import random
+from decimal import Decimal
 from itertools import pairwise
 
 import pytest
@@ -22,6 +23,7 @@ from codec import (
     Snap,
     make_command,
 )
+from codec._fields import exact_decimal
 
 from .helpers import in_range, representable, valid_codes
 
@@ -524,6 +526,93 @@ def test_numeric_scale_refuses_overlap_and_too_many_values() -> None:
     with pytest.raises(ValueError, match="8 bits"):
         NumericScale(segments=(Segment("1", "1", 256),), first_code=1)
     NumericScale(segments=(Segment("1", "1", 255),), first_code=1)  # exactly fits
+
+
+def decimal_values(scale: NumericScale) -> tuple[float, ...]:
+    """The table as the codec built it before it dropped :mod:`decimal` (the reference)."""
+    values: list[float] = []
+    for seg in scale.segments:
+        start, step = Decimal(seg.start), Decimal(seg.step)
+        values.extend(float(start + i * step) for i in range(seg.count))
+    return tuple(values)
+
+
+@pytest.mark.parametrize(("pattern", "f"), NUMERIC_FIELDS, ids=NUMERIC_IDS)
+def test_values_are_bit_identical_to_decimal_arithmetic(pattern: str, f: Field) -> None:
+    scale = numeric(f)
+    reference = decimal_values(scale)
+    assert [v.hex() for v in scale.values] == [v.hex() for v in reference]
+    codes = valid_codes(f)
+    assert [float(f.value_of(c)) for c in codes] == list(reference)  # computed without the table
+    for seg in scale.segments:
+        a, b, d = seg.exact()
+        assert Decimal(a) / Decimal(d) == Decimal(seg.start)
+        assert Decimal(b) / Decimal(d) == Decimal(seg.step)
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["0", "1", "0.025", "2.5", "107.5", "-1.5", "+3", "0.1", "1e3", "1.5E-3", "12.", ".5"],
+)
+def test_exact_decimal_matches_decimal(text: str) -> None:
+    numerator, denominator = exact_decimal(text)
+    assert Decimal(numerator) / Decimal(denominator) == Decimal(text)
+    assert (numerator / denominator).hex() == float(Decimal(text)).hex()
+
+
+@pytest.mark.parametrize(
+    "text", ["", ".", "1.2.3", "abc", "1e", "1e-", "1e1.5", "0x10", "1_0", "٣", "nan", "inf", "--1"]
+)
+def test_exact_decimal_refuses_non_decimals(text: str) -> None:
+    with pytest.raises(ValueError, match="not a decimal number"):
+        exact_decimal(text)
+
+
+def test_random_segments_match_decimal() -> None:
+    rng = random.Random(7)
+    for _ in range(300):
+        start = f"{rng.randrange(10**6)}e-{rng.randrange(8)}"
+        step = f"{rng.randrange(1, 10**6)}e-{rng.randrange(8)}"
+        scale = NumericScale(segments=(Segment(start, step, 200),))
+        assert scale.values == decimal_values(scale), (start, step)
+
+
+@pytest.mark.parametrize(("pattern", "f"), ALL_FIELDS, ids=ALL_IDS)
+def test_represents_agrees_with_snap(pattern: str, f: Field) -> None:
+    candidates: list[ParamValue] = [*representable(f), f.default, -1, 0.123, 1e300, "cw", " CW"]
+    if isinstance(f.scale, NumericScale):
+        scale = f.scale
+        candidates += [scale.maximum + 1, math.nan, math.inf, 360.0, -0.0, 2**80]
+        candidates += [math.nextafter(v, math.inf) for v in scale.values[::7]]
+        candidates += [str(v) for v in scale.values[::31]]
+    for value in candidates:
+        try:
+            unchanged = f.snap(value)[1] == value
+        except EncodeError:
+            unchanged = False
+        assert f.scale.represents(value) == unchanged, value
+
+
+def test_numeric_scale_builds_its_table_on_first_use() -> None:
+    scale = NumericScale(segments=(Segment("0", "0.5", 10),), name="x")
+    assert scale._table is None
+    assert scale.is_valid_code(9) and not scale.is_valid_code(10)
+    assert scale.value_of(3) == 1.5
+    assert (scale.minimum, scale.maximum) == (0.0, 4.5)
+    assert scale._table is None  # none of the above needed it
+    assert scale.snap("x", "m", 1.4) == (3, 1.5)
+    assert scale._table == (0.0, 0.5, 1.0, 1.5, 2.0, 2.5, 3.0, 3.5, 4.0, 4.5)
+    with pytest.raises(IndexError):
+        scale.value_of(10)
+    with pytest.raises(IndexError):
+        scale.value_of(-1)
+
+
+def test_numeric_scale_needs_a_value() -> None:
+    with pytest.raises(ValueError, match="at least one value"):
+        NumericScale(segments=())
+    with pytest.raises(ValueError, match="at least one value"):
+        NumericScale(segments=(Segment("0", "1", 0),))
 
 
 def test_choice_scale_size_limits() -> None:
