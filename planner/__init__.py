@@ -13,19 +13,7 @@ Typical use::
 """
 
 from planner._errors import PlanError
-from planner._estimate import Estimate, ParamChange, PlanDiff, compare, estimate
 from planner._geometry import CHORD_TOL_M, MAX_STEP_RAD
-from planner._limits import (
-    DEFAULT_MAX_SPEED_MPS,
-    RATED_DEPTH_M,
-    CircleFence,
-    LimitError,
-    Limits,
-    PolygonFence,
-    Violation,
-    check,
-    validate,
-)
 from planner._path import Path, Setpoint, VehicleState
 from planner._plan import (
     DEPTH_RATE_MPS,
@@ -42,6 +30,21 @@ from planner._plan import (
     plan,
     turn_radius_m,
 )
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from planner._estimate import Estimate, ParamChange, PlanDiff, compare, estimate
+    from planner._limits import (
+        DEFAULT_MAX_SPEED_MPS,
+        RATED_DEPTH_M,
+        CircleFence,
+        LimitError,
+        Limits,
+        PolygonFence,
+        Violation,
+        check,
+        validate,
+    )
 
 __all__ = [
     "CHORD_TOL_M",
@@ -78,3 +81,35 @@ __all__ = [
     "turn_radius_m",
     "validate",
 ]
+
+# Estimates and limits are imported on first use: the console checks every plan, the vehicle's
+# decode-and-replan loop needs neither (``nemesys bench planner`` measures its footprint).
+# Hidden from the type checker, which sees the imports above.
+_LAZY = {
+    "Estimate": "_estimate",
+    "ParamChange": "_estimate",
+    "PlanDiff": "_estimate",
+    "compare": "_estimate",
+    "estimate": "_estimate",
+    "DEFAULT_MAX_SPEED_MPS": "_limits",
+    "RATED_DEPTH_M": "_limits",
+    "CircleFence": "_limits",
+    "LimitError": "_limits",
+    "Limits": "_limits",
+    "PolygonFence": "_limits",
+    "Violation": "_limits",
+    "check": "_limits",
+    "validate": "_limits",
+}
+
+if not TYPE_CHECKING:
+
+    def __getattr__(name: str) -> object:
+        module = _LAZY.get(name)
+        if module is None:
+            raise AttributeError(f"module 'planner' has no attribute {name!r}")
+        import importlib
+
+        value = getattr(importlib.import_module(f"planner.{module}"), name)
+        globals()[name] = value
+        return value

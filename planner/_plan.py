@@ -503,7 +503,9 @@ def _sample_spiral(
         rr = max(0.0, r + dr * MAX_STEP_RAD) if dr < 0.0 else r
         k2 = rr * rr + b2
         # the tangent turns (1 + b^2 / (r^2 + b^2)) times as fast as theta: cap its turn too
-        step = min(MAX_STEP_RAD / (1.0 + b2 / k2), math.sqrt(tol8 * k2**0.5 / (rr * rr + 2.0 * b2)))
+        step = min(
+            0.999 * MAX_STEP_RAD / (1.0 + b2 / k2), math.sqrt(tol8 * k2**0.5 / (rr * rr + 2.0 * b2))
+        )
         theta = min(total, theta + step)
         r = r0 + dr * theta
         a = phi0 + sense * theta
