@@ -189,7 +189,8 @@ class _Build:
         if len(self.xs) > MAX_WAYPOINTS:
             raise PlanError(
                 f"the path needs {len(self.xs)} waypoints, more than the vehicle's "
-                f"{MAX_WAYPOINTS}: choose fewer laps or smaller radii"
+                f"{MAX_WAYPOINTS}: shorten the pattern (fewer laps, turns or loops), or bring "
+                "the vehicle nearer the pattern's depth first (a long depth ramp adds laps)"
             )
         xs, ys, zs, sp, ts, ms, where = timed(
             self.xs, self.ys, self.zb, self.marks, state.z_m, speed_mps, rate_mps

@@ -78,10 +78,15 @@ def check_join(p: Plan, state: VehicleState) -> None:
         return
     # first segment on the vehicle's heading, unless it is vertical: within half of one
     # chord of a turn (at most MAX_STEP_RAD / 2)
-    if horizontal(path, 0) > TOL:
+    h0 = horizontal(path, 0)
+    if h0 > TOL:
         c = math.atan2(path.ys[1] - path.ys[0], path.xs[1] - path.xs[0])
         step = abs(wrap(c - state.heading_rad))
-        assert step <= MAX_STEP_RAD / 2 + 1e-9, f"heading step {math.degrees(step):.2f} deg"
+        # the planner takes points within TOL (1e-6 m) as equal (a vehicle that close to a
+        # spiral's centre starts it there): that much offset skews the chord by TOL / h0
+        assert step <= MAX_STEP_RAD / 2 + 1e-9 + TOL / h0, (
+            f"heading step {math.degrees(step):.2f} deg"
+        )
     # tangential all along the join and into the body
     bs = path.body_start
     kinks = [
@@ -115,7 +120,7 @@ def at_corner(p: Plan) -> bool:
     return False
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=1000, deadline=None)
 @given(
     case=_case,
     current=_current_plan,

@@ -170,7 +170,7 @@ def round_commands(draw: st.DrawFn) -> Command:
     return command(kind, **params)
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=150, deadline=None)
 @given(
     cmd=round_commands(),
     x=st.floats(-50, 50),
