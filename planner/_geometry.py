@@ -138,14 +138,3 @@ def dubins(
         xs.append(x1)
         ys.append(y1)
     return xs, ys, length
-
-
-def project(
-    px: float, py: float, ax: float, ay: float, bx: float, by: float
-) -> tuple[float, float]:
-    """Projection of ``p`` on segment ``ab``: ``(fraction in [0, 1], squared distance m^2)``."""
-    dx, dy = bx - ax, by - ay
-    den = dx * dx + dy * dy
-    f = 0.0 if den == 0.0 else min(1.0, max(0.0, ((px - ax) * dx + (py - ay) * dy) / den))
-    ex, ey = ax + f * dx - px, ay + f * dy - py
-    return f, ex * ex + ey * ey

@@ -65,7 +65,6 @@ HOVER_APPROACH_MPS = 0.2
 #: A plan may not exceed this many waypoints (about 2 MB on the vehicle).
 MAX_WAYPOINTS = 10_000
 
-ORBIT_PATTERNS = frozenset({"square", "circle", "spiral", "helix", "box_orbit"})
 #: Patterns that repeat until retasked.
 REPEATING_PATTERNS = frozenset({"square", "circle"})
 
@@ -486,28 +485,25 @@ def _sample_spiral(
     dz = (z1 - z0) / total
     cos, sin = math.cos, math.sin
     xs, ys, zb, ms = b.xs, b.ys, b.zb, b.marks
-    if dr == 0.0:
-        n = max(1, math.ceil((total - theta) / step_angle(r0) - 1e-9))
-        d = (total - theta) / n
-        for k in range(1, n + 1):
-            th = theta + d * k
-            a = phi0 + sense * th
-            xs.append(ax + r0 * cos(a))
-            ys.append(ay + r0 * sin(a))
-            zb.append(z0 + dz * th)
-            ms.append(th / TAU)
-        return
     tol8 = 8.0 * CHORD_TOL_M * 0.8  # the sagitta formula is a first-order estimate
     b2 = dr * dr
+    start, k = theta, 0
+    # a helix (constant radius) takes n equal steps; a spiral sizes each step where it is
+    n = max(1, math.ceil((total - theta) / step_angle(r0) - 1e-9)) if dr == 0.0 else 0
     while theta < total - 1e-12:
-        r = r0 + dr * theta
-        rr = max(0.0, r + dr * MAX_STEP_RAD) if dr < 0.0 else r
-        k2 = rr * rr + b2
-        # the tangent turns (1 + b^2 / (r^2 + b^2)) times as fast as theta: cap its turn too
-        step = min(
-            0.999 * MAX_STEP_RAD / (1.0 + b2 / k2), math.sqrt(tol8 * k2**0.5 / (rr * rr + 2.0 * b2))
-        )
-        theta = min(total, theta + step)
+        if n:
+            k += 1
+            theta = start + (total - start) * k / n
+        else:
+            r = r0 + dr * theta
+            rr = max(0.0, r + dr * MAX_STEP_RAD) if dr < 0.0 else r
+            k2 = rr * rr + b2
+            # the tangent turns (1 + b^2 / (r^2 + b^2)) times as fast as theta: cap its turn too
+            step = min(
+                0.999 * MAX_STEP_RAD / (1.0 + b2 / k2),
+                math.sqrt(tol8 * k2**0.5 / (rr * rr + 2.0 * b2)),
+            )
+            theta = min(total, theta + step)
         r = r0 + dr * theta
         a = phi0 + sense * theta
         xs.append(ax + r * cos(a))
@@ -560,7 +556,6 @@ def _plan_lawnmower(command: Command, p: Params, state: VehicleState, current: P
         lanes = [i * spacing for i in range(n_lanes)]
         b.zb[0] = depth
         start, first = 0, 0
-        ex, ey = ox, oy
     for i in range(first, len(lanes)):
         a0, a1 = (0.0, length) if i % 2 == 0 else (length, 0.0)
         c = lanes[i]

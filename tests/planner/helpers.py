@@ -109,6 +109,22 @@ def course(path: Path, i: int) -> float:
     return math.atan2(path.ys[i + 1] - path.ys[i], path.xs[i + 1] - path.xs[i])
 
 
+def straight_legs(path: Path, lo: int) -> list[tuple[tuple[float, float], tuple[float, float]]]:
+    """Straight legs of the path from ``lo``: runs of horizontal segments on one course."""
+    out: list[tuple[tuple[float, float], tuple[float, float]]] = []
+    cur: float | None = None
+    for i in range(lo, len(path) - 1):
+        if horizontal(path, i) < TOL:
+            continue
+        c = math.atan2(path.ys[i + 1] - path.ys[i], path.xs[i + 1] - path.xs[i])
+        if cur is not None and abs(math.remainder(c - cur, 2 * math.pi)) < 1e-9:
+            out[-1] = (out[-1][0], xy(path, i + 1))
+        else:
+            out.append((xy(path, i), xy(path, i + 1)))
+        cur = c
+    return out
+
+
 def turns_between(path: Path, lo: int, hi: int) -> list[tuple[int, float]]:
     """``(waypoint, |course change| rad)`` at every waypoint ``lo < k < hi`` joining two
     horizontal segments (vertical segments in between are skipped)."""

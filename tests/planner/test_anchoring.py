@@ -7,7 +7,7 @@ import math
 import pytest
 
 from codec import ParamValue
-from planner import DEPTH_RATE_MPS, Path, Plan, anchor_for, plan
+from planner import DEPTH_RATE_MPS, Plan, anchor_for, plan
 
 from .helpers import (
     TOL,
@@ -17,29 +17,12 @@ from .helpers import (
     command,
     depth_rate_violations,
     dist,
-    horizontal,
     num,
     on_path,
+    straight_legs,
     vehicle,
     xy,
 )
-
-
-def _legs(path: Path, lo: int) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """Straight legs from waypoint ``lo``: runs of horizontal segments on one course."""
-    legs: list[tuple[tuple[float, float], tuple[float, float]]] = []
-    cur: float | None = None
-    for i in range(lo, len(path) - 1):
-        if horizontal(path, i) < TOL:
-            continue
-        c = math.atan2(path.ys[i + 1] - path.ys[i], path.xs[i + 1] - path.xs[i])
-        if cur is not None and abs(math.remainder(c - cur, 2 * math.pi)) < 1e-9:
-            legs[-1] = (legs[-1][0], xy(path, i + 1))
-        else:
-            legs.append((xy(path, i), xy(path, i + 1)))
-        cur = c
-    return legs
-
 
 # --- (a) lawnmower: a longer sweep in the middle of the survey ----------------------------
 
@@ -79,7 +62,7 @@ def test_scenario_a_lawnmower_longer_sweep_mid_survey(heading: float) -> None:
     a0, c0 = _along_cross(new, xy(path, path.body_start))
     assert c0 == pytest.approx(old.lanes[1], abs=TOL)
     assert a0 < along  # ahead of the vehicle on lane 1, which runs toward along = 0
-    legs = _legs(path, path.body_start)
+    legs = straight_legs(path, path.body_start)
     # rest of lane 1, step, lane 2, step, lane 3
     assert len(legs) == 5
     rest, _, lane2, _, lane3 = legs

@@ -29,6 +29,7 @@ from .helpers import (
     horizontal,
     num,
     sense,
+    straight_legs,
     swept_angles,
     unwrapped_bearings,
     vehicle,
@@ -338,22 +339,6 @@ def test_helix_depths_turns_and_radius(
 # --- lawnmower ------------------------------------------------------------------------------
 
 
-def _legs(path: Path, lo: int) -> list[tuple[tuple[float, float], tuple[float, float]]]:
-    """Straight legs of the path from ``lo``: runs of horizontal segments on one course."""
-    legs: list[tuple[tuple[float, float], tuple[float, float]]] = []
-    cur: float | None = None
-    for i in range(lo, len(path) - 1):
-        if horizontal(path, i) < TOL:
-            continue
-        c = math.atan2(path.ys[i + 1] - path.ys[i], path.xs[i + 1] - path.xs[i])
-        if cur is not None and abs(math.remainder(c - cur, 2 * math.pi)) < 1e-9:
-            legs[-1] = (legs[-1][0], xy(path, i + 1))
-        else:
-            legs.append((xy(path, i), xy(path, i + 1)))
-        cur = c
-    return legs
-
-
 @pytest.mark.parametrize(
     ("heading", "length", "spacing", "laps"),
     [(0.0, 20.0, 5.0, 2), (90.0, 20.0, 5.0, 2), (37.5, 30.0, 3.0, 3), (270.0, 12.0, 4.0, 1)],
@@ -373,7 +358,7 @@ def test_lawnmower_lanes(heading: float, length: float, spacing: float, laps: in
     vx, vy = -uy, ux  # starboard of the heading (NED, seen from above)
     assert p.origin == (x0, y0)
     assert angle_diff_deg(p.angle_deg, heading) < 1e-9
-    legs = _legs(path, path.body_start)
+    legs = straight_legs(path, path.body_start)
     lanes = legs[0::2]
     steps = legs[1::2]
     assert len(lanes) == n
@@ -420,7 +405,7 @@ def test_lawnmower_coverage_from_the_path() -> None:
     path = p.path
     h = math.radians(60.0)
     ux, uy, vx, vy = math.cos(h), math.sin(h), -math.sin(h), math.cos(h)
-    lanes = _legs(path, path.body_start)[0::2]
+    lanes = straight_legs(path, path.body_start)[0::2]
     width = 3 * 5.0
     for i in range(11):
         for j in range(16):
