@@ -1,0 +1,218 @@
+"""Guidance: the planner's path -> (course, speed, depth) references for the autopilot.
+
+Path following is line-of-sight with a lookahead on the path itself (the "enclosure" form of
+Fossen's LOS): the vehicle steers at the point ``lookahead_m`` further along the path from
+its projection. On a circle that is exact (the chord to the lookahead point asks for the
+circle's curvature), and a repeating path wraps into its lap. The projection searches a
+window of segments ahead of the active one (like MSS ``projectToPath``), so cutting a corner
+never leaves the vehicle tied to a segment it has passed, and it never jumps back to an
+earlier pass of a self-crossing path. Depth follows the path's own depth at the projection
+(the planner already ramps it at 0.05 m/s).
+
+Station keeping (hover, the end of a finite path, idle): NemeSys has no sway thruster, so it
+turns to face the hold point and approaches when more than ``capture_m`` away, and holds the
+heading inside ``settle_m`` (hysteresis). Hover and surfacing give the depth controller the
+target depth as a step, as in the paper's tank test; the controller's thrust limit shapes the
+transient.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import StrEnum
+
+from planner import Plan
+
+
+class Mode(StrEnum):
+    """What the vehicle is doing (reported in the status)."""
+
+    IDLE = "idle"  # no command yet: holding the start pose
+    RUNNING = "running"  # following a pattern
+    HOLDING = "holding"  # a finite pattern is complete, or a hover: station keeping
+    SURFACING = "surfacing"
+    SURFACED = "surfaced"
+    BATTERY_EMPTY = "battery_empty"
+
+
+@dataclass(frozen=True, slots=True)
+class GuidanceConfig:
+    lookahead_m: float = 1.5
+    capture_m: float = 1.0  # start approaching the hold point beyond this
+    settle_m: float = 0.3  # stop approaching inside this
+    approach_mps: float = 0.2
+    approach_gain_per_s: float = 0.3
+    surfaced_depth_m: float = 0.05
+
+
+class Reference:
+    """What guidance asks of the autopilot for one tick."""
+
+    __slots__ = ("course_rad", "depth_m", "segment", "speed_mps", "vertical", "yaw_rate_ff_rps")
+
+    def __init__(
+        self,
+        course_rad: float,
+        speed_mps: float,
+        depth_m: float,
+        vertical: bool = True,
+        segment: int | None = None,
+        yaw_rate_ff_rps: float = 0.0,
+    ) -> None:
+        self.course_rad = course_rad
+        self.speed_mps = speed_mps
+        self.depth_m = depth_m
+        self.vertical = vertical  # False: vertical thrusters off (afloat at the surface)
+        self.segment = segment
+        self.yaw_rate_ff_rps = yaw_rate_ff_rps
+
+
+class Guidance:
+    """Tracks one plan at a time; :meth:`set_plan` switches (the retask)."""
+
+    def __init__(self, config: GuidanceConfig | None = None) -> None:
+        self.config = config or GuidanceConfig()
+        self.plan: Plan | None = None
+        self.mode = Mode.IDLE
+        self.segment = 0
+        self.cross_track_m = 0.0
+        self.hold: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)  # x, y, z, hdg rad
+        self._approaching = False
+        self._started_s = 0.0
+
+    def hold_here(self, x_m: float, y_m: float, z_m: float, heading_deg: float) -> None:
+        """Station keeping at a pose (idle, and after a finite pattern)."""
+        self.hold = (x_m, y_m, z_m, math.radians(heading_deg))
+        self._approaching = False
+
+    def set_plan(self, plan: Plan, t_s: float) -> None:
+        """Switch to ``plan`` (already joined from the current pose by the planner)."""
+        self.plan = plan
+        self.segment = 0
+        self._started_s = t_s
+        self._approaching = False
+        self.cross_track_m = 0.0
+        path = plan.path
+        name = plan.pattern
+        if name == "surface":
+            self.mode = Mode.SURFACING
+            self.hold = (path.xs[0], path.ys[0], 0.0, math.radians(path.course_deg(0)))
+        elif name == "hover":
+            self.mode = Mode.RUNNING
+            heading = path.hold_heading_deg or 0.0
+            self.hold = (plan.origin[0], plan.origin[1], path.zs[-1], math.radians(heading))
+        else:
+            self.mode = Mode.RUNNING
+
+    def update(
+        self, x_m: float, y_m: float, z_m: float, heading_rad: float, t_s: float
+    ) -> Reference:
+        """References for the vehicle at ``(x, y, z)`` (NED m) and ``t_s`` (s)."""
+        plan = self.plan
+        if self.mode is Mode.SURFACING or self.mode is Mode.SURFACED:
+            hdg = self.hold[3]
+            if z_m <= self.config.surfaced_depth_m:
+                self.mode = Mode.SURFACED
+            return Reference(hdg, 0.0, 0.0, self.mode is Mode.SURFACING)
+        if plan is None or self.mode is Mode.HOLDING or self.mode is Mode.IDLE:
+            return self._station(x_m, y_m, heading_rad)
+        if plan.pattern == "hover":
+            if t_s - self._started_s >= plan.path.duration_s:
+                self.mode = Mode.HOLDING
+            return self._station(x_m, y_m, heading_rad)
+        return self._follow(plan, x_m, y_m, z_m)
+
+    # --- path following ------------------------------------------------------------------
+
+    def _follow(self, plan: Plan, x: float, y: float, z: float) -> Reference:
+        path = plan.path
+        xs, ys, zs = path.xs, path.ys, path.zs
+        n = len(xs)
+        if n == 1:
+            self._finish(plan)
+            return self._station(x, y, 0.0)
+        look = self.config.lookahead_m
+        loop = path.loop_start
+        # window search: segments from the active one up to `look` metres of path beyond it
+        best_i, best_f, best_d = self.segment, 0.0, math.inf
+        i = self.segment
+        ahead = 0.0
+        for _ in range(n):
+            f, d = _project(xs[i], ys[i], xs[i + 1], ys[i + 1], x, y)
+            if d < best_d - 1e-9:
+                best_i, best_f, best_d = i, f, d
+            ahead += math.hypot(xs[i + 1] - xs[i], ys[i + 1] - ys[i])
+            if ahead > look and i != self.segment:
+                break
+            i += 1
+            if i >= n - 1:
+                if loop is None:
+                    break
+                i = loop
+        i, f = best_i, best_f
+        self.segment = i
+        self.cross_track_m = best_d
+        if loop is None and i == n - 2 and f >= 1.0:
+            self._finish(plan)
+            return self._station(x, y, 0.0)
+        # the lookahead point
+        px = xs[i] + f * (xs[i + 1] - xs[i])
+        py = ys[i] + f * (ys[i + 1] - ys[i])
+        depth = zs[i] + f * (zs[i + 1] - zs[i])
+        left = look
+        j, cx, cy = i, px, py
+        while True:
+            sx, sy = xs[j + 1] - cx, ys[j + 1] - cy
+            seg = math.hypot(sx, sy)
+            if seg >= left:
+                cx, cy = cx + sx * left / seg, cy + sy * left / seg
+                break
+            left -= seg
+            cx, cy = xs[j + 1], ys[j + 1]
+            j += 1
+            if j >= n - 1:
+                if loop is None:
+                    break
+                j = loop
+        if math.hypot(cx - x, cy - y) < 1e-6:
+            course = math.radians(path.course_deg(i))
+        else:
+            course = math.atan2(cy - y, cx - x)
+        return Reference(course, path.speeds[i], depth, True, i)
+
+    def _finish(self, plan: Plan) -> None:
+        path = plan.path
+        heading = (
+            path.hold_heading_deg
+            if path.hold_heading_deg is not None
+            else path.course_deg(len(path) - 2)
+            if len(path) > 1
+            else plan.angle_deg
+        )
+        self.hold_here(path.xs[-1], path.ys[-1], path.zs[-1], heading)
+        self.mode = Mode.HOLDING
+
+    # --- station keeping -----------------------------------------------------------------
+
+    def _station(self, x: float, y: float, heading_rad: float) -> Reference:
+        cfg = self.config
+        hx, hy, hz, hdg = self.hold
+        dist = math.hypot(hx - x, hy - y)
+        if dist > cfg.capture_m:
+            self._approaching = True
+        elif dist < cfg.settle_m:
+            self._approaching = False
+        if self._approaching:
+            speed = min(cfg.approach_mps, cfg.approach_gain_per_s * dist)
+            return Reference(math.atan2(hy - y, hx - x), speed, hz)
+        return Reference(hdg, 0.0, hz)
+
+
+def _project(ax: float, ay: float, bx: float, by: float, x: float, y: float) -> tuple[float, float]:
+    """Fraction along segment a->b (clamped to [0, 1]) of the point nearest (x, y); distance."""
+    dx, dy = bx - ax, by - ay
+    den = dx * dx + dy * dy
+    f = 0.0 if den < 1e-12 else min(1.0, max(0.0, ((x - ax) * dx + (y - ay) * dy) / den))
+    ex, ey = ax + f * dx - x, ay + f * dy - y
+    return f, math.hypot(ex, ey)
