@@ -80,7 +80,17 @@ class SimConfig:
 class Sample:
     """One recorded instant (for plots and metrics)."""
 
-    __slots__ = ("cross_track_m", "depth_ref_m", "heading_deg", "mode", "t_s", "x_m", "y_m", "z_m")
+    __slots__ = (
+        "cross_track_m",
+        "depth_ref_m",
+        "heading_deg",
+        "mode",
+        "segment",
+        "t_s",
+        "x_m",
+        "y_m",
+        "z_m",
+    )
 
     def __init__(
         self,
@@ -92,6 +102,7 @@ class Sample:
         depth_ref_m: float,
         cross_track_m: float,
         mode: str,
+        segment: int,
     ) -> None:
         self.t_s = t_s
         self.x_m = x_m
@@ -101,6 +112,7 @@ class Sample:
         self.depth_ref_m = depth_ref_m
         self.cross_track_m = cross_track_m
         self.mode = mode
+        self.segment = segment  # the active plan's segment guidance tracks
 
 
 class Simulation:
@@ -241,6 +253,7 @@ class Simulation:
                     self.ref.depth_m,
                     self.guidance.cross_track_m,
                     self.mode.value,
+                    self.guidance.segment,
                 )
             )
 
