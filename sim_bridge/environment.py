@@ -431,13 +431,17 @@ class Battery:
 
     thrust_power_w = staticmethod(thrust_power_w)
 
-    def __init__(self, config: BatteryConfig | None = None) -> None:
+    def __init__(self, config: BatteryConfig | None = None, start_h: float = 0.0) -> None:
+        """``start_h``: hours already run at nominal load (a part-used battery; 0 = full)."""
+        _check("start_h", start_h, 0.0, math.inf, "[0, inf)")
         self._config = BatteryConfig()
         self._inv_nominal_w = 0.0
         self._elapsed_h = 0.0
         self._load_h = 0.0
         self._soc_pct = 100.0
         self.set_config(config if config is not None else BatteryConfig())
+        self._elapsed_h = self._load_h = float(start_h)
+        self._soc_pct = max(0.0, paper_soc_pct(start_h))
 
     @property
     def config(self) -> BatteryConfig:

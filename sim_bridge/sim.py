@@ -59,6 +59,8 @@ class SimConfig:
     depth_sensor: DepthSensorConfig = field(default_factory=DepthSensorConfig)
     battery: BatteryConfig = field(default_factory=BatteryConfig)
     limits: Limits = field(default_factory=Limits)
+    #: Hours the battery has already run at nominal load (0: full; ~7.4 h: empty).
+    battery_start_h: float = 0.0
     #: Samples per second kept in :attr:`Simulation.track` (0: none).
     record_hz: float = 0.0
 
@@ -136,7 +138,7 @@ class Simulation:
         self.channel = MEChannel(cfg.channel, seed=seed)
         self.current = Current(cfg.current, seed=seed + 1)
         self.sensor = DepthSensor(cfg.depth_sensor, seed=seed + 2)
-        self.battery = Battery(cfg.battery)
+        self.battery = Battery(cfg.battery, cfg.battery_start_h)
         self.dt_s = 1.0 / cfg.physics_hz
         self._ticks_per_guidance = round(cfg.physics_hz / cfg.guidance_hz)
         self._record_every = round(cfg.physics_hz / cfg.record_hz) if cfg.record_hz > 0 else 0
