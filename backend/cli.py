@@ -1,7 +1,8 @@
 """The ``nemesys`` command line.
 
 Subcommands are dispatched through :data:`COMMANDS`; each handler returns the exit status.
-Exit status: 0 success, 1 a frame was rejected, 2 bad input (usage, out-of-range value),
+Exit status: 0 success, 1 a frame was rejected (or, for ``send``, not sent or not
+acknowledged), 2 bad input (usage, out-of-range value, bad target),
 70 an internal error (a bug: reported in one line; ``NEMESYS_DEBUG=1`` shows the traceback).
 Errors are one line on standard error, never a traceback.
 """
@@ -13,7 +14,8 @@ import json
 import os
 import sys
 from collections.abc import Callable, Sequence
-from typing import Any, TextIO
+from datetime import UTC, datetime
+from typing import TYPE_CHECKING, Any, TextIO
 
 from codec import (
     DEFAULT_BITRATE_BPS,
@@ -30,6 +32,10 @@ from codec import (
     sections,
 )
 from codec._fields import fmt
+from sim_bridge import cli as sim_cli
+
+if TYPE_CHECKING:
+    from sim_bridge.transmit import SendResult
 
 EXIT_OK = 0
 EXIT_REJECTED = 1
@@ -192,6 +198,121 @@ def cmd_decode(args: argparse.Namespace, out: TextIO) -> int:
     return EXIT_OK if _decode_one("".join(args.frame), args.json, out, None) else EXIT_REJECTED
 
 
+# --- send ---------------------------------------------------------------------------------
+
+#: Where ``nemesys send`` transmits by default: the simulator's rosbridge (``nemesys sim``).
+#: Equal to ``sim_bridge.transmit.DEFAULT_ROSBRIDGE_URL`` (not imported: it pulls in asyncio,
+#: websockets and pyserial, which the other subcommands don't need).
+DEFAULT_SEND_TO = "ws://127.0.0.1:9090"
+DEFAULT_SEND_TIMEOUT_S = 5.0
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"timeout must be seconds, got {text!r}") from None
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"timeout must be 0 or more seconds, got {text}")
+    return value
+
+
+def _utc(t: float) -> str:
+    return datetime.fromtimestamp(t, UTC).isoformat(timespec="milliseconds")
+
+
+def _command_text(command: object) -> str:
+    """An acknowledgement's ``command`` ({pattern, params}) as ``circle speed=0.5 m/s ...``."""
+    if not isinstance(command, dict):
+        return str(command)
+    try:
+        return encode_frame(command["pattern"], command["params"]).command.describe()
+    except (CodecError, KeyError, TypeError, ValueError):
+        params = command.get("params") or {}
+        words = [str(command.get("pattern"))]
+        words += [f"{k}={v}" for k, v in params.items()] if isinstance(params, dict) else []
+        return " ".join(words)
+
+
+def _ack_lines(result: SendResult) -> list[str]:
+    ack = result.ack or {}
+    seq = f"ack #{ack.get('seq')}"
+    if result.accepted:
+        note = ", already active: not replanned" if ack.get("duplicate") else ""
+        lines = [f"accepted {_command_text(ack.get('command'))}  ({seq}{note})"]
+        corrected = ack.get("corrected_bits")
+        bits = "bit" if corrected == 1 else "bits"
+        lines.append(f"         corrected {corrected} {bits}, sync errors {ack.get('sync_errors')}")
+        timing = [
+            f"{name} {value:.2f} ms"
+            for name in ("decode", "replan")
+            if isinstance(value := ack.get(f"{name}_latency_ms"), int | float)
+        ]
+        if isinstance(waypoints := ack.get("waypoints"), int):
+            timing.append(f"{waypoints} waypoints")
+        if timing:
+            lines.append("         " + ", ".join(timing))
+    else:
+        field = f" (field {ack['field']})" if ack.get("field") else ""
+        lines = [f"rejected {ack.get('reason')}{field}: {ack.get('detail')}  ({seq})"]
+    if result.ack_match != "exact":
+        lines.append(f"         {result.detail}")
+    return lines
+
+
+def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
+    from sim_bridge.transmit import open_transmitter
+
+    try:
+        transmitter = open_transmitter(args.to, bitrate_bps=args.bitrate)
+    except ValueError as err:
+        raise UsageError(f"--to: {err}") from None
+    enc = encode_frame(args.pattern, _parse_assignments(args.params))
+    cmd, frame = enc.command, enc.frame
+    airtime_ms = airtime_s(args.bitrate) * 1e3
+    if not args.json:
+        out.write(f"send     {cmd.pattern.name} (ID {cmd.pattern.id}) to {args.to}\n")
+        for snap in enc.snaps:
+            sent = snap.sent if isinstance(snap.sent, str) else fmt(snap.sent)
+            unit = f" {snap.unit}" if snap.unit else ""
+            note = f"   (requested {snap.requested}{unit})" if snap.changed else ""
+            out.write(f"  {snap.field:<15} {sent}{unit}{note}\n")
+        out.write(f"hex      {frame.hex}\n")
+        out.write(f"airtime  {airtime_ms:.3f} ms at {fmt(args.bitrate)} b/s\n")
+        out.flush()
+    with transmitter:
+        result = transmitter.send(frame, wait_ack_s=args.timeout)
+    if args.json:
+        doc: dict[str, Any] = {
+            "pattern": cmd.pattern.name,
+            "pattern_id": cmd.pattern.id,
+            "params": cmd.params,
+            "requested": {s.field: _number_or_text(s.requested) for s in enc.snaps},
+            "snapped": [str(s) for s in enc.snaps if s.changed],
+            "hex": frame.hex,
+            "bitrate_bps": args.bitrate,
+            "airtime_ms": airtime_ms,
+            "to": args.to,
+            **result.to_json(),
+        }
+        json.dump(doc, out)
+        out.write("\n")
+    elif result.sent_t is not None:
+        out.write(f"sent     {_utc(result.sent_t)} via {result.transport}\n")
+        if result.ack is not None:
+            out.write("\n".join(_ack_lines(result)) + "\n")
+        elif result.ok:
+            out.write(f"         {result.detail}\n")
+    if not result.ok:
+        print(f"nemesys send: failed: {result.reason}: {result.detail}", file=sys.stderr)
+        return EXIT_REJECTED
+    if result.accepted is False:
+        ack = result.ack or {}
+        print(f"nemesys send: rejected: {ack.get('reason')}: {ack.get('detail')}", file=sys.stderr)
+        return EXIT_REJECTED
+    return EXIT_OK
+
+
 # --- bench --------------------------------------------------------------------------------
 
 
@@ -204,6 +325,10 @@ def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
         from bench import planner as bench_planner
 
         return bench_planner.run(out, quick=args.quick)
+    if args.target == "sim":
+        from bench import sim as bench_sim
+
+        return bench_sim.run(out, quick=args.quick)
     raise UsageError(f"unknown benchmark {args.target!r}")
 
 
@@ -214,6 +339,9 @@ COMMANDS: dict[str, Handler] = {
     "patterns": cmd_patterns,
     "encode": cmd_encode,
     "decode": cmd_decode,
+    "send": cmd_send,
+    "sim": sim_cli.cmd_sim,
+    "scenario": sim_cli.cmd_scenario,
     "bench": cmd_bench,
 }
 
@@ -254,8 +382,44 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("frame", nargs="+", metavar="BITS", help="the frame, or - for stdin")
     p.add_argument("--json", action="store_true", help="machine-readable output")
 
+    p = sub.add_parser(
+        "send",
+        help="encode a command and transmit it to the vehicle",
+        description="Encode PATTERN (parameters as name=value, as for encode), transmit it to "
+        "--to and print the vehicle's acknowledgement when the target gives one. Exit status 0 "
+        "accepted (or sent, for targets without acknowledgements), 1 rejected, not sent or not "
+        "acknowledged in time, 2 bad input.",
+    )
+    p.add_argument("pattern", metavar="PATTERN", help=", ".join(DICTIONARY))
+    p.add_argument("params", nargs="*", metavar="name=value")
+    p.add_argument(
+        "--to",
+        default=DEFAULT_SEND_TO,
+        metavar="TARGET",
+        help="ws://host:port[/path] (rosbridge), serial:///dev/ttyUSB0[?baud=115200], "
+        f"tcp://host:port (modem gateway), loop:// (default {DEFAULT_SEND_TO})",
+    )
+    p.add_argument(
+        "--timeout",
+        type=_seconds,
+        default=DEFAULT_SEND_TIMEOUT_S,
+        metavar="S",
+        help="seconds to wait for the acknowledgement; 0 does not wait "
+        f"(default {DEFAULT_SEND_TIMEOUT_S:g})",
+    )
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.add_argument(
+        "--bitrate",
+        type=_positive_rate,
+        default=float(DEFAULT_BITRATE_BPS),
+        metavar="BPS",
+        help=f"link bit rate: airtime and the gap between frames (default {DEFAULT_BITRATE_BPS})",
+    )
+
+    sim_cli.add_parsers(sub)
+
     p = sub.add_parser("bench", help="run a benchmark and print its table")
-    p.add_argument("target", choices=["codec", "planner"], help="what to benchmark")
+    p.add_argument("target", choices=["codec", "planner", "sim"], help="what to benchmark")
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
     return parser
 
@@ -273,7 +437,7 @@ def main(argv: Sequence[str] | None = None, out: TextIO | None = None) -> int:
     except DecodeError as err:
         print(f"nemesys {args.command}: rejected: {err}", file=sys.stderr)
         return EXIT_REJECTED
-    except (EncodeError, UsageError, CodecError) as err:
+    except (EncodeError, UsageError, CodecError, sim_cli.SimUsageError) as err:
         print(f"nemesys {args.command}: {err}", file=sys.stderr)
         return EXIT_USAGE
     except BrokenPipeError:  # e.g. piped into head

@@ -1,0 +1,121 @@
+"""A small fake rosbridge endpoint for transmitter tests: a ``websockets`` server on
+127.0.0.1 (port 0) in its own thread and event loop. It records every message a client sends
+and answers each frame published on ``/nemesys/frame`` with whatever ``respond`` returns
+(complete rosbridge messages; :func:`mission` wraps an acknowledgement)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import threading
+from collections.abc import Callable
+from types import TracebackType
+from typing import Any, Self
+
+from websockets.asyncio.server import Server, ServerConnection, serve
+
+#: Replies to one published frame: rosbridge messages (dicts) or raw text.
+Respond = Callable[[bytes], list[dict[str, Any] | str]]
+
+
+def mission(ack: dict[str, Any]) -> dict[str, Any]:
+    """A ``/nemesys/mission`` publish carrying ``ack`` as a JSON string, as rosbridge sends."""
+    return {"op": "publish", "topic": "/nemesys/mission", "msg": {"data": json.dumps(ack)}}
+
+
+def ack_for(data: bytes, seq: int = 1, outcome: str = "accepted", **fields: Any) -> dict[str, Any]:
+    """An acknowledgement of the 13 bytes ``data`` shaped like the onboard agent's."""
+    value = int.from_bytes(data, "big") >> 4
+    ack: dict[str, Any] = {
+        "seq": seq,
+        "t_s": 12.5,
+        "outcome": outcome,
+        "frame_hex": f"{value:025x}",
+        "corrected_bits": 0,
+        "sync_errors": 0,
+        "reason": None if outcome == "accepted" else "crc_mismatch",
+        "detail": "circle: replanned, 12 waypoints" if outcome == "accepted" else "CRC-4 failed",
+        "field": None,
+        "command": {"pattern": "circle", "pattern_id": 3, "params": {"speed": 0.5}},
+        "duplicate": False,
+        "decode_latency_ms": 0.25,
+        "replan_latency_ms": 3.5 if outcome == "accepted" else None,
+        "waypoints": 12 if outcome == "accepted" else None,
+        "active": None,
+    }
+    ack.update(fields)
+    return ack
+
+
+def accept_all(data: bytes) -> list[dict[str, Any] | str]:
+    return [mission(ack_for(data))]
+
+
+class FakeRosbridge:
+    """``with FakeRosbridge(respond) as fake: ... fake.url ... fake.received``."""
+
+    def __init__(self, respond: Respond | None = accept_all, *, close_after: int = 0) -> None:
+        self.respond = respond
+        #: Close the client's connection after this many frames (0: never).
+        self.close_after = close_after
+        self.received: list[dict[str, Any]] = []
+        self.connections = 0
+        self.frames = 0
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._loop.run_forever, daemon=True)
+        self._server: Server | None = None
+        self.port = 0
+
+    @property
+    def url(self) -> str:
+        return f"ws://127.0.0.1:{self.port}"
+
+    def __enter__(self) -> Self:
+        self._thread.start()
+        self.port = asyncio.run_coroutine_threadsafe(self._start(), self._loop).result(5)
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        asyncio.run_coroutine_threadsafe(self._stop(), self._loop).result(5)
+        self._loop.call_soon_threadsafe(self._loop.stop)
+        self._thread.join(5)
+        self._loop.close()
+
+    async def _start(self) -> int:
+        self._server = await serve(self._handler, "127.0.0.1", 0)
+        port: int = self._server.sockets[0].getsockname()[1]
+        return port
+
+    async def _stop(self) -> None:
+        if self._server is not None:
+            self._server.close()
+            await self._server.wait_closed()
+
+    def ops(self) -> list[str]:
+        return [m["op"] for m in self.received]
+
+    def published(self) -> list[bytes]:
+        return [
+            bytes(m["msg"]["data"])
+            for m in self.received
+            if m["op"] == "publish" and m["topic"] == "/nemesys/frame"
+        ]
+
+    async def _handler(self, ws: ServerConnection) -> None:
+        self.connections += 1
+        async for text in ws:
+            message: dict[str, Any] = json.loads(text)
+            self.received.append(message)
+            if message["op"] != "publish" or message["topic"] != "/nemesys/frame":
+                continue
+            self.frames += 1
+            data = bytes(message["msg"]["data"])
+            for reply in self.respond(data) if self.respond else []:
+                await ws.send(reply if isinstance(reply, str) else json.dumps(reply))
+            if self.close_after and self.frames % self.close_after == 0:
+                await ws.close()
