@@ -140,7 +140,8 @@ class Guidance:
         ahead = 0.0
         for _ in range(n):
             f, d = _project(xs[i], ys[i], xs[i + 1], ys[i + 1], x, y)
-            if d < best_d - 1e-9:
+            # on a tie (the end of one segment is the start of the next) the later one wins
+            if d < best_d - 1e-9 or (d <= best_d + 1e-9 and best_f >= 1.0):
                 best_i, best_f, best_d = i, f, d
             ahead += math.hypot(xs[i + 1] - xs[i], ys[i + 1] - ys[i])
             if ahead > look and i != self.segment:
@@ -210,9 +211,13 @@ class Guidance:
 
 
 def _project(ax: float, ay: float, bx: float, by: float, x: float, y: float) -> tuple[float, float]:
-    """Fraction along segment a->b (clamped to [0, 1]) of the point nearest (x, y); distance."""
+    """Fraction along segment a->b (clamped to [0, 1]) of the point nearest (x, y); distance.
+
+    A segment with no horizontal extent (a depth change in place) counts as passed (1.0) as
+    soon as it is the nearest: its depth becomes the reference as a step.
+    """
     dx, dy = bx - ax, by - ay
     den = dx * dx + dy * dy
-    f = 0.0 if den < 1e-12 else min(1.0, max(0.0, ((x - ax) * dx + (y - ay) * dy) / den))
+    f = 1.0 if den < 1e-12 else min(1.0, max(0.0, ((x - ax) * dx + (y - ay) * dy) / den))
     ex, ey = ax + f * dx - x, ay + f * dy - y
     return f, math.hypot(ex, ey)

@@ -14,8 +14,8 @@ setpoint in that same tick.
 
 from __future__ import annotations
 
+import heapq
 import math
-from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -146,7 +146,10 @@ class Simulation:
         self.t_s = 0.0
         self.depth_m = cfg.start_z_m  # the last depth sensor reading
         self.ref = Reference(math.radians(cfg.start_heading_deg), 0.0, cfg.start_z_m)
-        self._inbox: deque[tuple[float, Delivery | None, int]] = deque()
+        # frames in flight, by arrival time then submission order: (arrive_t_s, n, delivery,
+        # n_bits); a delivery of None is a message that was not a frame (wrong length)
+        self._inbox: list[tuple[float, int, Delivery | None, int]] = []
+        self._clock_s = 0.0
         self._missions: list[dict[str, Any]] = []
         self.acks: list[dict[str, Any]] = []  # every acknowledgement of the run
         self.track: list[Sample] = []
@@ -161,19 +164,26 @@ class Simulation:
         self.frames_in += 1
         if len(data) != FRAME_BYTES:
             # not a frame: acknowledged as malformed on the next tick, nothing transmitted
-            self._inbox.append((self.t_s, None, 8 * len(data)))
+            heapq.heappush(self._inbox, (self.t_s, self.frames_in, None, 8 * len(data)))
             return
         delivery = self.channel.transmit_bytes(bytes(data), self.t_s, self.distance_m)
         if delivery is None:
             self.frames_lost += 1
             return
-        self._inbox.append((delivery.arrive_t_s, delivery, delivery.n_bits))
+        heapq.heappush(
+            self._inbox, (delivery.arrive_t_s, self.frames_in, delivery, delivery.n_bits)
+        )
 
     def advance(self, dt_s: float) -> None:
-        """Run the physics forward by ``dt_s`` seconds (whole steps; the rest carries over)."""
-        self.run_until(self.t_s + dt_s)
+        """Run the physics forward by ``dt_s`` seconds: whole steps, the rest carries over to
+        the next call (so many small advances add up to the right time)."""
+        if not dt_s >= 0.0:
+            raise ValueError(f"dt_s must be >= 0 seconds, got {dt_s!r}")
+        self.run_until(self._clock_s + dt_s)
 
     def run_until(self, t_s: float) -> None:
+        """Step until simulated time reaches ``t_s`` (to the nearest step)."""
+        self._clock_s = max(self._clock_s, t_s)
         while self.t_s + self.dt_s / 2 <= t_s:
             self.step()
 
@@ -264,7 +274,7 @@ class Simulation:
         self.depth_m = self.sensor.read(v.z, self.t_s)
         ref: Reference | None = None
         while self._inbox and self._inbox[0][0] <= self.t_s + 1e-9:
-            _, delivery, n_bits = self._inbox.popleft()
+            _, _, delivery, n_bits = heapq.heappop(self._inbox)
             self.last_frame_t_s = self.t_s
             ack, new = self.agent.receive(
                 delivery.bits if delivery is not None else None, n_bits, self.state()
