@@ -23,7 +23,9 @@ from codec import (
     CodecError,
     Decoded,
     DecodeError,
+    Encoded,
     EncodeError,
+    Snap,
     airtime_s,
     decode_frame,
     describe_dictionary,
@@ -107,6 +109,27 @@ def _number_or_text(value: object) -> object:
     return value
 
 
+def _write_snaps(out: TextIO, snaps: Sequence[Snap]) -> None:
+    """One line per parameter: the value sent, and what was asked for if it was snapped."""
+    for snap in snaps:
+        sent = snap.sent if isinstance(snap.sent, str) else fmt(snap.sent)
+        unit = f" {snap.unit}" if snap.unit else ""
+        note = f"   (requested {snap.requested}{unit})" if snap.changed else ""
+        out.write(f"  {snap.field:<15} {sent}{unit}{note}\n")
+
+
+def _command_json(enc: Encoded) -> dict[str, Any]:
+    """The encoded command as JSON: pattern, values sent, values requested, what was snapped."""
+    cmd = enc.command
+    return {
+        "pattern": cmd.pattern.name,
+        "pattern_id": cmd.pattern.id,
+        "params": cmd.params,
+        "requested": {s.field: _number_or_text(s.requested) for s in enc.snaps},
+        "snapped": [str(s) for s in enc.snaps if s.changed],
+    }
+
+
 def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
     enc = encode_frame(args.pattern, _parse_assignments(args.params))
     cmd, frame = enc.command, enc.frame
@@ -115,11 +138,7 @@ def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
     secs = sections(cmd.pattern)
     if args.json:
         doc: dict[str, Any] = {
-            "pattern": cmd.pattern.name,
-            "pattern_id": cmd.pattern.id,
-            "params": cmd.params,
-            "requested": {s.field: _number_or_text(s.requested) for s in enc.snaps},
-            "snapped": [str(s) for s in enc.snaps if s.changed],
+            **_command_json(enc),
             "units": {f.name: f.unit for f in cmd.pattern.fields},
             "bits": bits,
             "hex": frame.hex,
@@ -134,11 +153,7 @@ def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
         out.write("\n")
         return EXIT_OK
     out.write(f"{cmd.pattern.name} (ID {cmd.pattern.id})\n")
-    for snap in enc.snaps:
-        sent = snap.sent if isinstance(snap.sent, str) else fmt(snap.sent)
-        unit = f" {snap.unit}" if snap.unit else ""
-        note = f"   (requested {snap.requested}{unit})" if snap.changed else ""
-        out.write(f"  {snap.field:<15} {sent}{unit}{note}\n")
+    _write_snaps(out, enc.snaps)
     out.write(f"bits     {frame.grouped(cmd.pattern)}\n")
     for s in secs:
         out.write(f"  {s.name:<15} bits {s.start:>2}-{s.start + s.length - 1:<3} ")
@@ -272,11 +287,7 @@ def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
     airtime_ms = airtime_s(args.bitrate) * 1e3
     if not args.json:
         out.write(f"send     {cmd.pattern.name} (ID {cmd.pattern.id}) to {args.to}\n")
-        for snap in enc.snaps:
-            sent = snap.sent if isinstance(snap.sent, str) else fmt(snap.sent)
-            unit = f" {snap.unit}" if snap.unit else ""
-            note = f"   (requested {snap.requested}{unit})" if snap.changed else ""
-            out.write(f"  {snap.field:<15} {sent}{unit}{note}\n")
+        _write_snaps(out, enc.snaps)
         out.write(f"hex      {frame.hex}\n")
         out.write(f"airtime  {airtime_ms:.3f} ms at {fmt(args.bitrate)} b/s\n")
         out.flush()
@@ -284,11 +295,7 @@ def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
         result = transmitter.send(frame, wait_ack_s=args.timeout)
     if args.json:
         doc: dict[str, Any] = {
-            "pattern": cmd.pattern.name,
-            "pattern_id": cmd.pattern.id,
-            "params": cmd.params,
-            "requested": {s.field: _number_or_text(s.requested) for s in enc.snaps},
-            "snapped": [str(s) for s in enc.snaps if s.changed],
+            **_command_json(enc),
             "hex": frame.hex,
             "bitrate_bps": args.bitrate,
             "airtime_ms": airtime_ms,

@@ -43,6 +43,7 @@ import random
 from dataclasses import dataclass
 
 from codec import DEFAULT_BITRATE_BPS, FRAME_BITS
+from sim_bridge._checks import in_range, number
 
 __all__ = [
     "DEFAULT_RANGE_M",
@@ -59,18 +60,6 @@ DEFAULT_RANGE_M = 730.0
 MAX_BER = 0.5
 #: The longest burst: one frame.
 MAX_BURST_LENGTH_BITS = FRAME_BITS
-
-
-def _number(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    return float(value)
-
-
-def _in_range(name: str, value: object, lo: float, hi: float, allowed: str) -> None:
-    x = _number(name, value)
-    if not lo <= x <= hi:  # also refuses NaN
-        raise ValueError(f"{name} must be in {allowed}, got {value!r}")
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,12 +85,12 @@ class ChannelConfig:
     delay_s: float = 0.0
 
     def __post_init__(self) -> None:
-        rate = _number("bitrate_bps", self.bitrate_bps)
+        rate = number("bitrate_bps", self.bitrate_bps)
         if not 0.0 < rate < math.inf:
             raise ValueError(f"bitrate_bps must be in (0, inf), got {self.bitrate_bps!r}")
-        _in_range("range_m", self.range_m, 0.0, math.inf, "[0, inf]")
-        _in_range("ber", self.ber, 0.0, MAX_BER, f"[0, {MAX_BER}]")
-        _in_range("burst_rate", self.burst_rate, 0.0, 1.0, "[0, 1]")
+        in_range("range_m", self.range_m, 0.0, math.inf, "[0, inf]")
+        in_range("ber", self.ber, 0.0, MAX_BER, f"[0, {MAX_BER}]")
+        in_range("burst_rate", self.burst_rate, 0.0, 1.0, "[0, 1]")
         length = self.burst_length_bits
         if isinstance(length, bool) or not isinstance(length, int):
             raise ValueError(f"burst_length_bits must be an int, got {length!r}")
@@ -109,8 +98,8 @@ class ChannelConfig:
             raise ValueError(
                 f"burst_length_bits must be in [1, {MAX_BURST_LENGTH_BITS}], got {length!r}"
             )
-        _in_range("loss", self.loss, 0.0, 1.0, "[0, 1]")
-        _in_range("delay_s", self.delay_s, 0.0, math.inf, "[0, inf)")
+        in_range("loss", self.loss, 0.0, 1.0, "[0, 1]")
+        in_range("delay_s", self.delay_s, 0.0, math.inf, "[0, inf)")
         if self.delay_s == math.inf:
             raise ValueError(f"delay_s must be in [0, inf), got {self.delay_s!r}")
 

@@ -22,6 +22,8 @@ import random
 from collections.abc import Iterable
 from dataclasses import dataclass
 
+from sim_bridge._checks import in_range, number
+
 __all__ = [
     "CALIBRATED_THRUST_N",
     "HOTEL_POWER_W",
@@ -43,21 +45,8 @@ __all__ = [
 ]
 
 
-def _number(name: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ValueError(f"{name} must be a number, got {value!r}")
-    return float(value)
-
-
-def _check(name: str, value: object, lo: float, hi: float, allowed: str) -> None:
-    """``lo <= value <= hi`` (NaN refused); ``allowed`` is the range as the message shows it."""
-    x = _number(name, value)
-    if not lo <= x <= hi:
-        raise ValueError(f"{name} must be in {allowed}, got {value!r}")
-
-
 def _check_positive(name: str, value: object) -> None:
-    x = _number(name, value)
+    x = number(name, value)
     if not 0.0 < x < math.inf:
         raise ValueError(f"{name} must be in (0, inf), got {value!r}")
 
@@ -102,18 +91,18 @@ class CurrentConfig:
 
     def __post_init__(self) -> None:
         span = f"[-{MAX_CURRENT_MPS:g}, {MAX_CURRENT_MPS:g}]"
-        _check("north_mps", self.north_mps, -MAX_CURRENT_MPS, MAX_CURRENT_MPS, span)
-        _check("east_mps", self.east_mps, -MAX_CURRENT_MPS, MAX_CURRENT_MPS, span)
-        _check(
+        in_range("north_mps", self.north_mps, -MAX_CURRENT_MPS, MAX_CURRENT_MPS, span)
+        in_range("east_mps", self.east_mps, -MAX_CURRENT_MPS, MAX_CURRENT_MPS, span)
+        in_range(
             "speed_sigma_mps",
             self.speed_sigma_mps,
             0.0,
             MAX_CURRENT_MPS,
             f"[0, {MAX_CURRENT_MPS:g}]",
         )
-        _check("direction_sigma_deg", self.direction_sigma_deg, 0.0, 180.0, "[0, 180]")
+        in_range("direction_sigma_deg", self.direction_sigma_deg, 0.0, 180.0, "[0, 180]")
         _check_positive("time_constant_s", self.time_constant_s)
-        x = _number("bound_sigmas", self.bound_sigmas)
+        x = number("bound_sigmas", self.bound_sigmas)
         if not 0.0 < x <= 10.0:
             raise ValueError(f"bound_sigmas must be in (0, 10], got {self.bound_sigmas!r}")
 
@@ -255,8 +244,8 @@ class DepthSensorConfig:
     rate_hz: float | None = 20.0
 
     def __post_init__(self) -> None:
-        _check("noise_sigma_m", self.noise_sigma_m, 0.0, 1.0, "[0, 1]")
-        _check("quantum_m", self.quantum_m, 0.0, 1.0, "[0, 1]")
+        in_range("noise_sigma_m", self.noise_sigma_m, 0.0, 1.0, "[0, 1]")
+        in_range("quantum_m", self.quantum_m, 0.0, 1.0, "[0, 1]")
         if self.rate_hz is not None:
             _check_positive("rate_hz", self.rate_hz)
 
@@ -403,11 +392,11 @@ class BatteryConfig:
 
     def __post_init__(self) -> None:
         _check_positive("hotel_power_w", self.hotel_power_w)
-        _check("nominal_thrust_power_w", self.nominal_thrust_power_w, 0.0, math.inf, "[0, inf)")
+        in_range("nominal_thrust_power_w", self.nominal_thrust_power_w, 0.0, math.inf, "[0, inf)")
         if self.nominal_thrust_power_w == math.inf:
             raise ValueError("nominal_thrust_power_w must be in [0, inf), got inf")
-        _check("reserve_pct", self.reserve_pct, 0.0, 100.0, "[0, 100]")
-        _check(
+        in_range("reserve_pct", self.reserve_pct, 0.0, 100.0, "[0, 100]")
+        in_range(
             "cutoff_pct",
             self.cutoff_pct,
             0.0,
@@ -433,7 +422,7 @@ class Battery:
 
     def __init__(self, config: BatteryConfig | None = None, start_h: float = 0.0) -> None:
         """``start_h``: hours already run at nominal load (a part-used battery; 0 = full)."""
-        _check("start_h", start_h, 0.0, math.inf, "[0, inf)")
+        in_range("start_h", start_h, 0.0, math.inf, "[0, inf)")
         self._config = BatteryConfig()
         self._inv_nominal_w = 0.0
         self._elapsed_h = 0.0
