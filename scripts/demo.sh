@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `make run` until the console lands: a tour of the codec CLI in the project's .venv.
+# `make run` until the console lands: a tour of the CLI (codec, simulated vehicle) in .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 nemesys=.venv/bin/nemesys
@@ -20,3 +20,17 @@ $nemesys decode "$noisy"
 
 say nemesys encode circle speed=3 depth=2 radius=5 direction=cw "  # out of range: refused"
 $nemesys encode circle speed=3 depth=2 radius=5 direction=cw || true
+
+say nemesys scenario tank --out .demo "  # the paper's tank test in the simulator"
+$nemesys scenario tank --out .demo
+
+# The simulated vehicle behind its rosbridge websocket, on a free loopback port.
+log=$(mktemp)
+$nemesys sim --port 0 --ber 0.005 --seed 3 --quiet >"$log" 2>&1 &
+sim_pid=$!
+trap 'kill $sim_pid 2>/dev/null || true; rm -f "$log"' EXIT
+for _ in $(seq 50); do grep -q 'ws://' "$log" && break; sleep 0.1; done
+url=$(grep -o 'ws://[0-9.:]*' "$log")
+say nemesys sim --port 0 --ber 0.005 "  # running at $url"
+say nemesys send --to "$url" circle speed=0.18 depth=3 radius=5 direction=cw
+$nemesys send --to "$url" circle speed=0.18 depth=3 radius=5 direction=cw || true
