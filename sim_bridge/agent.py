@@ -150,6 +150,9 @@ class OnboardAgent:
             "replan_latency_ms": replan_ms,
             "waypoints": len(new.path) if new is not None else None,
             "active": self._active_json(),
+            # the state the plan was made from: a console replays plan() from it and gets the
+            # very path the vehicle flies (same anchor, same join)
+            "from": _state_json(state) if new is not None else None,
         }
 
     def _reject(
@@ -179,4 +182,17 @@ class OnboardAgent:
             "replan_latency_ms": None,
             "waypoints": None,
             "active": self._active_json(),
+            "from": None,
         }
+
+
+def _state_json(state: VehicleState) -> dict[str, Any]:
+    return {
+        "x_m": state.x_m,
+        "y_m": state.y_m,
+        "z_m": state.z_m,
+        "heading_deg": state.heading_deg,
+        "speed_mps": state.speed_mps,
+        "t_s": state.t_s,
+        "segment": state.segment,
+    }

@@ -43,6 +43,7 @@ ACK_KEYS = {
     "replan_latency_ms",
     "waypoints",
     "active",
+    "from",
 }
 STATE = VehicleState(0.0, 0.0, 2.0, 0.0, 0.0, 12.5)
 CIRCLE: dict[str, ParamValue] = {"speed": 0.2, "depth": 2, "radius": 3, "direction": "cw"}
@@ -434,3 +435,20 @@ def test_seq_increments_per_frame_whatever_the_outcome() -> None:
     assert outcomes == ["accepted", "rejected", "accepted", "rejected", "rejected"]
     assert agent.seq == 5
     assert (agent.accepted, agent.rejected) == (2, 3)
+
+
+def test_the_console_reproduces_the_vehicles_plan_from_the_ack() -> None:
+    from codec import decode_frame
+    from planner import plan
+
+    agent = _agent()
+    first = encode_frame("square", {"speed": 0.2, "depth": 2, "side_span": 8, "direction": "cw"})
+    ack1, _ = agent.receive(first.frame.value, FRAME_BITS, STATE)
+    mirror = plan(decode_frame(first.frame.bits).command, VehicleState(**ack1["from"]))
+    assert mirror.path == agent.active.path if agent.active else False
+    moved = VehicleState(3.0, 4.0, 2.0, 90.0, 0.2, 40.0, 2)
+    second = encode_frame("circle", CIRCLE)
+    ack2, _ = agent.receive(second.frame.value, FRAME_BITS, moved)
+    again = plan(decode_frame(second.frame.bits).command, VehicleState(**ack2["from"]), mirror)
+    assert agent.active is not None
+    assert again.path == agent.active.path and again.anchor == agent.active.anchor
