@@ -150,6 +150,7 @@ class Simulation:
         # n_bits); a delivery of None is a message that was not a frame (wrong length)
         self._inbox: list[tuple[float, int, Delivery | None, int]] = []
         self._clock_s = 0.0
+        self._heave_n = 0.0
         self._missions: list[dict[str, Any]] = []
         self.acks: list[dict[str, Any]] = []  # every acknowledgement of the run
         self.track: list[Sample] = []
@@ -186,6 +187,8 @@ class Simulation:
         self._clock_s = max(self._clock_s, t_s)
         while self.t_s + self.dt_s / 2 <= t_s:
             self.step()
+        if self._inbox:  # frames that arrived since the last step: no need to wait for one
+            self._deliver(t_s)
 
     def take_missions(self) -> list[dict[str, Any]]:
         out, self._missions = self._missions, []
@@ -249,6 +252,8 @@ class Simulation:
         dt = self.dt_s
         if self.steps % self._ticks_per_guidance == 0:
             self._control(dt * self._ticks_per_guidance)
+        elif self._inbox:
+            self._deliver(self.t_s)
         v.current_n, v.current_e = self.current.step(dt)
         v.step(dt)
         self.battery.step(dt, thrust_power_w(v.thrusts))
@@ -269,13 +274,14 @@ class Simulation:
                 )
             )
 
-    def _control(self, dt: float) -> None:
-        v = self.vehicle
-        self.depth_m = self.sensor.read(v.z, self.t_s)
+    def _deliver(self, t_s: float) -> Reference | None:
+        """Hand the agent every frame that has arrived by ``t_s``; the last accepted frame's
+        first setpoint goes to the thrusters at once (the depth loop keeps its last force until
+        its next tick)."""
         ref: Reference | None = None
-        while self._inbox and self._inbox[0][0] <= self.t_s + 1e-9:
-            _, _, delivery, n_bits = heapq.heappop(self._inbox)
-            self.last_frame_t_s = self.t_s
+        while self._inbox and self._inbox[0][0] <= t_s + 1e-9:
+            arrive_s, _, delivery, n_bits = heapq.heappop(self._inbox)
+            self.last_frame_t_s = arrive_s
             ack, new = self.agent.receive(
                 delivery.bits if delivery is not None else None, n_bits, self.state()
             )
@@ -285,18 +291,32 @@ class Simulation:
             self.acks.append(ack)
             if new is not None:
                 ref = new
-        if ref is None:
-            ref = self.guidance.update(v.x, v.y, self.depth_m, v.psi, self.t_s)
+        if ref is not None:
+            self.ref = ref
+            self._apply(ref, self._heave_n)
+        return ref
+
+    def _control(self, dt: float) -> None:
+        v = self.vehicle
+        self.depth_m = self.sensor.read(v.z, self.t_s)
+        ref = self._deliver(self.t_s) or self.guidance.update(
+            v.x, v.y, self.depth_m, v.psi, self.t_s
+        )
         self.ref = ref
+        heave = self.autopilot.depth_force(ref.depth_m, self.depth_m, dt) if ref.vertical else 0.0
+        self._heave_n = heave
+        self._apply(ref, heave)
+
+    def _apply(self, ref: Reference, heave_n: float) -> None:
+        v = self.vehicle
         if self.battery.empty:
             v.command(0.0, 0.0, 0.0, 0.0)
             return
-        heave = self.autopilot.depth_force(ref.depth_m, self.depth_m, dt) if ref.vertical else 0.0
         t1, t2, t3, t4 = self.autopilot.thrusts(
             ref.course_rad,
             ref.speed_mps,
             ref.yaw_rate_ff_rps,
-            heave,
+            heave_n,
             v.psi,
             v.r,
             v.u,
