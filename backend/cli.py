@@ -339,6 +339,13 @@ def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
     raise UsageError(f"unknown benchmark {args.target!r}")
 
 
+def _serve() -> Any:
+    """``backend.serve`` (the console command), imported on use."""
+    from backend import serve
+
+    return serve
+
+
 # --- dispatch -----------------------------------------------------------------------------
 
 Handler = Callable[[argparse.Namespace, TextIO], int]
@@ -347,6 +354,7 @@ COMMANDS: dict[str, Handler] = {
     "encode": cmd_encode,
     "decode": cmd_decode,
     "send": cmd_send,
+    "console": lambda args, out: _serve().cmd_console(args, out),
     "sim": sim_cli.cmd_sim,
     "scenario": sim_cli.cmd_scenario,
     "bench": cmd_bench,
@@ -424,6 +432,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
 
     sim_cli.add_parsers(sub)
+    _serve().add_parser(sub)
 
     p = sub.add_parser("bench", help="run a benchmark and print its table")
     p.add_argument("target", choices=["codec", "planner", "sim"], help="what to benchmark")

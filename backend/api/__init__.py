@@ -1,0 +1,1 @@
+"""The console's routers (REST under /api, the live websocket at /ws)."""

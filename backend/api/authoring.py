@@ -1,0 +1,77 @@
+"""Session, dictionary, preview, encode, decode: read-only, no token needed."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import APIRouter, HTTPException, Request
+
+from backend.api.deps import ConsoleDep, token_from, token_ok
+from backend.api.models import CommandIn, DecodeIn
+from codec import DecodeError, decode_frame, describe_dictionary
+
+router = APIRouter(prefix="/api", tags=["authoring"])
+
+
+@router.get("/session")
+def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
+    """Mode, target, where the 3D view is, and whether the caller holds the operator token."""
+    s = console.settings
+    token = token_from(request.headers.get("authorization"), request.headers.get("x-nemesys-token"))
+    viewer_url = None
+    if console.viewer is not None:
+        host = request.url.hostname or s.viewer_host
+        viewer_url = f"/viewer/?websocket=ws://{host}:{console.viewer.port}&hideViserLogo"
+    return {
+        "mode": "training" if s.training else "vehicle",
+        "target": s.target,
+        "viewer_url": viewer_url,
+        "bitrate_bps": s.bitrate_bps,
+        "operator": s.operator,
+        "authenticated": token_ok(console, token),
+        "dive": console.dive,
+        "limits": {"max_depth_m": s.max_depth_m, "max_speed_mps": s.max_speed_mps},
+    }
+
+
+@router.get("/dictionary")
+def dictionary() -> list[dict[str, Any]]:
+    """Every pattern with its fields: name, unit, range, steps, default, choices."""
+    return describe_dictionary()
+
+
+@router.post("/preview")
+def preview(body: CommandIn, console: ConsoleDep) -> dict[str, Any]:
+    """The frame (bits, sections, hex, airtime) and the path the vehicle would fly from where it
+    is now, expanded from the decoded packet, with estimates, limit violations and the diff
+    against the active pattern. Also drawn in the 3D view."""
+    return console.preview(body.pattern, dict(body.params))
+
+
+@router.post("/encode")
+def encode(body: CommandIn, console: ConsoleDep) -> dict[str, Any]:
+    """The frame only: snapped values, bits by section, hex, airtime."""
+    _, doc = console.encode(body.pattern, dict(body.params))
+    return doc
+
+
+@router.post("/decode")
+def decode(body: DecodeIn) -> dict[str, Any]:
+    """Decode 100 bits or 25 hex digits; 422 with the reason when the frame is rejected."""
+    try:
+        dec = decode_frame(body.frame)
+    except DecodeError as err:
+        raise HTTPException(
+            422, {"reason": err.reason.value, "message": str(err), "field": err.field}
+        ) from None
+    cmd = dec.command
+    return {
+        "ok": True,
+        "command": {
+            "pattern": cmd.pattern.name,
+            "pattern_id": cmd.pattern.id,
+            "params": cmd.params,
+        },
+        "corrected": dec.corrected,
+        "sync_errors": dec.sync_errors,
+    }

@@ -1,0 +1,90 @@
+"""The live websocket: telemetry and command states out; authenticated control in."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+from typing import Any
+
+from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+
+from backend.api.deps import token_ok
+from backend.commands import RateLimited
+from backend.console import Console
+from codec import CodecError
+from planner import PlanError
+
+router = APIRouter(tags=["live"])
+
+#: Largest control message accepted (bytes).
+MAX_CONTROL_BYTES = 4096
+
+
+@router.websocket("/ws")
+async def live(websocket: WebSocket) -> None:
+    """Server -> client: ``telemetry`` (10 Hz, latest wins), ``command``, ``vehicle`` and
+    ``error`` messages. Client -> server: ``auth`` then ``surface`` or ``send``; control
+    without the token is refused (the connection stays, read-only)."""
+    console: Console = websocket.app.state.console
+    await websocket.accept()
+    pump = asyncio.create_task(console.hub.serve(websocket))
+    authed = False
+    try:
+        while True:
+            text = await websocket.receive_text()
+            reply = await _control(console, text, authed)
+            if reply.get("type") == "auth_ok":
+                authed = True
+            await websocket.send_text(json.dumps(reply))
+    except (WebSocketDisconnect, RuntimeError):
+        pass
+    finally:
+        pump.cancel()
+        with contextlib.suppress(asyncio.CancelledError, Exception):
+            await pump
+
+
+async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
+    if len(text.encode()) > MAX_CONTROL_BYTES:
+        return {"type": "error", "detail": f"message over {MAX_CONTROL_BYTES} bytes"}
+    try:
+        msg = json.loads(text)
+    except ValueError:
+        return {"type": "error", "detail": "not JSON"}
+    if not isinstance(msg, dict):
+        return {"type": "error", "detail": "expected a JSON object with a 'type'"}
+    kind = msg.get("type")
+    if kind == "auth":
+        token = msg.get("token")
+        if isinstance(token, str) and token_ok(console, token):
+            return {"type": "auth_ok"}
+        return {"type": "error", "detail": "wrong operator token"}
+    if kind not in ("surface", "send"):
+        return {
+            "type": "error",
+            "detail": f"unknown message type {kind!r}; use auth, surface, send",
+        }
+    if not authed:
+        return {"type": "error", "detail": "token required: send {type: auth, token} first"}
+    assert console.commands is not None
+    try:
+        if kind == "surface":
+            record = await console.commands.surface()
+        else:
+            pattern, params = msg.get("pattern"), msg.get("params", {})
+            if not isinstance(pattern, str) or not isinstance(params, dict):
+                return {"type": "error", "detail": "send needs a pattern (str) and params (object)"}
+            doc = console.preview(pattern, params, show=False)
+            if doc["violations"]:
+                return {
+                    "type": "error",
+                    "detail": "; ".join(v["message"] for v in doc["violations"]),
+                }
+            enc, _ = console.encode(pattern, params)
+            record = await console.commands.submit(enc, doc["requested"])
+    except (CodecError, PlanError) as err:
+        return {"type": "error", "detail": str(err), "field": getattr(err, "field", None)}
+    except RateLimited as err:
+        return {"type": "error", "detail": str(err)}
+    return {"type": "queued", "command": record}

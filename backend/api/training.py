@@ -1,0 +1,91 @@
+"""Training controls for the simulated vehicle: channel, current, time scale, reset, presets."""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+from typing import Any
+
+from fastapi import APIRouter, HTTPException
+
+from backend.api.deps import ConsoleDep, OperatorDep
+from backend.api.models import ChannelIn, CurrentIn, TimeScaleIn
+from backend.console import SCENARIO_PRESETS
+
+router = APIRouter(prefix="/api/training", tags=["training"])
+
+
+def _sim(console: ConsoleDep) -> Any:
+    if console.sim is None:
+        raise HTTPException(409, "training controls need the simulated vehicle (target 'sim')")
+    return console.sim
+
+
+@router.get("")
+def training(console: ConsoleDep) -> dict[str, Any]:
+    sim = console.sim
+    if sim is None:
+        return {"enabled": False, "scenarios": []}
+    return {
+        "enabled": True,
+        "channel": asdict(sim.channel.config),
+        "current": asdict(sim.current.config),
+        "time_scale": console.bridge.time_scale if console.bridge is not None else 1.0,
+        "scenarios": list(SCENARIO_PRESETS),
+        "channel_stats": asdict(sim.channel.stats),
+    }
+
+
+@router.put("/channel")
+def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+    from sim_bridge.channel import ChannelConfig
+
+    sim = _sim(console)
+    sim.channel.set_config(ChannelConfig(**body.model_dump()))
+    return asdict(sim.channel.config)
+
+
+@router.put("/current")
+def current(body: CurrentIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+    from sim_bridge.environment import CurrentConfig
+
+    sim = _sim(console)
+    sim.current.set_config(CurrentConfig(**body.model_dump()))
+    return asdict(sim.current.config)
+
+
+@router.put("/time_scale")
+def time_scale(body: TimeScaleIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, float]:
+    _sim(console)
+    console.bridge.time_scale = body.time_scale
+    return {"time_scale": body.time_scale}
+
+
+@router.post("/reset")
+def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
+    """The vehicle back to its start pose, a full battery and no command: a new dive."""
+    _sim(console)
+    return {"dive": console.reset_vehicle()}
+
+
+@router.post("/scenario/{name}")
+async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+    """Load one of the paper's scenarios: the vehicle reset to its start, its first command
+    sent. The retask is the operator's to send (the preset returns it, ready to preview)."""
+    from sim_bridge.scenarios import SCENARIOS
+
+    _sim(console)
+    if name not in SCENARIOS:
+        raise HTTPException(404, f"no scenario {name!r}; choose from {', '.join(SCENARIO_PRESETS)}")
+    sc = SCENARIOS[name]
+    dive = console.reset_vehicle(start_z_m=sc.start_z_m)
+    first, retask = sc.commands[0], sc.commands[sc.retask]
+    enc, doc = console.encode(first.pattern, dict(first.params))
+    assert console.commands is not None
+    record = await console.commands.submit(enc, doc["requested"])
+    return {
+        "dive": dive,
+        "scenario": name,
+        "title": sc.title,
+        "sent": record,
+        "next": {"pattern": retask.pattern, "params": retask.params, "at_s": retask.t_s},
+    }

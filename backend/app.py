@@ -1,0 +1,95 @@
+"""The console app: ``create_app(settings)`` builds it; its lifespan owns the runtime.
+
+Nothing starts at import time. The lifespan starts the :class:`backend.console.Console` (the
+mission log, in training mode the simulated vehicle and its rosbridge, the vehicle link, the
+viser view) and stops it on shutdown. One uvicorn worker only: viser and the simulator live
+in the process.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from pathlib import Path
+
+from fastapi import FastAPI, Request
+from fastapi.responses import FileResponse, JSONResponse
+from fastapi.staticfiles import StaticFiles
+
+from backend.api import authoring, commands, live, training
+from backend.commands import RateLimited
+from backend.console import Console
+from backend.settings import Settings
+from codec import EncodeError
+from planner import PlanError
+
+FRONTEND = Path(__file__).resolve().parent.parent / "frontend"
+
+
+def create_app(settings: Settings | None = None, *, viewer: bool = True) -> FastAPI:
+    """The FastAPI app for ``settings`` (default: from the environment)."""
+    cfg = settings or Settings.load()
+
+    @asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        console = Console(cfg)
+        app.state.console = console
+        await console.start(viewer=viewer)
+        try:
+            yield
+        finally:
+            await console.stop()
+
+    app = FastAPI(
+        title="NemeSys Console",
+        summary="Author, preview, send and watch 100-bit retasking commands for the NemeSys AUV.",
+        version="0.1.0",
+        lifespan=lifespan,
+    )
+    app.state.settings = cfg
+    # No CORS middleware: cross-origin browser calls are refused (closed by default).
+    for router in (authoring.router, commands.router, training.router, live.router):
+        app.include_router(router)
+    _errors(app)
+    _static(app)
+    return app
+
+
+def _errors(app: FastAPI) -> None:
+    @app.exception_handler(EncodeError)
+    async def encode_error(_request: Request, err: EncodeError) -> JSONResponse:
+        loc = ["body", "params", err.field] if err.field else ["body", "pattern"]
+        return JSONResponse(
+            {"detail": [{"loc": loc, "msg": str(err), "type": "value_error"}]}, status_code=422
+        )
+
+    @app.exception_handler(PlanError)
+    async def plan_error(_request: Request, err: PlanError) -> JSONResponse:
+        loc = ["body", "params", err.field] if err.field else ["body", "params"]
+        return JSONResponse(
+            {"detail": [{"loc": loc, "msg": str(err), "type": "plan_error"}]}, status_code=422
+        )
+
+    @app.exception_handler(RateLimited)
+    async def rate_limited(_request: Request, err: RateLimited) -> JSONResponse:
+        return JSONResponse(
+            {"detail": str(err)},
+            status_code=429,
+            headers={"Retry-After": str(math.ceil(err.retry_after_s))},
+        )
+
+
+def _static(app: FastAPI) -> None:
+    @app.get("/", include_in_schema=False)
+    def index() -> FileResponse:
+        return FileResponse(FRONTEND / "index.html", headers={"Cache-Control": "no-cache"})
+
+    @app.get("/viewer/", include_in_schema=False)
+    def viewer_page() -> FileResponse:
+        """viser's own client page, served same-origin; it connects to viser's port."""
+        from backend.viewer import client_html_path
+
+        return FileResponse(client_html_path())
+
+    app.mount("/static", StaticFiles(directory=FRONTEND), name="static")

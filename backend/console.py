@@ -1,0 +1,296 @@
+"""The console's runtime: everything the app's lifespan owns, and the operations on it.
+
+:class:`Console` starts, in order: the mission log (a new dive), in training mode the
+simulated vehicle and its rosbridge server on loopback, the link to the vehicle (the same
+rosbridge client a real vehicle gets), the telemetry hub, the command manager and the viser
+3D view. The routers only call its methods; nothing starts at import time.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from typing import Any
+
+from backend.commands import CommandManager
+from backend.link import Link, RosbridgeLink, open_link
+from backend.settings import Settings
+from backend.store import MissionLog
+from backend.telemetry import TelemetryHub, pose_from_message
+from codec import FRAME_BITS, Encoded, airtime_s, decode_frame, encode_frame, sections
+from planner import Limits, Plan, VehicleState, compare, estimate, plan, validate
+from sim_bridge.environment import SOC_LINEAR_PCT_PER_H
+
+logger = logging.getLogger("backend.console")
+
+#: Scenario presets offered in training mode.
+SCENARIO_PRESETS = ("wreck", "panel", "pod", "tank")
+
+
+class Console:
+    """The running console (one per app)."""
+
+    def __init__(self, settings: Settings) -> None:
+        self.settings = settings
+        self.limits = Limits(max_depth_m=settings.max_depth_m, max_speed_mps=settings.max_speed_mps)
+        self.log: MissionLog | None = None
+        self.dive = 0
+        self.sim: Any = None  # sim_bridge.sim.Simulation in training mode
+        self.bridge: Any = None  # sim_bridge.server.BridgeServer in training mode
+        self.link: Link | None = None
+        self.hub = TelemetryHub(settings.telemetry_hz)
+        self.commands: CommandManager | None = None
+        self.viewer: Any = None  # backend.viewer.Viewer
+        self.runner: Any = None  # backend.scripts.ScriptRunner while a script runs
+        self._runner_task: asyncio.Task[None] | None = None
+        self._last_track_s = -1.0
+        self.started_s = time.monotonic()
+
+    # --- lifecycle -----------------------------------------------------------------------
+
+    async def start(self, *, viewer: bool = True) -> None:
+        s = self.settings
+        self.log = MissionLog(s.db_path)
+        self.dive = self.log.new_dive(s.target)
+        if s.training:
+            from sim_bridge.server import BridgeServer
+            from sim_bridge.sim import SimConfig, Simulation
+
+            self.sim = Simulation(SimConfig(seed=s.sim_seed, limits=self.limits))
+            self.bridge = BridgeServer(
+                self.sim, "127.0.0.1", s.sim_port, time_scale=s.sim_time_scale
+            )
+            await self.bridge.start()
+            link: Link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}")
+        else:
+            link = open_link(s.target, s.bitrate_bps)
+        self.link = link
+        link.on_pose = self._on_pose
+        link.on_status = self.hub.set_status
+        self.commands = CommandManager(
+            self.log,
+            link,
+            self.hub,
+            dive=lambda: self.dive,
+            operator=s.operator,
+            ack_timeout_s=s.ack_timeout_s,
+            surface_repeat_s=s.surface_repeat_s,
+            max_sends_per_minute=s.max_sends_per_minute,
+            link_delay_s=self._link_delay_s,
+            airtime_s=airtime_s(s.bitrate_bps),
+        )
+        link.on_mission = self.commands.on_mission
+        self.commands.on_plan = self._show_active
+        await link.start()
+        if isinstance(link, RosbridgeLink) and s.training:
+            await link.wait_connected(5.0)
+        if viewer:
+            from backend.viewer import Viewer
+
+            self.viewer = Viewer(s.viewer_host, s.viewer_port)
+
+    async def stop(self) -> None:
+        if self._runner_task is not None:
+            self._runner_task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._runner_task
+        if self.commands is not None:
+            await self.commands.close()
+        if self.link is not None:
+            await self.link.stop()
+        if self.bridge is not None:
+            await self.bridge.stop()
+        if self.viewer is not None:
+            self.viewer.stop()
+        if self.log is not None:
+            self.log.close()
+
+    # --- telemetry -----------------------------------------------------------------------
+
+    def _on_pose(self, msg: dict[str, Any]) -> None:
+        pose = pose_from_message(msg)
+        self.hub.set_pose(pose)
+        if self.viewer is not None:
+            self.viewer.update_pose(
+                pose["t_s"],
+                pose["x_m"],
+                pose["y_m"],
+                pose["z_m"],
+                pose["roll_deg"],
+                pose["heading_deg"],
+            )
+        if self.log is not None and pose["t_s"] - self._last_track_s >= 1.0:
+            self._last_track_s = pose["t_s"]
+            self.log.add_track(
+                self.dive, pose["t_s"], pose["x_m"], pose["y_m"], pose["z_m"], pose["heading_deg"]
+            )
+
+    def _show_active(self, active: Plan) -> None:
+        if self.viewer is not None:
+            p = active.path
+            self.viewer.show_active(p.xs, p.ys, p.zs, f"active: {active.pattern}")
+
+    def _link_delay_s(self) -> float:
+        if self.sim is None:
+            return 0.0
+        delay: float = self.sim.channel.config.delay_s
+        scale = self.bridge.time_scale if self.bridge is not None else 1.0
+        # the channel's delay is in simulated seconds; the ack timeout runs on the wall clock
+        return delay / scale if scale > 0 else 3600.0
+
+    def vehicle_state(self) -> VehicleState:
+        """The vehicle as last reported (NED), for previews and joins."""
+        pose, status = self.hub.pose, self.hub.status or {}
+        if pose is None:
+            if self.sim is not None:
+                c = self.sim.config
+                return VehicleState(c.start_x_m, c.start_y_m, c.start_z_m, c.start_heading_deg)
+            return VehicleState(0.0, 0.0, 0.0)
+        return VehicleState(
+            pose["x_m"],
+            pose["y_m"],
+            max(0.0, pose["z_m"]),
+            pose["heading_deg"],
+            float(status.get("speed_mps", 0.0)),
+            pose["t_s"],
+        )
+
+    def vehicle(self) -> dict[str, Any]:
+        cm = self.commands
+        link = self.link
+        return {
+            "pose": self.hub.pose,
+            "status": self.hub.status,
+            "active": cm.vehicle_active if cm else None,
+            "last_sent": cm.last_sent if cm else None,
+            "echo_mismatch": cm.echo_mismatch if cm else False,
+            "age_s": self.hub.age_s(),
+            "link": {
+                "target": self.settings.target,
+                "connected": link.connected if link else False,
+                "acknowledges": link.acknowledges if link else False,
+            },
+        }
+
+    # --- authoring -----------------------------------------------------------------------
+
+    def encode(self, pattern: str, params: dict[str, Any]) -> tuple[Encoded, dict[str, Any]]:
+        """Encode (raises codec.EncodeError naming the field) and describe the frame."""
+        enc = encode_frame(pattern, params)
+        cmd, frame = enc.command, enc.frame
+        bits = frame.bits
+        doc = {
+            "pattern": cmd.pattern.name,
+            "pattern_id": cmd.pattern.id,
+            "params": dict(cmd.params),
+            "requested": {s.field: s.requested for s in enc.snaps},
+            "snaps": [
+                {
+                    "field": s.field,
+                    "requested": s.requested,
+                    "sent": s.sent,
+                    "unit": s.unit,
+                    "changed": s.changed,
+                    "text": str(s),
+                }
+                for s in enc.snaps
+            ],
+            "bits": bits,
+            "hex": frame.hex,
+            "sections": [
+                {
+                    "name": sec.name,
+                    "start": sec.start,
+                    "length": sec.length,
+                    "bits": bits[sec.start : sec.start + sec.length],
+                }
+                for sec in sections(cmd.pattern)
+            ],
+            "airtime_ms": airtime_s(self.settings.bitrate_bps) * 1e3,
+            "bitrate_bps": self.settings.bitrate_bps,
+            "frame_bits": FRAME_BITS,
+        }
+        return enc, doc
+
+    def preview(self, pattern: str, params: dict[str, Any], *, show: bool = True) -> dict[str, Any]:
+        """The frame and the path the vehicle would fly from where it is now.
+
+        Raises:
+            codec.EncodeError / planner.PlanError: naming the parameter at fault.
+        """
+        enc, doc = self.encode(pattern, params)
+        cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
+        state = self.vehicle_state()
+        current = self.commands.mirror if self.commands else None
+        new = plan(cmd, state, current)
+        est = estimate(new)
+        path = new.path
+        doc["path"] = {
+            "x_m": list(path.xs),
+            "y_m": list(path.ys),
+            "z_m": list(path.zs),
+            "t_s": list(path.times),
+            "body_start": path.body_start,
+            "repeats": path.loop_start is not None,
+        }
+        doc["estimate"] = {
+            **{k: v for k, v in est.as_dict().items() if isinstance(v, int | float | None)},
+            # the paper's battery fit: 9.23 % an hour at nominal load, beyond the first hour
+            "battery_pct": est.duration_s / 3600.0 * SOC_LINEAR_PCT_PER_H,
+        }
+        doc["violations"] = [
+            {
+                "param": v.param,
+                "value": v.value,
+                "limit": v.limit,
+                "unit": v.unit,
+                "message": v.message,
+                "overridable": v.overridable,
+            }
+            for v in validate(new, self.limits)
+        ]
+        doc["diff"] = None
+        if current is not None:
+            d = compare(current, new)
+            doc["diff"] = {
+                "active": current.pattern,
+                "changes": [
+                    {"param": c.param, "old": c.old, "new": c.new, "unit": c.unit}
+                    for c in d.changes
+                ],
+                "pattern_changed": d.pattern_changed,
+                "duration_delta_s": d.delta("duration_s"),
+                "length_delta_m": d.delta("length_m"),
+                "anchor_moved_m": d.anchor_moved_m,
+            }
+        doc["from"] = state.as_dict()
+        if show and self.viewer is not None:
+            self.viewer.show_preview(
+                path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
+            )
+        return doc
+
+    # --- training ------------------------------------------------------------------------
+
+    def reset_vehicle(self, start_z_m: float | None = None) -> int:
+        """Training: the simulated vehicle back to its start (optionally at another depth), a
+        full battery, no command; a new dive. Returns the dive."""
+        if self.sim is None or self.log is None:
+            raise RuntimeError("not in training mode")
+        if start_z_m is None:
+            self.sim.reset()
+        else:
+            from dataclasses import replace
+
+            self.sim.reset(replace(self.sim.config, start_z_m=start_z_m))
+        self.hub.pose = None
+        self.dive = self.log.new_dive(self.settings.target)
+        self._last_track_s = -1.0
+        if self.commands is not None:
+            self.commands.reset_vehicle()
+        if self.viewer is not None:
+            self.viewer.reset_track()
+            self.viewer.clear_active()
+        return self.dive

@@ -1,0 +1,78 @@
+"""The console's one settings class: environment variables ``NEMESYS_*`` or a settings file.
+
+Defaults are the embedded training set-up: a simulated NemeSys behind its own rosbridge on
+loopback, a local SQLite mission log, everything bound to 127.0.0.1. Point ``target`` at a
+real vehicle's rosbridge (``ws://host:9090``) or an ME transmitter (``serial:///dev/ttyUSB0``,
+``tcp://host:port``) instead. A settings file (``NEMESYS_SETTINGS=path``, ``KEY=value`` lines
+with the same ``NEMESYS_`` names) is read when given.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from pathlib import Path
+from typing import Annotated, Any
+
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+#: The target meaning "the embedded simulator" (training mode).
+SIM_TARGET = "sim"
+
+
+class Settings(BaseSettings):
+    """Everything the console needs to start. Units in the names."""
+
+    model_config = SettingsConfigDict(env_prefix="NEMESYS_", extra="forbid")
+
+    host: str = "127.0.0.1"
+    port: Annotated[int, Field(ge=0, le=65535)] = 8000
+    viewer_host: str = "127.0.0.1"
+    #: viser's own port (0: any free port; viser moves to the next free one if taken).
+    viewer_port: Annotated[int, Field(ge=0, le=65535)] = 8080
+    #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port.
+    target: str = SIM_TARGET
+    #: Port of the embedded simulator's rosbridge (0: any free port), loopback only.
+    sim_port: Annotated[int, Field(ge=0, le=65535)] = 0
+    sim_seed: int = 0
+    sim_time_scale: Annotated[float, Field(ge=0, le=50)] = 1.0
+    db_path: Path = Path(".nemesys/missions.sqlite3")
+    #: The operator token; a fresh random one per start when not set.
+    token: Annotated[str, Field(min_length=16)] = Field(
+        default_factory=lambda: secrets.token_urlsafe(24)
+    )
+    operator: Annotated[str, Field(min_length=1, max_length=40)] = "operator"
+    bitrate_bps: Annotated[float, Field(gt=0, le=1e7)] = 36000.0
+    #: Time allowed for an acknowledgement on top of airtime and the channel's delay (s).
+    ack_timeout_s: Annotated[float, Field(gt=0, le=600)] = 5.0
+    #: Surface is sent again this often until acknowledged (s).
+    surface_repeat_s: Annotated[float, Field(gt=0, le=60)] = 2.0
+    #: Transmissions allowed per minute (Surface is never limited).
+    max_sends_per_minute: Annotated[int, Field(ge=1, le=600)] = 30
+    max_depth_m: Annotated[float, Field(gt=0, le=100)] = 100.0
+    max_speed_mps: Annotated[float, Field(gt=0, le=2.55)] = 1.0
+    telemetry_hz: Annotated[float, Field(gt=0, le=50)] = 10.0
+
+    @field_validator("target")
+    @classmethod
+    def _target(cls, value: str) -> str:
+        if value == SIM_TARGET:
+            return value
+        from sim_bridge.transmit import open_transmitter
+
+        # parse only (raises ValueError naming the allowed forms); nothing is opened here
+        open_transmitter(value).close()
+        return value
+
+    @property
+    def training(self) -> bool:
+        return self.target == SIM_TARGET
+
+    @classmethod
+    def load(cls, **overrides: Any) -> Settings:
+        """Settings from the environment, the file named by NEMESYS_SETTINGS, and overrides."""
+        path = os.environ.get("NEMESYS_SETTINGS")
+        if path:
+            return cls(_env_file=path, **overrides)  # type: ignore[call-arg]
+        return cls(**overrides)
