@@ -17,7 +17,7 @@ from fastapi import FastAPI, Request
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
-from backend.api import authoring, commands, live, training
+from backend.api import authoring, commands, live, scripts, training
 from backend.commands import RateLimited
 from backend.console import Console
 from backend.settings import Settings
@@ -49,7 +49,13 @@ def create_app(settings: Settings | None = None, *, viewer: bool = True) -> Fast
     )
     app.state.settings = cfg
     # No CORS middleware: cross-origin browser calls are refused (closed by default).
-    for router in (authoring.router, commands.router, training.router, live.router):
+    for router in (
+        authoring.router,
+        commands.router,
+        training.router,
+        scripts.router,
+        live.router,
+    ):
         app.include_router(router)
     _errors(app)
     _static(app)

@@ -12,6 +12,7 @@ import asyncio
 import contextlib
 import logging
 import time
+from collections.abc import Coroutine
 from typing import Any
 
 from backend.commands import CommandManager
@@ -45,6 +46,7 @@ class Console:
         self.viewer: Any = None  # backend.viewer.Viewer
         self.runner: Any = None  # backend.scripts.ScriptRunner while a script runs
         self._runner_task: asyncio.Task[None] | None = None
+        self.script_commands: dict[int, int] = {}  # script step -> command id
         self._last_track_s = -1.0
         self.started_s = time.monotonic()
 
@@ -106,6 +108,12 @@ class Console:
             self.viewer.stop()
         if self.log is not None:
             self.log.close()
+
+    def start_script_loop(self, coro: Coroutine[Any, Any, None]) -> None:
+        """Run a mission script's trigger loop (replacing a finished one)."""
+        if self._runner_task is not None:
+            self._runner_task.cancel()
+        self._runner_task = asyncio.create_task(coro, name="mission script")
 
     # --- telemetry -----------------------------------------------------------------------
 

@@ -1,0 +1,161 @@
+"""Mission scripts: preview (one 3D path and a timeline), onboard export, and runs."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Any, Literal
+
+from fastapi import APIRouter, HTTPException
+from fastapi.responses import JSONResponse, Response
+from pydantic import BaseModel, ConfigDict
+
+from backend.api.deps import ConsoleDep, OperatorDep
+from backend.console import Console
+from backend.scripts import (
+    MissionScript,
+    ScriptError,
+    ScriptRunError,
+    ScriptRunner,
+    export_onboard,
+    onboard_csv,
+    preview,
+)
+
+router = APIRouter(prefix="/api/scripts", tags=["scripts"])
+
+#: How often a run checks its triggers (s).
+POLL_S = 0.2
+
+
+class RunIn(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+    script: MissionScript
+    mode: Literal["auto", "step"] = "auto"
+
+
+def _plan_error(err: ScriptError) -> HTTPException:
+    return HTTPException(422, [{**e, "loc": ["body", *e["loc"]]} for e in err.errors()])
+
+
+@router.post("/preview")
+def script_preview(script: MissionScript, console: ConsoleDep) -> dict[str, Any]:
+    """The whole script as one path (NED) with its timeline, from where the vehicle is now;
+    drawn in the 3D view."""
+    mirror = console.commands.mirror if console.commands else None
+    try:
+        doc = preview(script, console.vehicle_state(), mirror)
+    except ScriptError as err:
+        raise _plan_error(err) from None
+    if console.viewer is not None:
+        path = doc.path
+        labels = [
+            (i, f"{s.index + 1}: {s.pattern}")
+            for s, i in zip(doc.steps, path.step_start, strict=False)
+        ]
+        console.viewer.show_script(path.x_m, path.y_m, path.z_m, labels)
+    out: dict[str, Any] = doc.model_dump()
+    return out
+
+
+@router.post("/export", response_model=None)
+def script_export(
+    script: MissionScript, console: ConsoleDep, format: Literal["json", "csv"] = "json"
+) -> Response:
+    """The onboard script the paper's field trials used: a timed list of frames."""
+    mirror = console.commands.mirror if console.commands else None
+    name = "".join(c if c.isalnum() else "-" for c in script.name)
+    try:
+        if format == "csv":
+            return Response(
+                onboard_csv(script, console.vehicle_state(), mirror),
+                media_type="text/csv",
+                headers={"Content-Disposition": f'attachment; filename="{name}-onboard.csv"'},
+            )
+        doc = export_onboard(script, console.vehicle_state(), mirror)
+    except ScriptError as err:
+        raise _plan_error(err) from None
+    return JSONResponse(
+        doc, headers={"Content-Disposition": f'attachment; filename="{name}-onboard.json"'}
+    )
+
+
+def _state(console: Console) -> dict[str, Any]:
+    if console.runner is None:
+        return {"running": False, "outcome": None, "steps": []}
+    state: dict[str, Any] = console.runner.state()
+    state["commands"] = console.script_commands
+    return state
+
+
+@router.get("/run")
+def run_state(console: ConsoleDep) -> dict[str, Any]:
+    return _state(console)
+
+
+@router.post("/run")
+async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+    """Run a script against the vehicle: ``auto`` sends each step at its trigger; ``step``
+    proposes each step and waits for the operator's go (``/run/next``)."""
+    if console.runner is not None and console.runner.state()["running"]:
+        raise HTTPException(409, "a script is already running; stop it first")
+    console.runner = ScriptRunner(body.script, body.mode)
+    console.script_commands = {}
+    console.start_script_loop(_loop(console))
+    await asyncio.sleep(0)
+    return _state(console)
+
+
+@router.post("/run/next")
+async def run_next(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+    """Operator's go: send the proposed step."""
+    runner = console.runner
+    if runner is None:
+        raise HTTPException(409, "no script is running")
+    try:
+        index = runner.go()
+    except ScriptRunError as err:
+        raise HTTPException(409, str(err)) from None
+    await _send(console, runner, index)
+    return _state(console)
+
+
+@router.post("/run/stop")
+def run_stop(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+    if console.runner is not None:
+        console.runner.stop()
+    return _state(console)
+
+
+async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
+    step = runner.script.steps[index]
+    assert console.commands is not None
+    try:
+        enc, doc = console.encode(step.pattern, dict(step.params))
+        record = await console.commands.submit(enc, doc["requested"], kind="script")
+    except Exception as err:  # rate limit, link down: the run stops with the reason
+        runner.mark_failed(index, str(err))
+        return
+    console.script_commands[index] = record["id"]
+    runner.mark_sent(index)
+
+
+async def _loop(console: Console) -> None:
+    runner = console.runner
+    assert runner is not None and console.log is not None
+    while runner.state()["running"]:
+        for index, command_id in list(console.script_commands.items()):
+            record = console.log.command(command_id)
+            steps = runner.state()["steps"]
+            if record is None or steps[index]["state"] != "sent":
+                continue
+            if record["state"] == "acknowledged":
+                runner.mark_acknowledged(index)
+            elif record["state"] in ("rejected", "failed", "timed_out"):
+                runner.mark_failed(
+                    index, f"step {index + 1}: {record['state']}: {record['reason']}"
+                )
+        status = console.hub.status or {}
+        now = float(status.get("t_s", 0.0))
+        for index in runner.poll(now, str(status.get("mode", "")), status.get("pattern")):
+            await _send(console, runner, index)
+        await asyncio.sleep(POLL_S)
