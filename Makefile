@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: test lint run bench clean
+.PHONY: test lint run demo bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -21,6 +21,9 @@ test: lint
 	$(BIN)/pytest
 
 run: $(STAMP)
+	$(BIN)/nemesys console
+
+demo: $(STAMP)
 	./scripts/demo.sh
 
 bench: $(STAMP)

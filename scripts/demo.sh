@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# `make run` until the console lands: a tour of the CLI (codec, simulated vehicle) in .venv.
+# `make demo`: a tour of the CLI (codec, simulated vehicle) in .venv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 nemesys=.venv/bin/nemesys
