@@ -32,20 +32,25 @@ class DecodeIn(Strict):
 
 
 class ChannelIn(Strict):
-    ber: Annotated[float, Field(ge=0, le=0.5)] = 0.0
-    burst_rate: Annotated[float, Field(ge=0, le=1)] = 0.0
-    burst_length_bits: Annotated[int, Field(ge=1, le=100)] = 8
-    loss: Annotated[float, Field(ge=0, le=1)] = 0.0
-    range_m: Annotated[float, Field(ge=0, le=100_000)] = 730.0
-    delay_s: Annotated[float, Field(ge=0, le=60)] = 0.0
-    bitrate_bps: Annotated[float, Field(gt=0, le=1e7)] = 36000.0
+    """Emulated channel settings; a field left out (or null) keeps its current value, except
+    ``range_m``, where null means no range limit."""
+
+    ber: Annotated[float | None, Field(ge=0, le=0.5)] = None
+    burst_rate: Annotated[float | None, Field(ge=0, le=1)] = None
+    burst_length_bits: Annotated[int | None, Field(ge=1, le=100)] = None
+    loss: Annotated[float | None, Field(ge=0, le=1)] = None
+    range_m: Annotated[float | None, Field(ge=0, le=100_000)] = 730.0
+    delay_s: Annotated[float | None, Field(ge=0, le=60)] = None
+    bitrate_bps: Annotated[float | None, Field(gt=0, le=1e7)] = None
 
 
 class CurrentIn(Strict):
-    north_mps: Annotated[float, Field(ge=-5, le=5)] = 0.0
-    east_mps: Annotated[float, Field(ge=-5, le=5)] = 0.0
-    speed_sigma_mps: Annotated[float, Field(ge=0, le=5)] = 0.0
-    direction_sigma_deg: Annotated[float, Field(ge=0, le=180)] = 0.0
+    """Water current (NED); a field left out (or null) keeps its current value."""
+
+    north_mps: Annotated[float | None, Field(ge=-5, le=5)] = None
+    east_mps: Annotated[float | None, Field(ge=-5, le=5)] = None
+    speed_sigma_mps: Annotated[float | None, Field(ge=0, le=5)] = None
+    direction_sigma_deg: Annotated[float | None, Field(ge=0, le=180)] = None
 
 
 class TimeScaleIn(Strict):

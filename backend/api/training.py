@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict
+import math
+from dataclasses import asdict, replace
 from typing import Any
 
 from fastapi import APIRouter, HTTPException
@@ -27,7 +28,7 @@ def training(console: ConsoleDep) -> dict[str, Any]:
         return {"enabled": False, "scenarios": []}
     return {
         "enabled": True,
-        "channel": asdict(sim.channel.config),
+        "channel": _json(asdict(sim.channel.config)),
         "current": asdict(sim.current.config),
         "time_scale": console.bridge.time_scale if console.bridge is not None else 1.0,
         "scenarios": list(SCENARIO_PRESETS),
@@ -37,19 +38,19 @@ def training(console: ConsoleDep) -> dict[str, Any]:
 
 @router.put("/channel")
 def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
-    from sim_bridge.channel import ChannelConfig
-
     sim = _sim(console)
-    sim.channel.set_config(ChannelConfig(**body.model_dump()))
-    return asdict(sim.channel.config)
+    fields = {k: v for k, v in body.model_dump(exclude_unset=True).items() if v is not None}
+    if "range_m" in body.model_fields_set and body.range_m is None:
+        fields["range_m"] = math.inf
+    sim.channel.set_config(replace(sim.channel.config, **fields))
+    return _json(asdict(sim.channel.config))
 
 
 @router.put("/current")
 def current(body: CurrentIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
-    from sim_bridge.environment import CurrentConfig
-
     sim = _sim(console)
-    sim.current.set_config(CurrentConfig(**body.model_dump()))
+    fields = {k: v for k, v in body.model_dump(exclude_unset=True).items() if v is not None}
+    sim.current.set_config(replace(sim.current.config, **fields))
     return asdict(sim.current.config)
 
 
@@ -89,3 +90,8 @@ async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str
         "sent": record,
         "next": {"pattern": retask.pattern, "params": retask.params, "at_s": retask.t_s},
     }
+
+
+def _json(config: dict[str, Any]) -> dict[str, Any]:
+    """JSON has no infinity: an unlimited range is null."""
+    return {k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in config.items()}

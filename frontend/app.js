@@ -1,0 +1,182 @@
+// NemeSys Console page: wires the session, token, live link and the panels together.
+
+import { api, adoptUrlToken, setToken, hasToken } from "./api.js";
+import { initAuthoring, current } from "./authoring.js";
+import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
+import { setDictionary } from "./form.js";
+import { connectLive } from "./live.js";
+import { initLog, loadLog } from "./log.js";
+import { initScript, addStep } from "./script.js";
+import { renderTelemetry, startAgeTicker } from "./status.js";
+import { initTraining, loadTraining } from "./training.js";
+import { $, notify, notifyError, applyAuth, debounce } from "./ui.js";
+
+const RETRY_MS = 3000;
+let session = null;
+let live = null;
+
+// ---- session and token ----
+
+/** The viewer runs on its own port; if it names a loopback host, use the host this page came from. */
+function viewerSrc(url) {
+  try {
+    const u = new URL(url, window.location.href);
+    const loopback = ["127.0.0.1", "localhost", "0.0.0.0", "[::1]"];
+    if (loopback.includes(u.hostname) && !loopback.includes(window.location.hostname)) u.hostname = window.location.hostname;
+    return u.href;
+  } catch {
+    return url;
+  }
+}
+
+function renderSession(s) {
+  const mode = s ? s.mode : null;
+  const badge = $("mode-badge");
+  badge.textContent = mode ? mode.toUpperCase() : "UNKNOWN";
+  badge.className = `badge mode-${mode || "unknown"}`;
+  $("target").textContent = s ? s.target || "–" : "–";
+  $("version").textContent = s && s.version ? `NemeSys Console ${s.version}` : "";
+  const viewer = $("viewer");
+  if (s && s.viewer_url) {
+    const src = viewerSrc(s.viewer_url);
+    if (viewer.getAttribute("src") !== src) viewer.src = src;
+  }
+  $("viewer-missing").hidden = Boolean(s && s.viewer_url);
+  viewer.hidden = !(s && s.viewer_url);
+
+  const token = hasToken();
+  const rejected = token && s && s.authenticated === false;
+  const auth = $("auth-state");
+  if (!token) {
+    auth.textContent = "read-only (observer)";
+    auth.className = "auth-ro";
+  } else if (rejected) {
+    auth.textContent = "token rejected (403): read-only";
+    auth.className = "auth-bad";
+  } else {
+    auth.textContent = s && s.operator ? `operator ${s.operator}` : "operator";
+    auth.className = "auth-ok";
+  }
+  $("token-form").hidden = token && !rejected;
+  $("token-clear").hidden = !token;
+  applyAuth(token && !rejected);
+}
+
+async function loadSession() {
+  try {
+    session = await api("/api/session");
+  } catch (err) {
+    notifyError("session", err);
+    session = null;
+  }
+  renderSession(session);
+  return session;
+}
+
+function initToken() {
+  $("token-form").addEventListener("submit", async (e) => {
+    e.preventDefault();
+    const value = $("token-input").value.trim();
+    if (!value) return;
+    setToken(value);
+    $("token-input").value = "";
+    const s = await loadSession();
+    if (live) live.auth();
+    if (s && s.authenticated === false) notify("403: that token was rejected", "error");
+    else if (s) notify("operator token accepted");
+  });
+  $("token-clear").addEventListener("click", () => {
+    setToken("");
+    renderSession(session && { ...session, authenticated: false });
+    notify("token forgotten: read-only");
+  });
+}
+
+// ---- vehicle ----
+
+async function loadVehicle() {
+  try {
+    const v = await api("/api/vehicle");
+    renderTelemetry(v);
+    renderEcho(v);
+  } catch (err) {
+    notifyError("vehicle state", err);
+  }
+}
+
+/** Keep the status fresh over REST while the websocket is down. */
+function startVehicleFallback() {
+  setInterval(() => {
+    if (live && !live.isOpen()) loadVehicle();
+  }, 5000);
+}
+
+// ---- dictionary-dependent panels ----
+
+async function loadDictionary() {
+  for (let attempt = 0; ; attempt++) {
+    try {
+      const data = await api("/api/dictionary");
+      setDictionary(Array.isArray(data) ? data : (data && data.patterns) || []);
+      return;
+    } catch (err) {
+      if (attempt === 0) notifyError("command dictionary (retrying)", err);
+      await new Promise((resolve) => setTimeout(resolve, RETRY_MS));
+    }
+  }
+}
+
+async function main() {
+  adoptUrlToken();
+  initToken();
+  initCommands({ wsSurface: () => Boolean(live && live.send({ type: "surface" })) });
+  initTraining();
+  startAgeTicker();
+  renderSession(null);
+
+  let opened = false;
+  const refreshLog = debounce(loadLog, 2000);
+  live = connectLive({
+    telemetry: renderTelemetry,
+    command: (m) => {
+      upsertCommand(m.command);
+      refreshLog();
+    },
+    vehicle: renderEcho,
+    open: () => {
+      if (opened) {
+        loadCommands();
+        loadVehicle();
+        if (!session) loadSession().then((again) => again && loadTraining(again.mode));
+      }
+      opened = true;
+    },
+  });
+  startVehicleFallback();
+
+  const s = await loadSession();
+  loadTraining(s ? s.mode : null);
+  loadVehicle();
+  const dictionaryReady = loadDictionary();
+  // the command list does not need the dictionary (only its units): do not wait long for it
+  await Promise.race([dictionaryReady, new Promise((resolve) => setTimeout(resolve, 2000))]);
+  loadCommands();
+  await dictionaryReady;
+  loadVehicle(); // again, now that the units are known
+  initAuthoring({ onSent: upsertCommand });
+  $("script-add").addEventListener("click", () => addStep(current()));
+  initScript();
+  initLog();
+  loadLog();
+  renderSession(session);
+}
+
+// a 401/403 on any call: ask the server again what this token is worth, and show it
+window.addEventListener("nemesys:auth-error", debounce(() => loadSession(), 500));
+
+window.addEventListener("unhandledrejection", (event) => {
+  event.preventDefault();
+  notifyError("unexpected error", event.reason);
+});
+
+main().catch((err) => notifyError("start-up", err));

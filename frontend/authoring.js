@@ -1,0 +1,261 @@
+// Authoring: pattern picker, parameter form, live preview (bits, hex, airtime, estimates,
+// checks; the backend draws the 3D preview in the viewer) and the confirmed send.
+
+import { api, ApiError } from "./api.js";
+import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
+import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite } from "./ui.js";
+
+const state = {
+  form: null,
+  pattern: "",
+  remembered: new Map(), // pattern -> last values typed for it
+  preview: null, // the last successful preview response
+  previewError: null, // the last ApiError of the preview
+  seq: 0,
+  controller: null,
+  onSent: () => {},
+};
+
+export function current() {
+  return { pattern: state.pattern, params: state.form ? state.form.read() : {} };
+}
+
+const schedulePreview = debounce(() => runPreview(), 150);
+
+/** Build the picker from the dictionary. onSent(record) is told about every queued command. */
+export function initAuthoring({ onSent }) {
+  state.onSent = onSent;
+  const select = $("pattern-select");
+  const first = dictionary.list.find((p) => (p.fields || []).length) || dictionary.list[0];
+  fillPatternSelect(select, first && first.name);
+  select.addEventListener("change", () => choosePattern(select.value));
+  $("param-form").addEventListener("submit", (e) => {
+    e.preventDefault();
+    runPreview();
+  });
+  $("send-button").addEventListener("click", openConfirm);
+  $("confirm-cancel").addEventListener("click", () => $("confirm-dialog").close());
+  $("confirm-send").addEventListener("click", confirmSend);
+  $("confirm-override").addEventListener("change", updateConfirmButton);
+  if (select.value) choosePattern(select.value);
+}
+
+/** Switch pattern, keeping values typed for it before and same-named fields (speed, depth). */
+export function choosePattern(name, values) {
+  if (state.form) state.remembered.set(state.pattern, state.form.read());
+  const carried = state.form ? state.form.read() : {};
+  const start = { ...defaultParams(name), ...pick(carried, name), ...(state.remembered.get(name) || {}), ...(values || {}) };
+  state.pattern = name;
+  $("pattern-select").value = name;
+  const p = dictionary.byName.get(name);
+  $("pattern-doc").textContent = p ? p.doc || "" : "";
+  state.form = paramForm($("param-form"), name, start, { onChange: schedulePreview });
+  schedulePreview();
+}
+
+function pick(values, pattern) {
+  const p = dictionary.byName.get(pattern);
+  const names = new Set(((p && p.fields) || []).filter((f) => f.kind !== "choice").map((f) => f.name));
+  return Object.fromEntries(Object.entries(values).filter(([k]) => names.has(k)));
+}
+
+export async function runPreview() {
+  schedulePreview.cancel();
+  if (!state.pattern) return;
+  if (state.controller) state.controller.abort();
+  const controller = new AbortController();
+  state.controller = controller;
+  const seq = ++state.seq;
+  const body = current();
+  try {
+    const preview = await api("/api/preview", { method: "POST", body, signal: controller.signal });
+    if (seq !== state.seq) return;
+    state.preview = preview;
+    state.previewError = null;
+    renderPreview(preview);
+  } catch (err) {
+    if (err.name === "AbortError" || seq !== state.seq) return;
+    state.preview = null;
+    state.previewError = err;
+    renderPreviewError(err);
+  }
+}
+
+// ---- rendering the preview ----
+
+function sectionKind(section, fieldNames) {
+  if (["preamble", "delimiter", "pattern", "crc", "parity", "guard"].includes(section.name)) return section.name;
+  if (fieldNames.includes(section.name)) return "field";
+  return "unused";
+}
+
+export function renderBits(container, response) {
+  const bits = response.bits || "";
+  const sections = Array.isArray(response.sections) ? response.sections : [];
+  const p = dictionary.byName.get(response.pattern);
+  const fieldNames = ((p && p.fields) || []).map((f) => f.name);
+  const spans = sections.map((s, i) => {
+    const kind = sectionKind(s, fieldNames);
+    const length = s.length ?? (s.bits || "").length;
+    const last = s.start + length - 1;
+    const label = kind === "field" ? s.name : s.name.replace(" (unused)", "");
+    return el("span", {
+      class: `sec sec-${kind}${kind === "field" ? ` field-${fieldNames.indexOf(s.name) % 6}` : ""}`,
+      testid: `bits-${slug(s.name)}`,
+      title: `${s.name}: bits ${s.start}-${last} (${length} bits)`,
+      dataset: { label, index: String(i) },
+    }, s.bits || bits.slice(s.start, s.start + length));
+  });
+  container.replaceChildren(...(spans.length ? spans : [el("span", { class: "sec" }, bits)]));
+}
+
+function renderPreview(r) {
+  renderBits($("bits-strip"), r);
+  $("frame-hex").textContent = r.hex || "–";
+  $("airtime").textContent = r.airtime_ms == null ? "–" : `${num(r.airtime_ms, 3)} ms at ${num(r.bitrate_bps, 0)} b/s`;
+  renderEstimates(r.estimate);
+  const violations = Array.isArray(r.violations) ? r.violations : [];
+  state.form.setSnaps(r.snaps);
+  state.form.setErrors(new Map());
+  state.form.setWarnings(new Set(violations.map((v) => v.param)));
+  renderChecks(violations.map(violationItem), violations.length ? "" : "within limits");
+}
+
+function renderPreviewError(err) {
+  for (const id of ["bits-strip", "estimates"]) $(id).replaceChildren();
+  $("frame-hex").textContent = "–";
+  $("airtime").textContent = "–";
+  const items = err instanceof ApiError && err.status === 422 ? err.items : [{ param: "", msg: err.message }];
+  if (state.form) {
+    state.form.setSnaps([]);
+    state.form.setWarnings(new Set());
+    state.form.setErrors(new Map(items.filter((i) => i.param).map((i) => [i.param, i.msg])));
+  }
+  renderChecks(items.map((i) => ({ text: i.param ? `${i.param}: ${i.msg}` : i.msg, kind: "error", param: i.param })), "");
+}
+
+function violationItem(v) {
+  const unit = v.unit || unitOf(state.pattern, v.param);
+  const facts = v.limit !== undefined ? ` (${withUnit(v.value, unit)}, limit ${withUnit(v.limit, unit)})` : "";
+  return {
+    param: v.param,
+    kind: v.overridable ? "warn" : "error",
+    text: `${v.param}: ${v.message || "outside the limits"}${facts}${v.overridable ? " [overridable]" : ""}`,
+  };
+}
+
+function renderChecks(items, okText) {
+  const list = $("violations");
+  if (!items.length) {
+    list.replaceChildren(el("li", { class: "ok" }, okText || "–"));
+    return;
+  }
+  list.replaceChildren(...items.map((i) => el("li", { class: i.kind, dataset: { param: i.param || "" } }, i.text)));
+}
+
+function renderEstimates(e) {
+  const box = $("estimates");
+  if (!e) {
+    box.replaceChildren(el("div", {}, el("dt", {}, "–"), el("dd", {}, "no estimate")));
+    return;
+  }
+  const depth = e.depth_min_m == null ? "–" : `${num(e.depth_min_m, 2)} to ${num(e.depth_max_m, 2)} m`;
+  const rows = [
+    ["length", withUnit(e.length_m, "m", 1)],
+    ["duration", e.duration_s == null ? "repeats (no end)" : withUnit(e.duration_s, "s", 1)],
+    ["depth range", depth],
+    ["battery use", withUnit(e.battery_pct, "%", 2)],
+    ["join", `${withUnit(e.join_length_m, "m", 1)}, ${withUnit(e.join_duration_s, "s", 1)}`],
+  ];
+  box.replaceChildren(...rows.map(([k, v]) => el("div", { dataset: { key: k } }, el("dt", {}, k), el("dd", {}, v))));
+}
+
+// ---- the confirm step ----
+
+async function openConfirm() {
+  if (!canWrite()) return;
+  await runPreview();
+  const err = state.previewError;
+  if (err && err.status === 422) {
+    notify("Fix the parameters first: " + err.items.map((i) => `${i.param} ${i.msg}`).join("; "), "error");
+    const bad = err.items.find((i) => i.param);
+    if (bad && state.form) state.form.focus(bad.param);
+    return;
+  }
+  renderConfirm(state.preview, current());
+  $("confirm-dialog").showModal();
+}
+
+function renderConfirm(preview, command) {
+  const body = $("confirm-body");
+  const overrideBox = $("confirm-override-box");
+  $("confirm-override").checked = false;
+  $("confirm-error").hidden = true;
+  const parts = [];
+  if (!preview) {
+    parts.push(el("p", { class: "warn" }, "No preview available (backend unreachable?): the command is checked when sent."));
+    overrideBox.hidden = true;
+  } else {
+    const diff = preview.diff || {};
+    parts.push(el("p", { testid: "confirm-summary" },
+      "Active: ", el("strong", {}, diff.active || "none"), "  ->  new: ", el("strong", {}, preview.pattern)));
+    const changes = Array.isArray(diff.changes) ? diff.changes : [];
+    parts.push(changes.length
+      ? el("ul", { class: "changes", testid: "confirm-changes" }, ...changes.map((c) =>
+        el("li", {}, changeText(c, preview.pattern))))
+      : el("p", { class: "hint", testid: "confirm-changes" }, diff.active === preview.pattern ? "No parameter changes (a repeat)." : "New pattern: every parameter is new."));
+    parts.push(el("p", { testid: "confirm-deltas" },
+      `duration ${delta(diff.duration_delta_s, "s")}, length ${delta(diff.length_delta_m, "m")}`));
+    parts.push(el("p", { class: "hint" }, `frame ${preview.hex || "–"}, ${num(preview.airtime_ms, 3)} ms on air`));
+    const violations = Array.isArray(preview.violations) ? preview.violations : [];
+    if (violations.length) {
+      parts.push(el("ul", { class: "violations", testid: "confirm-violations" },
+        ...violations.map(violationItem).map((i) => el("li", { class: i.kind }, i.text))));
+    }
+    overrideBox.hidden = !violations.some((v) => v.overridable);
+    body.dataset.hard = violations.some((v) => !v.overridable) ? "1" : "0";
+  }
+  $("confirm-title").textContent = `Send ${command.pattern}?`;
+  body.replaceChildren(...parts);
+  updateConfirmButton();
+}
+
+function changeText(c, pattern) {
+  const unit = c.unit || unitOf(pattern, c.param) || unitOf(state.pattern, c.param);
+  const old = c.old === null || c.old === undefined ? "(not set)" : withUnit(c.old, unit);
+  return `${c.param}: ${old} -> ${withUnit(c.new, unit)}`;
+}
+
+function updateConfirmButton() {
+  const hard = $("confirm-body").dataset.hard === "1";
+  const needsOverride = !$("confirm-override-box").hidden && !$("confirm-override").checked;
+  const button = $("confirm-send");
+  button.disabled = hard || needsOverride;
+  button.title = hard ? "a limit that cannot be overridden is violated" : needsOverride ? "tick “override limits” to send anyway" : "";
+}
+
+async function confirmSend() {
+  const command = current();
+  const button = $("confirm-send");
+  button.disabled = true;
+  try {
+    const record = await api("/api/commands", {
+      method: "POST",
+      body: { pattern: command.pattern, params: command.params, override: $("confirm-override").checked },
+    });
+    $("confirm-dialog").close();
+    notify(`${command.pattern} queued${record && record.id !== undefined ? ` (command ${record.id})` : ""}`);
+    state.onSent(record);
+  } catch (err) {
+    const box = $("confirm-error");
+    box.hidden = false;
+    box.textContent = err.message;
+    if (err.status === 409) $("confirm-override-box").hidden = false;
+    if (err.status === 422 && state.form) {
+      state.form.setErrors(new Map(err.items.filter((i) => i.param).map((i) => [i.param, i.msg])));
+    }
+    if (err.status === 0) notifyError("send", err);
+  } finally {
+    updateConfirmButton();
+  }
+}

@@ -1,0 +1,287 @@
+// Mission scripts: ordered steps (pattern, parameters, trigger), preview, save/load, onboard
+// export, and running them in auto or step mode.
+
+import { api } from "./api.js";
+import { dictionary, paramForm, fillPatternSelect, defaultParams, commandText } from "./form.js";
+import { $, el, summarize, download, notify, notifyError, applyAuth, setOff } from "./ui.js";
+
+export const SCRIPT_FORMAT = "nemesys-mission-script";
+export const SCRIPT_VERSION = 1;
+const TRIGGERS = [
+  ["after_previous", "when the previous pattern completes"],
+  ["at", "at time into the dive"],
+  ["operator", "on operator go"],
+];
+
+let steps = []; // [{pattern, params, trigger: {kind, t_s}}]
+let pollTimer = null;
+
+export function scriptDocument() {
+  return {
+    format: SCRIPT_FORMAT,
+    version: SCRIPT_VERSION,
+    name: $("script-name").value.trim() || "mission",
+    steps: steps.map((s) => ({
+      pattern: s.pattern,
+      params: { ...s.params },
+      trigger: { kind: s.trigger.kind, t_s: s.trigger.kind === "at" ? s.trigger.t_s : null },
+    })),
+  };
+}
+
+/** Add a step from the authoring form ({pattern, params}). */
+export function addStep(command) {
+  if (!command || !command.pattern) return;
+  steps.push({
+    pattern: command.pattern,
+    params: { ...command.params },
+    trigger: steps.length ? { kind: "after_previous", t_s: null } : { kind: "at", t_s: 0 },
+  });
+  renderSteps();
+  notify(`step ${steps.length} added: ${command.pattern}`);
+}
+
+function move(i, by) {
+  const j = i + by;
+  if (j < 0 || j >= steps.length) return;
+  [steps[i], steps[j]] = [steps[j], steps[i]];
+  renderSteps();
+  $(`script-step-${j}`).querySelector(by < 0 ? ".up" : ".down")?.focus();
+}
+
+function remove(i) {
+  steps.splice(i, 1);
+  renderSteps();
+}
+
+function stepRow(step, i) {
+  const prefix = `script-step-${i}-`;
+  const patternSelect = el("select", { id: `${prefix}pattern`, testid: `${prefix}pattern`, "aria-label": `step ${i + 1} pattern` });
+  fillPatternSelect(patternSelect, step.pattern);
+  const summary = el("summary", {}, commandText(step));
+  const formBox = el("div", { class: "param-form" });
+  let form;
+  const build = () => {
+    form = paramForm(formBox, step.pattern, step.params, {
+      prefix,
+      onChange: () => {
+        step.params = form.read();
+        summary.textContent = commandText(step);
+      },
+    });
+  };
+  build();
+  patternSelect.addEventListener("change", () => {
+    step.pattern = patternSelect.value;
+    step.params = defaultParams(step.pattern);
+    build();
+    summary.textContent = commandText(step);
+  });
+
+  const trigger = el("select", { id: `${prefix}trigger`, testid: `${prefix}trigger`, "aria-label": `step ${i + 1} trigger` },
+    ...TRIGGERS.map(([k, label]) => el("option", { value: k }, label)));
+  trigger.value = step.trigger.kind;
+  const time = el("input", {
+    id: `${prefix}t`, testid: `${prefix}t`, type: "number", min: 0, step: "any", inputmode: "decimal",
+    "aria-label": `step ${i + 1} time into the dive (s)`, hidden: step.trigger.kind !== "at",
+  });
+  time.value = step.trigger.t_s ?? 0;
+  const unit = el("span", { class: "unit", hidden: step.trigger.kind !== "at" }, "s");
+  trigger.addEventListener("change", () => {
+    step.trigger.kind = trigger.value;
+    time.hidden = unit.hidden = trigger.value !== "at";
+    if (trigger.value === "at") step.trigger.t_s = Number(time.value) || 0;
+  });
+  time.addEventListener("input", () => { step.trigger.t_s = time.value === "" ? 0 : Number(time.value); });
+
+  return el("li", { class: "script-step", id: `script-step-${i}`, testid: `script-step-${i}` },
+    el("div", { class: "step-head" },
+      el("strong", {}, `${i + 1}.`), patternSelect, trigger, time, unit,
+      el("span", { class: "step-buttons" },
+        el("button", { type: "button", class: "small up", testid: `${prefix}up`, disabled: i === 0, "aria-label": `move step ${i + 1} up`, onclick: () => move(i, -1) }, "↑"),
+        el("button", { type: "button", class: "small down", testid: `${prefix}down`, disabled: i === steps.length - 1, "aria-label": `move step ${i + 1} down`, onclick: () => move(i, 1) }, "↓"),
+        el("button", { type: "button", class: "small", testid: `${prefix}remove`, "aria-label": `remove step ${i + 1}`, onclick: () => remove(i) }, "Remove"))),
+    el("details", {}, summary, formBox),
+    el("p", { class: "step-check", testid: `${prefix}check`, hidden: true }));
+}
+
+function renderSteps() {
+  const list = $("script-steps");
+  list.replaceChildren(...steps.map(stepRow)); // empty: CSS shows "no steps yet"
+}
+
+// ---- preview, files, export ----
+
+/** Put 422 errors (loc [..., "steps", i, ..., name]) next to the step they name. */
+function showStepErrors(err) {
+  for (const d of Array.isArray(err.detail) ? err.detail : []) {
+    const loc = Array.isArray(d.loc) ? d.loc : [];
+    const at = loc.indexOf("steps");
+    const i = at >= 0 ? Number(loc[at + 1]) : NaN;
+    const box = Number.isInteger(i) ? $("script-step-" + i)?.querySelector(".step-check") : null;
+    if (box) {
+      box.hidden = false;
+      box.className = "step-check error";
+      box.textContent = `${loc.slice(at + 2).join(".") || "step"}: ${d.msg}`;
+    }
+  }
+}
+
+function clearStepChecks() {
+  for (const box of document.querySelectorAll("#script-steps .step-check")) box.hidden = true;
+}
+
+function timelineText(e) {
+  if (!e || typeof e !== "object") return String(e ?? "");
+  const rest = summarize(e, ["pattern", "params", "state"]);
+  const head = e.pattern ? commandText(e) : "";
+  const state = e.state ? ` [${e.state}]` : "";
+  return [head, rest].filter((t) => t && t !== "–").join(" · ") + state;
+}
+
+async function previewScript() {
+  clearStepChecks();
+  try {
+    const r = await api("/api/scripts/preview", { method: "POST", body: scriptDocument() });
+    const timeline = Array.isArray(r && r.timeline) ? r.timeline : [];
+    $("script-timeline").replaceChildren(...(timeline.length
+      ? timeline.map((e, i) => el("li", { testid: `script-timeline-${i}` }, timelineText(e)))
+      : [el("li", { class: "hint" }, "empty timeline")]));
+    (Array.isArray(r && r.steps) ? r.steps : []).forEach((s, i) => {
+      const box = $("script-step-" + i)?.querySelector(".step-check");
+      const v = s && Array.isArray(s.violations) ? s.violations : [];
+      if (box && v.length) {
+        box.hidden = false;
+        box.className = "step-check warn";
+        box.textContent = v.map((x) => `${x.param}: ${x.message}`).join("; ");
+      }
+    });
+    notify("script preview drawn in the 3D view");
+  } catch (err) {
+    if (err.status === 422) showStepErrors(err);
+    notifyError("script preview", err);
+  }
+}
+
+function fileName(ext) {
+  return `${(scriptDocument().name || "mission").replace(/[^A-Za-z0-9_.-]+/g, "_")}${ext}`;
+}
+
+function saveScript() {
+  download(fileName(".nemesys-script.json"), JSON.stringify(scriptDocument(), null, 2) + "\n");
+}
+
+/** Parse a saved script; throws Error with a reason. */
+export function parseScript(text) {
+  const doc = JSON.parse(text);
+  if (!doc || doc.format !== SCRIPT_FORMAT) throw new Error(`not a ${SCRIPT_FORMAT} file`);
+  if (doc.version !== SCRIPT_VERSION) throw new Error(`version ${doc.version} is not supported (expected ${SCRIPT_VERSION})`);
+  if (!Array.isArray(doc.steps)) throw new Error("steps must be a list");
+  const out = doc.steps.map((s, i) => {
+    if (!s || !dictionary.byName.has(s.pattern)) throw new Error(`step ${i + 1}: unknown pattern ${s && s.pattern}`);
+    const kind = s.trigger && s.trigger.kind;
+    if (!TRIGGERS.some(([k]) => k === kind)) throw new Error(`step ${i + 1}: unknown trigger ${kind}`);
+    return { pattern: s.pattern, params: { ...(s.params || {}) }, trigger: { kind, t_s: kind === "at" ? Number(s.trigger.t_s) || 0 : null } };
+  });
+  return { name: String(doc.name || "mission"), steps: out };
+}
+
+async function loadScript(event) {
+  const file = event.target.files && event.target.files[0];
+  event.target.value = "";
+  if (!file) return;
+  try {
+    const parsed = parseScript(await file.text());
+    $("script-name").value = parsed.name;
+    steps = parsed.steps;
+    renderSteps();
+    notify(`loaded ${parsed.name}: ${steps.length} steps`);
+  } catch (err) {
+    notify(`could not load ${file.name}: ${err.message}`, "error");
+  }
+}
+
+async function exportOnboard() {
+  try {
+    const r = await api("/api/scripts/export", { method: "POST", body: scriptDocument() });
+    if (typeof r === "string") download(fileName(".onboard.txt"), r, "text/plain");
+    else download(fileName(".onboard.json"), JSON.stringify(r, null, 2) + "\n");
+  } catch (err) {
+    if (err.status === 422) showStepErrors(err);
+    notifyError("onboard export", err);
+  }
+}
+
+// ---- running ----
+
+async function runScript() {
+  if (!steps.length) {
+    notify("the script has no steps", "warn");
+    return;
+  }
+  const mode = $("script-step-mode").checked ? "step" : "auto";
+  try {
+    renderRun(await api("/api/scripts/run", { method: "POST", body: { script: scriptDocument(), mode } }));
+  } catch (err) {
+    if (err.status === 422) showStepErrors(err);
+    notifyError("run script", err);
+  }
+}
+
+async function control(path, what) {
+  try {
+    renderRun(await api(path, { method: "POST" }));
+  } catch (err) {
+    notifyError(what, err);
+  }
+  pollRun();
+}
+
+export async function pollRun() {
+  try {
+    renderRun(await api("/api/scripts/run"));
+  } catch (err) {
+    if (err.status !== 404) notifyError("script run state", err);
+    renderRun(null);
+  }
+}
+
+function triggerText(t) {
+  if (!t || typeof t !== "object") return "";
+  if (t.kind === "at") return `at ${t.t_s ?? 0} s into the dive`;
+  return t.kind === "operator" ? "on operator go" : "when the previous pattern completes";
+}
+
+function renderRun(run) {
+  const running = Boolean(run && run.running);
+  const total = run && Array.isArray(run.steps) ? run.steps.length : 0;
+  const stepNo = run && run.step != null ? Number(run.step) + 1 : null;
+  $("script-run-state").textContent = running
+    ? `running (${run.mode})${stepNo ? `, step ${stepNo}${total ? ` of ${total}` : ""}` : ""}${run.waiting_for ? `, waiting for ${run.waiting_for}` : ""}`
+    : run && total ? "finished or stopped" : "not running";
+  const next = running && run.next ? run.next : null;
+  const proposal = $("script-next-proposal");
+  proposal.hidden = !next;
+  proposal.textContent = next ? `Proposed next: ${commandText(next)}${next.trigger ? ` (${triggerText(next.trigger)})` : ""}` : "";
+  setOff($("script-next"), !(running && run.mode === "step" && next));
+  setOff($("script-stop"), !running);
+  setOff($("script-run"), running);
+  $("script-run-steps").replaceChildren(...(running || total ? (run.steps || []).map((s, i) =>
+    el("li", { testid: `script-run-step-${i}`, class: s && s.state ? `st-${s.state}` : "" },
+      `${i + 1}. ${timelineText(s)}`)) : []));
+  clearTimeout(pollTimer);
+  pollTimer = running ? setTimeout(pollRun, 1000) : null;
+}
+
+export function initScript() {
+  renderSteps();
+  $("script-preview").addEventListener("click", previewScript);
+  $("script-save").addEventListener("click", saveScript);
+  $("script-load").addEventListener("change", loadScript);
+  $("script-export").addEventListener("click", exportOnboard);
+  $("script-run").addEventListener("click", runScript);
+  $("script-next").addEventListener("click", () => control("/api/scripts/run/next", "send next"));
+  $("script-stop").addEventListener("click", () => control("/api/scripts/run/stop", "stop"));
+  applyAuth(undefined, $("script-panel"));
+  pollRun();
+}

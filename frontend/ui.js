@@ -1,0 +1,150 @@
+// DOM helpers, the message area, number formatting with units, and read-only gating.
+
+export const $ = (id) => document.getElementById(id);
+
+/** el("button", {class: "x", dataset: {testid: "y"}, onclick}, "text", child) */
+export function el(tag, attrs = {}, ...children) {
+  const node = document.createElement(tag);
+  for (const [key, value] of Object.entries(attrs)) {
+    if (value === undefined || value === null || value === false) continue;
+    if (key === "class") node.className = value;
+    else if (key === "testid") node.dataset.testid = value;
+    else if (key === "dataset") Object.assign(node.dataset, value);
+    else if (key.startsWith("on") && typeof value === "function") node.addEventListener(key.slice(2), value);
+    else if (key in node && typeof value !== "string") node[key] = value;
+    else node.setAttribute(key, value === true ? "" : value);
+  }
+  for (const child of children.flat()) {
+    if (child === null || child === undefined || child === false) continue;
+    node.append(child instanceof Node ? child : String(child));
+  }
+  return node;
+}
+
+// ---- messages ----
+
+/** Show a dismissable message; kind is "info", "warn" or "error". Info fades after 8 s. */
+export function notify(text, kind = "info") {
+  const box = $("messages");
+  if (!box) return;
+  const item = el(
+    "div",
+    { class: `message message-${kind}`, testid: "message", role: kind === "error" ? "alert" : "status" },
+    el("span", {}, text),
+    el("button", { type: "button", class: "dismiss", testid: "message-dismiss", "aria-label": "dismiss message", onclick: () => item.remove() }, "×"),
+  );
+  box.prepend(item);
+  while (box.children.length > 6) box.lastElementChild.remove();
+  if (kind === "info") setTimeout(() => item.remove(), 8000);
+}
+
+export function notifyError(prefix, err) {
+  if (err && err.name === "AbortError") return;
+  notify(`${prefix}: ${(err && err.message) || err}`, "error");
+}
+
+// ---- formatting ----
+
+/** A number for people: at most `digits` decimals, trailing zeros dropped. */
+export function num(value, digits = 3) {
+  if (value === null || value === undefined || value === "") return "–";
+  const n = Number(value);
+  if (!Number.isFinite(n)) return String(value);
+  return String(Number(n.toFixed(digits)));
+}
+
+/** A value with its unit ("5 m", "0.18 m/s", "cw"). */
+export function withUnit(value, unit, digits = 3) {
+  if (value === null || value === undefined || value === "") return "–";
+  if (typeof value !== "number" && !Number.isFinite(Number(value))) return String(value);
+  return unit ? `${num(value, digits)} ${unit}` : num(value, digits);
+}
+
+/** A signed delta with unit ("+12 s", "-3.1 m"). */
+export function delta(value, unit, digits = 1) {
+  if (value === null || value === undefined) return "–";
+  const n = Number(value);
+  return `${n > 0 ? "+" : ""}${num(n, digits)}${unit ? ` ${unit}` : ""}`;
+}
+
+const SUFFIX_UNITS = [
+  ["_mps", "m/s"], ["_deg", "deg"], ["_pct", "%"], ["_ms", "ms"], ["_bps", "b/s"],
+  ["_bits", "bits"], ["_s", "s"], ["_m", "m"],
+];
+
+/** "duration_s" -> ["duration", "s"]: the unit convention of the API's key names. */
+export function splitKey(key) {
+  for (const [suffix, unit] of SUFFIX_UNITS) {
+    if (key.endsWith(suffix)) return [key.slice(0, -suffix.length), unit];
+  }
+  return [key, ""];
+}
+
+/** Compact "key value unit" text of a flat object of unknown shape, units from key suffixes. */
+export function summarize(obj, skip = []) {
+  if (obj === null || obj === undefined) return "–";
+  if (typeof obj !== "object") return String(obj);
+  return Object.entries(obj)
+    .filter(([k, v]) => !skip.includes(k) && v !== null && v !== undefined && typeof v !== "object")
+    .map(([k, v]) => {
+      const [name, unit] = splitKey(k);
+      return `${name.replaceAll("_", " ")} ${withUnit(v, unit)}`;
+    })
+    .join(", ");
+}
+
+export function clock(iso) {
+  if (!iso) return "–";
+  const d = new Date(iso);
+  return Number.isNaN(d.getTime()) ? String(iso) : d.toLocaleTimeString([], { hour12: false });
+}
+
+export function debounce(fn, ms) {
+  let timer = null;
+  const wrapped = (...args) => {
+    clearTimeout(timer);
+    timer = setTimeout(() => fn(...args), ms);
+  };
+  wrapped.cancel = () => clearTimeout(timer);
+  return wrapped;
+}
+
+export function download(filename, text, type = "application/json") {
+  const url = URL.createObjectURL(new Blob([text], { type }));
+  const a = el("a", { href: url, download: filename, hidden: true });
+  document.body.append(a);
+  a.click();
+  a.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 1000);
+}
+
+/** A safe fragment of an id for data-testid ("j5 (unused)" -> "j5"). */
+export function slug(text) {
+  return String(text).replace(/\s*\(unused\)$/, "").replace(/[^A-Za-z0-9_.-]+/g, "-");
+}
+
+// ---- read-only gating ----
+
+export const READ_ONLY_TIP = "read-only: open the URL with the operator token";
+let writable = false;
+
+export function canWrite() {
+  return writable;
+}
+
+/** Enable or disable every [data-auth] control; call again after rendering new ones. */
+export function applyAuth(canWriteNow = writable, root = document) {
+  writable = canWriteNow;
+  for (const node of root.querySelectorAll("[data-auth]")) {
+    if (!("tip" in node.dataset)) node.dataset.tip = node.getAttribute("title") || "";
+    node.disabled = !writable || node.dataset.off === "1";
+    node.title = writable ? node.dataset.tip : READ_ONLY_TIP;
+    node.classList.toggle("read-only", !writable);
+  }
+}
+
+/** Disable an auth-gated control for another reason (off = true) without losing the gating. */
+export function setOff(node, off) {
+  node.dataset.off = off ? "1" : "0";
+  applyAuth(writable, node.parentElement || document);
+}
