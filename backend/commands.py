@@ -270,13 +270,21 @@ class CommandManager:
 
     @property
     def echo_mismatch(self) -> bool:
-        """The vehicle's echoed active command differs from the last command it accepted
-        from this console (e.g. it was retasked by someone else, or reset)."""
+        """The vehicle's echo of its active command (the last acknowledgement's ``active``,
+        and the pattern in its status) differs from the last command it accepted from this
+        console: retasked by someone else, restarted, or a console bug."""
         accepted = self.log.commands(state="acknowledged", dive=self._dive(), limit=1)
-        if not accepted or self.vehicle_active is None:
+        if not accepted:
             return False
         last = accepted[0]
+        status = self.hub.status or {}
+        acked_t_s = (last.get("ack") or {}).get("t_s", 0.0)
+        # a status from before the acknowledgement still shows the old pattern: not a mismatch
+        if status.get("t_s", 0.0) > acked_t_s and status.get("pattern") != last["pattern"]:
+            return True
         active = self.vehicle_active
+        if active is None:
+            return False
         return (active.get("pattern"), active.get("params")) != (last["pattern"], last["params"])
 
 

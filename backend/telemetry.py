@@ -65,7 +65,6 @@ class TelemetryHub:
         self.last_message_s: float | None = None  # monotonic
         self._version = 0
         self._clients: set[_Client] = set()
-        self._changed = asyncio.Event()
 
     @property
     def client_count(self) -> int:
