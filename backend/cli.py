@@ -336,6 +336,10 @@ def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
         from bench import sim as bench_sim
 
         return bench_sim.run(out, quick=args.quick)
+    if args.target == "console":
+        from bench import console as bench_console
+
+        return bench_console.run(out, quick=args.quick)
     raise UsageError(f"unknown benchmark {args.target!r}")
 
 
@@ -435,7 +439,9 @@ def build_parser() -> argparse.ArgumentParser:
     _serve().add_parser(sub)
 
     p = sub.add_parser("bench", help="run a benchmark and print its table")
-    p.add_argument("target", choices=["codec", "planner", "sim"], help="what to benchmark")
+    p.add_argument(
+        "target", choices=["codec", "planner", "sim", "console"], help="what to benchmark"
+    )
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
     return parser
 

@@ -62,9 +62,12 @@ class CommandManager:
         max_sends_per_minute: int,
         link_delay_s: Callable[[], float] = lambda: 0.0,
         airtime_s: float = 100 / 36000,
+        target: str | None = None,
     ) -> None:
         self.log = log
         self.link = link
+        #: What the log records as the target (the settings' name for it, e.g. "sim").
+        self.target = target or link.target
         self.hub = hub
         self._dive = dive
         self.operator = operator
@@ -132,7 +135,7 @@ class CommandManager:
             self._dive(),
             {
                 "operator": self.operator,
-                "target": self.link.target,
+                "target": self.target,
                 "kind": kind,
                 "pattern": cmd.pattern.name,
                 "pattern_id": cmd.pattern.id,
@@ -183,6 +186,12 @@ class CommandManager:
             self._update(command_id, state="failed", attempts=attempts, reason=reason)
             return
         self.last_sent = {"id": command_id, **_command_json(enc)}
+        now = self.log.command(command_id)
+        if now is not None and now["state"] == "acknowledged":
+            # an earlier attempt was acknowledged while this one was on its way (a Surface
+            # repeat): count the attempt, keep the acknowledgement
+            self._update(command_id, attempts=attempts)
+            return
         self._update(
             command_id, state="transmitted", attempts=attempts, sent_at=now_iso(), reason=None
         )

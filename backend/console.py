@@ -82,6 +82,7 @@ class Console:
             max_sends_per_minute=s.max_sends_per_minute,
             link_delay_s=self._link_delay_s,
             airtime_s=airtime_s(s.bitrate_bps),
+            target=s.target,
         )
         link.on_mission = self.commands.on_mission
         self.commands.on_plan = self._show_active
@@ -245,6 +246,8 @@ class Console:
         }
         doc["estimate"] = {
             **{k: v for k, v in est.as_dict().items() if isinstance(v, int | float | None)},
+            "join_length_m": est.transit_length_m,
+            "join_duration_s": est.transit_duration_s,
             # the paper's battery fit: 9.23 % an hour at nominal load, beyond the first hour
             "battery_pct": est.duration_s / 3600.0 * SOC_LINEAR_PCT_PER_H,
         }

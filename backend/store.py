@@ -99,6 +99,7 @@ class MissionLog:
 
     def dives(self) -> list[dict[str, Any]]:
         with self._lock:
+            self._flush_track()
             rows = self._db.execute(
                 "SELECT d.id, d.started_at, d.target, "
                 "(SELECT COUNT(*) FROM commands c WHERE c.dive = d.id) AS commands, "

@@ -30,6 +30,7 @@ def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
         "operator": s.operator,
         "authenticated": token_ok(console, token),
         "dive": console.dive,
+        "version": request.app.version,
         "limits": {"max_depth_m": s.max_depth_m, "max_speed_mps": s.max_speed_mps},
     }
 

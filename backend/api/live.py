@@ -32,8 +32,17 @@ async def live(websocket: WebSocket) -> None:
     authed = False
     try:
         while True:
-            text = await websocket.receive_text()
-            reply = await _control(console, text, authed)
+            message = await websocket.receive()
+            if message["type"] == "websocket.disconnect":
+                break
+            text = message.get("text")
+            if text is None:
+                reply: dict[str, Any] = {
+                    "type": "error",
+                    "detail": "binary frames are not accepted",
+                }
+            else:
+                reply = await _control(console, text, authed)
             if reply.get("type") == "auth_ok":
                 authed = True
             await websocket.send_text(json.dumps(reply))

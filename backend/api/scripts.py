@@ -81,7 +81,16 @@ def script_export(
 
 def _state(console: Console) -> dict[str, Any]:
     if console.runner is None:
-        return {"running": False, "outcome": None, "steps": []}
+        return {
+            "running": False,
+            "outcome": None,
+            "mode": None,
+            "step": None,
+            "next": None,
+            "waiting_for": None,
+            "steps": [],
+            "commands": {},
+        }
     state: dict[str, Any] = console.runner.state()
     state["commands"] = console.script_commands
     return state

@@ -1,0 +1,140 @@
+"""Shared fixtures of the console tests: an app on the simulated vehicle (fast time), its
+operator token, and polling helpers with deadlines (no fixed long sleeps)."""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Iterator
+from contextlib import ExitStack
+from pathlib import Path
+from typing import Any, Literal, Protocol, TypeVar
+
+import pytest
+from fastapi.testclient import TestClient
+
+from backend.app import create_app
+from backend.settings import Settings
+
+TOKEN = "x" * 20
+WRONG_TOKEN = "y" * 20
+AUTH = {"Authorization": f"Bearer {TOKEN}"}
+WRONG_AUTH = {"Authorization": f"Bearer {WRONG_TOKEN}"}
+#: The simulator's speed-up in these tests (the maximum).
+TIME_SCALE = 50.0
+
+CIRCLE: dict[str, Any] = {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"}
+SQUARE: dict[str, Any] = {"speed": 0.18, "depth": 2, "side_span": 6, "direction": "cw"}
+FINAL = ("acknowledged", "rejected", "timed_out", "failed")
+
+T = TypeVar("T")
+
+
+class MakeClient(Protocol):
+    def __call__(self, *, viewer: bool = False, **overrides: Any) -> TestClient: ...
+
+
+def clear_nemesys_env(monkeypatch: pytest.MonkeyPatch) -> None:
+    """No NEMESYS_* variable of the caller's shell leaks into the settings under test."""
+    for name in list(os.environ):
+        if name.startswith("NEMESYS_"):
+            monkeypatch.delenv(name)
+
+
+def settings_for(db_path: Path, **overrides: Any) -> Settings:
+    values: dict[str, Any] = {
+        "token": TOKEN,
+        "db_path": db_path,
+        "viewer_port": 0,
+        "sim_time_scale": TIME_SCALE,
+        **overrides,
+    }
+    return Settings(**values)
+
+
+@pytest.fixture
+def make_client(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[MakeClient]:
+    """Build a started app (lifespan running) with test settings; stopped at teardown."""
+    clear_nemesys_env(monkeypatch)
+    stack = ExitStack()
+    count = 0
+
+    def make(*, viewer: bool = False, **overrides: Any) -> TestClient:
+        nonlocal count
+        count += 1
+        overrides.setdefault("db_path", tmp_path / f"missions-{count}.sqlite3")
+        settings = settings_for(**overrides)
+        client = TestClient(create_app(settings, viewer=viewer))
+        stack.enter_context(client)
+        return client
+
+    with stack:
+        yield make
+
+
+@pytest.fixture
+def client(make_client: MakeClient) -> TestClient:
+    """The console in training mode: the simulated vehicle at 50x."""
+    return make_client()
+
+
+def wait_until(
+    probe: Callable[[], T | Literal[False] | None],
+    timeout_s: float = 5.0,
+    interval_s: float = 0.02,
+    what: str = "",
+) -> T:
+    """Poll ``probe`` until it returns something truthy (returned); fail at the deadline.
+    ``False`` and ``None`` mean "not yet", so ``lambda: cond and value`` reads well."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        value = probe()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s} s waiting for {what or probe}")
+        time.sleep(interval_s)
+
+
+def record(client: TestClient, command_id: int) -> dict[str, Any]:
+    r = client.get(f"/api/commands/{command_id}")
+    assert r.status_code == 200, r.text
+    body: dict[str, Any] = r.json()
+    return body
+
+
+def wait_state(
+    client: TestClient,
+    command_id: int,
+    states: tuple[str, ...] = FINAL,
+    timeout_s: float = 5.0,
+) -> dict[str, Any]:
+    """The command's record once its state is one of ``states``."""
+
+    def probe() -> dict[str, Any] | None:
+        rec = record(client, command_id)
+        return rec if rec["state"] in states else None
+
+    return wait_until(probe, timeout_s, what=f"command {command_id} in {states}")
+
+
+def send(
+    client: TestClient, pattern: str = "circle", params: dict[str, Any] | None = None
+) -> dict[str, Any]:
+    """POST a command with the operator token; returns the 202 record."""
+    r = client.post(
+        "/api/commands",
+        json={"pattern": pattern, "params": CIRCLE if params is None else params},
+        headers=AUTH,
+    )
+    assert r.status_code == 202, r.text
+    body: dict[str, Any] = r.json()
+    return body
+
+
+def loc_of(response_json: Any) -> list[Any]:
+    """The ``loc`` of the first validation error of a 422 answer."""
+    detail = response_json["detail"]
+    assert isinstance(detail, list) and detail, response_json
+    loc: list[Any] = detail[0]["loc"]
+    return loc
