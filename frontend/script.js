@@ -3,7 +3,7 @@
 
 import { api } from "./api.js";
 import { dictionary, paramForm, fillPatternSelect, defaultParams, commandText } from "./form.js";
-import { $, el, summarize, download, notify, notifyError, applyAuth, setOff } from "./ui.js";
+import { $, el, summarize, withUnit, download, notify, notifyError, applyAuth, setOff } from "./ui.js";
 
 export const SCRIPT_FORMAT = "nemesys-mission-script";
 export const SCRIPT_VERSION = 1;
@@ -131,9 +131,11 @@ function clearStepChecks() {
   for (const box of document.querySelectorAll("#script-steps .step-check")) box.hidden = true;
 }
 
+/** A preview timeline event ({t_s, step, text}) or a run step ({index, pattern, state, ...}). */
 function timelineText(e) {
   if (!e || typeof e !== "object") return String(e ?? "");
-  const rest = summarize(e, ["pattern", "params", "state"]);
+  if (typeof e.text === "string") return `${withUnit(e.t_s, "s", 1)}: ${e.text}`;
+  const rest = summarize(e, ["pattern", "params", "state", "index"]);
   const head = e.pattern ? commandText(e) : "";
   const state = e.state ? ` [${e.state}]` : "";
   return [head, rest].filter((t) => t && t !== "–").join(" · ") + state;
@@ -145,7 +147,10 @@ async function previewScript() {
     const r = await api("/api/scripts/preview", { method: "POST", body: scriptDocument() });
     const timeline = Array.isArray(r && r.timeline) ? r.timeline : [];
     $("script-timeline").replaceChildren(...(timeline.length
-      ? timeline.map((e, i) => el("li", { testid: `script-timeline-${i}` }, timelineText(e)))
+      ? timeline.map((e, i) => el("li", {
+        testid: `script-timeline-${i}`,
+        dataset: e && e.step != null ? { step: String(e.step) } : {},
+      }, timelineText(e)))
       : [el("li", { class: "hint" }, "empty timeline")]));
     (Array.isArray(r && r.steps) ? r.steps : []).forEach((s, i) => {
       const box = $("script-step-" + i)?.querySelector(".step-check");
@@ -252,13 +257,19 @@ function triggerText(t) {
   return t.kind === "operator" ? "on operator go" : "when the previous pattern completes";
 }
 
+/** How a finished run ended: "completed", "stopped: reason", "failed: reason". */
+function outcomeText(run) {
+  const outcome = run.outcome && run.outcome !== "running" ? run.outcome : "finished or stopped";
+  return run.reason ? `${outcome}: ${run.reason}` : outcome;
+}
+
 function renderRun(run) {
   const running = Boolean(run && run.running);
   const total = run && Array.isArray(run.steps) ? run.steps.length : 0;
   const stepNo = run && run.step != null ? Number(run.step) + 1 : null;
   $("script-run-state").textContent = running
     ? `running (${run.mode})${stepNo ? `, step ${stepNo}${total ? ` of ${total}` : ""}` : ""}${run.waiting_for ? `, waiting for ${run.waiting_for}` : ""}`
-    : run && total ? "finished or stopped" : "not running";
+    : run && total ? outcomeText(run) : "not running";
   const next = running && run.next ? run.next : null;
   const proposal = $("script-next-proposal");
   proposal.hidden = !next;

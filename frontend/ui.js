@@ -88,7 +88,9 @@ export function summarize(obj, skip = []) {
     .filter(([k, v]) => !skip.includes(k) && v !== null && v !== undefined && typeof v !== "object")
     .map(([k, v]) => {
       const [name, unit] = splitKey(k);
-      return `${name.replaceAll("_", " ")} ${withUnit(v, unit)}`;
+      const label = name.replaceAll("_", " ");
+      if (typeof v === "boolean") return `${label} ${v ? "yes" : "no"}`; // not "1" / "0"
+      return `${label} ${withUnit(v, unit)}`;
     })
     .join(", ");
 }

@@ -1,0 +1,366 @@
+"""The operator page in real headless Chromium against a real console (training mode).
+
+Each test opens the page of a fresh ``nemesys console`` and drives it only through the page's
+``data-testid`` controls; the REST API is used as the oracle (what the backend encodes, which
+commands it logged). The 3D view is checked through viser's scene tree inside its iframe.
+Rendering is slow here (SwiftShader), so waits poll every 100 ms instead of per frame.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from typing import Any
+from urllib.parse import parse_qs, urlsplit
+
+from playwright.sync_api import Frame, Page, expect
+
+from tests.frontend.conftest import TOKEN, Console, Watched
+
+POLL_MS = 100
+LAWNMOWER = {"speed": 0.18, "depth": 3, "sweep_length": 20.3, "lane_spacing": 2, "laps": 2}
+#: How long the vehicle may take to acknowledge (sim at time scale 10; ack timeout 5 s).
+ACK_MS = 10_000
+
+
+# ---- helpers -----------------------------------------------------------------------------
+
+
+def open_page(w: Watched, console: Console, *, token: bool = True, viewer: bool = False) -> Page:
+    """Load the page (with or without the operator token) and wait until it is built: the
+    pattern picker is filled from the dictionary and the access state is known. The real 3D
+    view is loaded only with ``viewer=True`` (see ``Watched.stub_viewer``)."""
+    page = w.page
+    if not viewer:
+        w.stub_viewer()
+    page.goto(f"{console.base}/?token={TOKEN}" if token else f"{console.base}/")
+    page.wait_for_function(
+        "() => document.querySelectorAll('#pattern-select option').length > 0"
+        " && document.querySelector('#param-form [data-testid^=\"param-\"]') !== null",
+        polling=POLL_MS,
+    )
+    operator = console.get("/api/session")["operator"]
+    expect(page.get_by_test_id("auth-state")).to_have_text(
+        f"operator {operator}" if token else "read-only (observer)"
+    )
+    if token:  # the token left the address bar (it is kept in sessionStorage)
+        assert "token" not in page.url
+    return page
+
+
+def author(page: Page, pattern: str, params: dict[str, Any]) -> None:
+    """Pick a pattern and type its parameters into the authoring form."""
+    page.get_by_test_id("pattern-select").select_option(pattern)
+    for name, value in params.items():
+        control = page.get_by_test_id(f"param-{name}")
+        if isinstance(value, str):
+            control.select_option(value)
+        else:
+            control.fill(f"{value:g}")
+
+
+def wait_text(page: Page, testid: str, text: str, timeout_ms: int = 10_000) -> None:
+    """Wait until the element's textContent is exactly ``text`` (polling, not per frame)."""
+    page.wait_for_function(
+        '([id, text]) => { const n = document.querySelector(`[data-testid="${id}"]`);'
+        " return n !== null && n.textContent === text; }",
+        arg=[testid, text],
+        polling=POLL_MS,
+        timeout=timeout_ms,
+    )
+
+
+def text_of(page: Page, testid: str) -> str:
+    return page.get_by_test_id(testid).text_content() or ""
+
+
+def viewer_frame(page: Page) -> Frame:
+    handle = page.get_by_test_id("viewer").element_handle()
+    frame = handle.content_frame()
+    assert frame is not None, "the 3D view iframe has no document"
+    return frame
+
+
+def wait_scene_label(frame: Frame, name: str, *parts: str, timeout_ms: int = 20_000) -> str:
+    """Wait until viser's scene tree (inside the viewer iframe) holds node ``name`` and, for a
+    label, its text contains every one of ``parts``; return the text ('' for other nodes)."""
+    frame.wait_for_function(
+        "([name, parts]) => { const t = window.__viserSceneTree;"
+        " const node = t && t.getState()[name];"
+        " if (!node) return false;"
+        " const text = (node.message.props && node.message.props.text) || '';"
+        " return parts.every((p) => text.includes(p)); }",
+        arg=[name, list(parts)],
+        polling=POLL_MS,
+        timeout=timeout_ms,
+    )
+    text: str = frame.evaluate(
+        "(name) => window.__viserSceneTree.getState()[name].message.props.text || ''", name
+    )
+    return text
+
+
+def render_viewer(page: Page, frame: Frame) -> None:
+    """Scroll the 3D view into sight and wait for two of its frames to be drawn. The tests
+    keep it below the fold (see the ``watched`` fixture), where Chromium does not render it."""
+    page.get_by_test_id("viewer").scroll_into_view_if_needed()
+    frame.evaluate(
+        "() => new Promise((done) => requestAnimationFrame(() => requestAnimationFrame(done)))"
+    )
+
+
+def scene_names(frame: Frame, prefix: str) -> list[str]:
+    names: list[str] = frame.evaluate(
+        "(prefix) => Object.keys(window.__viserSceneTree.getState())"
+        ".filter((k) => k.startsWith(prefix)).sort()",
+        prefix,
+    )
+    return names
+
+
+def commands(console: Console, **query: str) -> list[dict[str, Any]]:
+    """GET /api/commands (newest first)."""
+    rows: list[dict[str, Any]] = console.get("/api/commands", **query)
+    return rows
+
+
+def wait_command(console: Console, pattern: str, timeout_s: float = 5.0) -> dict[str, Any]:
+    """The newest logged command of ``pattern``, once there is one."""
+    deadline = time.monotonic() + timeout_s
+    while True:
+        rows = commands(console, pattern=pattern)
+        if rows:
+            return rows[0]
+        assert time.monotonic() < deadline, f"no {pattern} command was logged"
+        time.sleep(0.1)
+
+
+def assert_acknowledged_row(page: Page, command_id: int) -> None:
+    """The command's row in the command list reaches ``acknowledged`` and shows the vehicle's
+    acknowledgement: bits corrected and the decode and replan latencies."""
+    row = page.get_by_test_id("command-list").get_by_test_id(f"command-{command_id}")
+    expect(row).to_be_visible()
+    wait_text(page, f"state-{command_id}", "acknowledged", ACK_MS)
+    detail = row.get_by_test_id(f"command-detail-{command_id}")
+    expect(detail).to_have_text(
+        re.compile(r"corrected 0 bits, .*decode [\d.]+ ms, replan [\d.]+ ms")
+    )
+
+
+# ---- the flows -------------------------------------------------------------------------------
+
+
+def test_author_lawnmower_shows_bits_snaps_airtime_and_3d_preview(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console, viewer=True)
+    author(page, "lawnmower", LAWNMOWER)
+    oracle = console.post("/api/encode", {"pattern": "lawnmower", "params": LAWNMOWER})
+    bits: str = oracle["bits"]
+    assert len(bits) == 100 and set(bits) <= {"0", "1"}
+
+    # the frame: the same 100 bits and hex as the backend's encoder
+    wait_text(page, "bits-strip", bits)
+    strip = text_of(page, "bits-strip")
+    assert len(strip) == 100 and set(strip) <= {"0", "1"}
+    expect(page.get_by_test_id("frame-hex")).to_have_text(oracle["hex"])
+    expect(page.get_by_test_id("airtime")).to_contain_text("2.778 ms")
+    # the field sections are coloured separately: one span per field of the pattern
+    expect(page.get_by_test_id("bits-sweep_length")).to_have_text(
+        next(s["bits"] for s in oracle["sections"] if s["name"] == "sweep_length")
+    )
+
+    # 20.3 m does not fit the 8-bit scale: the form shows requested -> sent
+    snap = next(s for s in oracle["snaps"] if s["field"] == "sweep_length")
+    assert snap["changed"] and snap["sent"] != 20.3
+    expect(page.get_by_test_id("snap-sweep_length")).to_be_visible()
+    expect(page.get_by_test_id("snap-sweep_length")).to_have_text(f"20.3 m -> {snap['sent']:g} m")
+    for exact in ("speed", "depth", "lane_spacing", "laps"):  # these are sent as typed
+        expect(page.get_by_test_id(f"snap-{exact}")).to_be_hidden()
+
+    # the preview drawn in the 3D view (viser, inside the iframe): the lawnmower at 3 m
+    frame = viewer_frame(page)
+    end = wait_scene_label(frame, "/preview/end", "lawnmower", "depth 3.0 m")
+    assert end.startswith("preview: lawnmower end")
+    assert "/preview/body" in scene_names(frame, "/preview/")
+    render_viewer(page, frame)  # for the screenshot
+    assert commands(console) == [], "authoring must not transmit anything"
+    watched.assert_clean()
+
+
+def test_send_lawnmower_is_acknowledged_and_the_vehicle_moves(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    author(page, "lawnmower", LAWNMOWER)
+    oracle = console.post("/api/encode", {"pattern": "lawnmower", "params": LAWNMOWER})
+    wait_text(page, "bits-strip", oracle["bits"])
+    expect(page.get_by_test_id("status-pattern")).to_have_text("none")
+
+    page.get_by_test_id("send-button").click()
+    dialog = page.get_by_test_id("confirm-dialog")
+    expect(dialog).to_be_visible()
+    expect(page.locator("#confirm-title")).to_have_text("Send lawnmower?")
+    expect(page.get_by_test_id("confirm-summary")).to_have_text("Active: none  ->  new: lawnmower")
+    expect(page.get_by_test_id("confirm-changes")).to_contain_text("every parameter is new")
+    expect(page.get_by_test_id("confirm-body")).to_contain_text(oracle["hex"])
+    assert commands(console) == [], "nothing is sent before the operator confirms"
+
+    page.get_by_test_id("confirm-send").click()
+    expect(dialog).to_be_hidden()
+    record = wait_command(console, "lawnmower")
+    assert record["params"]["sweep_length"] == oracle["params"]["sweep_length"]
+    assert record["bits"] == oracle["bits"]
+    row = page.get_by_test_id(f"command-{record['id']}")
+    expect(row).to_be_visible()
+    expect(row).to_contain_text("lawnmower")
+    assert_acknowledged_row(page, record["id"])
+
+    # the vehicle flies it: the pattern is reported and the position keeps changing
+    wait_text(page, "status-pattern", "lawnmower", ACK_MS)
+    expect(page.get_by_test_id("status-mode")).to_have_text("running")
+    before = text_of(page, "status-position")
+    page.wait_for_function(
+        "(before) => document.querySelector('[data-testid=\"status-position\"]').textContent"
+        " !== before",
+        arg=before,
+        polling=POLL_MS,
+        timeout=5_000,
+    )
+    expect(page.get_by_test_id("echo-active")).to_contain_text("lawnmower")
+    expect(page.get_by_test_id("echo-mismatch")).to_be_hidden()
+    watched.assert_clean()
+
+
+def test_mission_script_with_two_commands_runs_to_completion(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    # step 1: a square at t = 0; step 2: a circle at t = 15 s (1.5 s of wall time at scale 10)
+    author(page, "square", {"speed": 0.5, "depth": 2, "side_span": 4, "direction": "cw"})
+    page.get_by_test_id("script-add").click()
+    author(page, "circle", {"speed": 0.5, "depth": 3, "radius": 3, "direction": "ccw"})
+    page.get_by_test_id("script-add").click()
+    expect(page.locator("#script-steps > li")).to_have_count(2)
+    expect(page.get_by_test_id("script-step-0-pattern")).to_have_value("square")
+    expect(page.get_by_test_id("script-step-0-trigger")).to_have_value("at")
+    expect(page.get_by_test_id("script-step-1-pattern")).to_have_value("circle")
+    page.get_by_test_id("script-step-1-trigger").select_option("at")
+    page.get_by_test_id("script-step-1-t").fill("15")
+
+    # preview: the timeline of the two commands
+    page.get_by_test_id("script-preview").click()
+    timeline = page.locator("#script-timeline > li")
+    # one entry per command sent (a circle repeats, so a note that one lap is shown follows)
+    sends = timeline.filter(has_text=re.compile(r"starts \(|retasks the vehicle \("))
+    expect(sends).to_have_count(2)
+    expect(sends.nth(0)).to_have_text("0 s: square starts (at 0 s)")
+    expect(sends.nth(1)).to_have_text("15 s: circle retasks the vehicle (at 15 s)")
+    assert commands(console) == [], "a preview must not transmit anything"
+
+    # run it in auto mode
+    expect(page.get_by_test_id("script-step-mode")).not_to_be_checked()
+    page.get_by_test_id("script-run").click()
+    wait_text(page, "script-run-state", "completed", 20_000)
+    run = console.get("/api/scripts/run")
+    assert run["outcome"] == "completed" and not run["running"], run
+    ids = [run["commands"][k] for k in sorted(run["commands"], key=int)]
+    assert len(ids) == 2
+    for command_id, pattern in zip(ids, ("square", "circle"), strict=True):
+        row = page.get_by_test_id(f"command-{command_id}")
+        expect(row).to_contain_text(pattern)
+        expect(row).to_contain_text("[script]")
+        assert_acknowledged_row(page, command_id)
+    expect(page.locator("#script-run-steps > li.st-acknowledged")).to_have_count(2)
+    expect(page.get_by_test_id("script-run")).to_be_enabled()
+    expect(page.get_by_test_id("script-stop")).to_be_disabled()
+    wait_text(page, "status-pattern", "circle", ACK_MS)
+    watched.assert_clean()
+
+
+def test_surface_button_is_acknowledged_and_the_banner_clears(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    banner = page.get_by_test_id("surface-state")
+    expect(banner).to_be_hidden()
+    page.get_by_test_id("surface-button").click()
+    record = wait_command(console, "surface")
+    assert record["kind"] == "surface"
+    row = page.get_by_test_id("command-list").get_by_test_id(f"command-{record['id']}")
+    expect(row).to_contain_text("SURFACE")
+    wait_text(page, f"state-{record['id']}", "acknowledged", ACK_MS)
+    expect(row.get_by_test_id(f"command-detail-{record['id']}")).to_contain_text("corrected 0")
+    wait_text(page, "status-pattern", "surface", ACK_MS)
+    expect(page.get_by_test_id("status-mode")).to_have_text(re.compile(r"^surfac(ing|ed)$"))
+    # the "surfacing... repeating" banner is gone once the vehicle acknowledged
+    page.wait_for_function(
+        "() => { const b = document.querySelector('[data-testid=\"surface-state\"]');"
+        " return b.hidden || !b.textContent.includes('surfacing'); }",
+        polling=POLL_MS,
+        timeout=5_000,
+    )
+    assert banner.is_hidden() or text_of(page, "surface-state") == "surface acknowledged"
+    watched.assert_clean()
+
+
+def test_without_token_the_page_is_read_only(console: Console, watched: Watched) -> None:
+    page = open_page(watched, console, token=False)
+    author(page, "circle", {"radius": 4})
+    for testid in ("send-button", "surface-button", "script-run", "training-reset"):
+        button = page.get_by_test_id(testid)
+        expect(button).to_be_disabled()
+        expect(button).to_have_attribute("title", "read-only: open the URL with the operator token")
+    expect(page.get_by_test_id("token-form")).to_be_visible()
+    # clicking anyway (a forced click, a script's click()) transmits nothing
+    page.get_by_test_id("send-button").click(force=True)
+    page.get_by_test_id("surface-button").click(force=True)
+    page.evaluate(
+        "() => { for (const id of ['send-button', 'surface-button'])"
+        ' document.querySelector(`[data-testid="${id}"]`).click(); }'
+    )
+    expect(page.get_by_test_id("confirm-dialog")).to_be_hidden()
+    page.wait_for_timeout(300)
+    posts = [url for method, url in watched.requests if method != "GET"]
+    assert all(urlsplit(u).path == "/api/preview" for u in posts), posts
+    assert commands(console) == []
+    assert console.get("/api/session")["authenticated"] is False
+    watched.assert_clean()
+
+
+def test_the_page_makes_no_external_requests(console: Console, watched: Watched) -> None:
+    sockets: list[str] = []
+    watched.page.on("websocket", lambda ws: sockets.append(ws.url))
+    page = open_page(watched, console, viewer=True)
+    # use it: author, preview, send, watch the acknowledgement
+    author(page, "circle", {"speed": 0.3, "depth": 2, "radius": 4})
+    page.get_by_test_id("send-button").click()
+    page.get_by_test_id("confirm-send").click()
+    record = wait_command(console, "circle")
+    wait_text(page, f"state-{record['id']}", "acknowledged", ACK_MS)
+    # the 3D view, scrolled into sight so that it renders (labels, fonts, textures) too
+    frame = viewer_frame(page)
+    wait_scene_label(frame, "/preview/end", "circle", "depth 2.0 m")
+    render_viewer(page, frame)
+    wait_scene_label(frame, "/vehicle/info", "depth")
+
+    session = console.get("/api/session")
+    viewer_ws = parse_qs(urlsplit(session["viewer_url"]).query)["websocket"][0]
+    viewer_port = urlsplit(viewer_ws).port
+    allowed = {("127.0.0.1", console.port), ("127.0.0.1", viewer_port)}
+    assert watched.requests, "no request was recorded"
+    assert sockets, "no websocket was recorded"
+    outside = []
+    urls = [url for _, url in watched.requests]
+    for url in urls + sockets:
+        parts = urlsplit(url)
+        if parts.scheme in ("data", "blob"):
+            continue
+        if (parts.hostname, parts.port) not in allowed:
+            outside.append(url)
+    assert not outside, f"requests that leave the console: {outside}"
+    # both servers were really used: the page's own API and viser's websocket
+    assert any(urlsplit(u).path == "/viewer/" for u in urls)
+    assert any(urlsplit(u).path == "/api/commands" for u in urls)
+    assert f"ws://127.0.0.1:{viewer_port}" in {u.rstrip("/") for u in sockets}
+    watched.assert_clean()
