@@ -26,6 +26,8 @@ from sim_bridge.environment import SOC_LINEAR_PCT_PER_H
 
 logger = logging.getLogger("backend.console")
 
+#: Shortest time between two preview drawings in the 3D view (s).
+PREVIEW_DRAW_INTERVAL_S = 0.1
 #: Scenario presets offered in training mode.
 SCENARIO_PRESETS = ("wreck", "panel", "pod", "tank")
 
@@ -47,6 +49,9 @@ class Console:
         self.runner: Any = None  # backend.scripts.ScriptRunner while a script runs
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
+        self._pending_preview: tuple[Any, ...] | None = None
+        self._preview_ready = asyncio.Event()
+        self._drawer: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
         self.started_s = time.monotonic()
 
@@ -93,12 +98,14 @@ class Console:
             from backend.viewer import Viewer
 
             self.viewer = Viewer(s.viewer_host, s.viewer_port)
+            self._drawer = asyncio.create_task(self._draw_loop(), name="preview drawing")
 
     async def stop(self) -> None:
-        if self._runner_task is not None:
-            self._runner_task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._runner_task
+        for task in (self._runner_task, self._drawer):
+            if task is not None:
+                task.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
         if self.commands is not None:
             await self.commands.close()
         if self.link is not None:
@@ -278,10 +285,25 @@ class Console:
             }
         doc["from"] = state.as_dict()
         if show and self.viewer is not None:
-            self.viewer.show_preview(
+            self._draw_later(
                 path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
             )
         return doc
+
+    def _draw_later(self, *preview: Any) -> None:
+        """Draw a preview in the 3D view off the request path, latest wins: a burst of
+        previews (an operator typing, twenty clients) costs one drawing per interval."""
+        self._pending_preview = preview
+        self._preview_ready.set()
+
+    async def _draw_loop(self) -> None:
+        while True:
+            await self._preview_ready.wait()
+            self._preview_ready.clear()
+            preview, self._pending_preview = self._pending_preview, None
+            if preview is not None and self.viewer is not None:
+                self.viewer.show_preview(*preview)
+            await asyncio.sleep(PREVIEW_DRAW_INTERVAL_S)
 
     # --- training ------------------------------------------------------------------------
 
