@@ -8,6 +8,7 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel, Field
 
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.models import SendIn
@@ -65,44 +66,33 @@ async def retry(command_id: int, console: ConsoleDep, _op: OperatorDep) -> dict[
 
 
 StateQ = Annotated[str | None, Query(pattern="^(" + "|".join(STATES) + ")$")]
-LimitQ = Annotated[int, Query(ge=1, le=1000)]
 
 
-def _filtered(
-    console: ConsoleDep,
-    state: StateQ = None,
-    pattern: Annotated[str | None, Query(max_length=32)] = None,
-    target: Annotated[str | None, Query(max_length=200)] = None,
-    dive: Annotated[int | None, Query(ge=1)] = None,
-    since: Annotated[str | None, Query(max_length=40)] = None,
-    until: Annotated[str | None, Query(max_length=40)] = None,
-    limit: LimitQ = 200,
-) -> list[dict[str, Any]]:
+class LogFilter(BaseModel):
+    """Filters of the mission log (all optional): query parameters."""
+
+    state: StateQ = None
+    pattern: Annotated[str | None, Field(max_length=32)] = None
+    target: Annotated[str | None, Field(max_length=200)] = None
+    dive: Annotated[int | None, Field(ge=1)] = None
+    since: Annotated[str | None, Field(max_length=40, description="ISO time, UTC")] = None
+    until: Annotated[str | None, Field(max_length=40, description="ISO time, UTC")] = None
+
+
+FilterQ = Annotated[LogFilter, Query()]
+
+
+def _rows(console: ConsoleDep, filters: LogFilter, limit: int) -> list[dict[str, Any]]:
     assert console.log is not None
-    return console.log.commands(
-        state=state,
-        pattern=pattern,
-        target=target,
-        dive=dive,
-        since=since,
-        until=until,
-        limit=limit,
-    )
+    return console.log.commands(**filters.model_dump(), limit=limit)
 
 
 @router.get("/commands")
 def commands(
-    console: ConsoleDep,
-    state: StateQ = None,
-    pattern: Annotated[str | None, Query(max_length=32)] = None,
-    target: Annotated[str | None, Query(max_length=200)] = None,
-    dive: Annotated[int | None, Query(ge=1)] = None,
-    since: Annotated[str | None, Query(max_length=40)] = None,
-    until: Annotated[str | None, Query(max_length=40)] = None,
-    limit: LimitQ = 200,
+    console: ConsoleDep, filters: FilterQ, limit: Annotated[int, Query(ge=1, le=1000)] = 200
 ) -> list[dict[str, Any]]:
     """The mission log, newest first."""
-    return _filtered(console, state, pattern, target, dive, since, until, limit)
+    return _rows(console, filters, limit)
 
 
 @router.get("/commands/{command_id}")
@@ -114,31 +104,23 @@ def command(command_id: int, console: ConsoleDep) -> dict[str, Any]:
     return record
 
 
+ExportLimitQ = Annotated[int, Query(ge=1, le=100_000)]
+
+
 @router.get("/log.json")
-def log_json(
-    console: ConsoleDep,
-    state: StateQ = None,
-    pattern: Annotated[str | None, Query(max_length=32)] = None,
-    dive: Annotated[int | None, Query(ge=1)] = None,
-    limit: Annotated[int, Query(ge=1, le=100_000)] = 100_000,
-) -> JSONResponse:
-    rows = _filtered(console, state, pattern, None, dive, None, None, limit)
+def log_json(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_000) -> JSONResponse:
+    """The log as a JSON file (newest first)."""
     return JSONResponse(
-        rows, headers={"Content-Disposition": 'attachment; filename="nemesys-log.json"'}
+        _rows(console, filters, limit),
+        headers={"Content-Disposition": 'attachment; filename="nemesys-log.json"'},
     )
 
 
 @router.get("/log.csv")
-def log_csv(
-    console: ConsoleDep,
-    state: StateQ = None,
-    pattern: Annotated[str | None, Query(max_length=32)] = None,
-    dive: Annotated[int | None, Query(ge=1)] = None,
-    limit: Annotated[int, Query(ge=1, le=100_000)] = 100_000,
-) -> Response:
-    rows = _filtered(console, state, pattern, None, dive, None, None, limit)
+def log_csv(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_000) -> Response:
+    """The log as a CSV file (oldest first), with the acknowledgement's figures as columns."""
     buf = io.StringIO()
-    csv.writer(buf).writerows(csv_rows(reversed(rows)))
+    csv.writer(buf).writerows(csv_rows(reversed(_rows(console, filters, limit))))
     return Response(
         buf.getvalue(),
         media_type="text/csv",
