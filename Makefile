@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: test lint run demo bench clean
+.PHONY: test lint run demo bench results clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -28,6 +28,10 @@ demo: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/nemesys bench codec
+
+# docs/results.md and docs/results/: the paper's tables and figures beside ours (full mode).
+results: $(STAMP)
+	$(BIN)/nemesys results
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache

@@ -15,6 +15,7 @@ import os
 import sys
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from codec import (
@@ -340,7 +341,36 @@ def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
         from bench import console as bench_console
 
         return bench_console.run(out, quick=args.quick)
+    if args.target == "reconfig":
+        from bench import reconfig as bench_reconfig
+
+        return bench_reconfig.run(out, quick=args.quick)
     raise UsageError(f"unknown benchmark {args.target!r}")
+
+
+def cmd_results(args: argparse.Namespace, out: TextIO) -> int:
+    from analysis import results
+
+    path = results.generate(
+        args.out or results.DEFAULT_MD,
+        args.img_dir or results.DEFAULT_IMG_DIR,
+        quick=args.quick,
+        progress=sys.stderr,
+    )
+    out.write(f"{path}\n")
+    return EXIT_OK
+
+
+def cmd_analyze(args: argparse.Namespace, out: TextIO) -> int:
+    if args.target == "ber":
+        from analysis import ber
+
+        report = ber.analyze(
+            args.out or ber.DEFAULT_OUT_DIR, quick=args.quick, seed=args.seed, progress=sys.stderr
+        )
+        out.write(ber.format_report(report))
+        return EXIT_OK
+    raise UsageError(f"unknown analysis {args.target!r}")
 
 
 def _serve() -> Any:
@@ -362,6 +392,8 @@ COMMANDS: dict[str, Handler] = {
     "sim": sim_cli.cmd_sim,
     "scenario": sim_cli.cmd_scenario,
     "bench": cmd_bench,
+    "results": cmd_results,
+    "analyze": cmd_analyze,
 }
 
 
@@ -440,9 +472,41 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("bench", help="run a benchmark and print its table")
     p.add_argument(
-        "target", choices=["codec", "planner", "sim", "console"], help="what to benchmark"
+        "target",
+        choices=["codec", "planner", "sim", "console", "reconfig"],
+        help="what to benchmark",
     )
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
+
+    p = sub.add_parser(
+        "results",
+        help="regenerate docs/results.md: the paper's tables and figures beside ours",
+        description="Run the BER analysis, the reconfiguration benchmark and the twin's "
+        "reproductions, and write the Markdown page and its images.",
+    )
+    p.add_argument("--quick", action="store_true", help="smoke-run sizes (under a minute)")
+    p.add_argument("--out", type=Path, default=None, help="the page (default docs/results.md)")
+    p.add_argument(
+        "--img-dir", type=Path, default=None, help="images and data (default docs/results/)"
+    )
+
+    p = sub.add_parser(
+        "analyze",
+        help="reproduce a figure of the paper by simulation (CSV + PNG)",
+        description="ber: decoding success vs bit error rate for T = 1..4 (Monte Carlo through "
+        "the real frame and decoder, against the analytic curve), coding efficiency, and the "
+        "rate of wrong commands accepted with and without the CRC-4.",
+    )
+    p.add_argument("target", choices=["ber"], help="what to analyze")
+    p.add_argument("--quick", action="store_true", help="fewer frames (under a minute)")
+    p.add_argument(
+        "--out",
+        type=Path,
+        default=None,
+        metavar="DIR",
+        help="output directory (default docs/results)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     return parser
 
 

@@ -1,0 +1,408 @@
+"""``nemesys bench reconfig``: the paper's Table ``tab:reconfig_metrics``, measured its way.
+
+The paper (Sec. "Reconfiguration Delay Analyses with Digital Twin") defines three metrics for
+its three digital-twin retasking scenarios (shipwreck, BOP panel, pod):
+
+* decode latency: command reception -> new mission acknowledgment (bit-array conversion, BCH
+  correction, payload parsing), "scenario independent, therefore averaged over all trials":
+  the mean of 30 trials. Paper: 0.027 ms.
+* normalised replan latency: acknowledgment -> first updated control output, divided by the
+  number of waypoints, averaged over 10 trials per scenario. Paper: Shipwreck 42, BOP 15,
+  Pod 46 ms per waypoint.
+* memory: peak resident set size (RSS) during decoding and replanning. Paper: 13.2 MB.
+
+Here each scenario's retask frame (``sim_bridge.scenarios``: lawnmower 20 -> 30 m sweep,
+helix -> square, square -> circle) goes through the onboard agent
+(:meth:`sim_bridge.agent.OnboardAgent.receive`) against the simulated vehicle at the moment
+of the retask, mid-scenario; the agent is deep-copied for every trial so each one sees the
+same vehicle and plan (as ``bench sim`` does). The agent's acknowledgment carries the two
+latencies, wall clock: decode = bits received -> frame synced, decoded and checked; replan =
+decoded -> plan with the retask join, guidance switched and its first setpoint out.
+Waypoints are the new path's points. One round is the paper's protocol: 10 trials per
+scenario, interleaved (wreck, panel, pod, wreck, ...), so 30 decodes. The decode figure is
+the mean of a round's 30 decodes and the replan figure the mean of a scenario's 10, as in
+the paper; the printed value is the median of these means over several rounds (the machine
+is shared).
+
+Memory: peak RSS (``VmHWM``) of a fresh interpreter that imports the onboard path (``codec``,
+``planner``, the agent and guidance), builds an agent per scenario and feeds it the
+scenario's first frame and then its retask frame, from the vehicle states the scenario's
+acknowledgments record; against a bare interpreter started the same way (``python -c``, the
+same arguments). Bytecode is compiled first, as on an installed vehicle. Both the absolute
+peak and the increment over the bare interpreter are printed beside the paper's 13.2 MB.
+
+Ratios are paper / ours: how many times faster (or smaller) ours is; below 1 it is slower.
+"""
+
+from __future__ import annotations
+
+import compileall
+import copy
+import os
+import pathlib
+import platform
+import statistics
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from typing import Any, TextIO
+
+import codec
+import planner
+import sim_bridge
+from bench._timing import table
+from codec import encode_frame
+from sim_bridge.agent import OnboardAgent
+from sim_bridge.scenarios import SCENARIOS, run_scenario
+from sim_bridge.sim import SimConfig, Simulation
+
+#: The paper's Table tab:reconfig_metrics (Intel i7, 16 GB RAM, Ubuntu 20.04, ROS 2 + Gazebo).
+PAPER_DECODE_MS = 0.027
+PAPER_NORMALISED_MS = {"wreck": 42.0, "panel": 15.0, "pod": 46.0}
+PAPER_NAMES = {"wreck": "Shipwreck", "panel": "BOP", "pod": "Pod"}
+PAPER_RSS_MB = 13.2
+#: The paper's "less than 50 ms total latency" claim.
+PAPER_TOTAL_MS = 50.0
+PAPER_DECODE_TRIALS = 30
+PAPER_REPLAN_TRIALS = 10
+#: The retask scenarios, in the paper's order.
+RETASK_SCENARIOS = ("wreck", "panel", "pod")
+
+# Peak RSS of this process (KiB): VmHWM belongs to the address space exec created (ru_maxrss
+# would also count the parent's pages the child had between fork and exec).
+_PEAK = "print(open('/proc/self/status').read().split('VmHWM:')[1].split()[0])"
+_BARE = _PEAK
+# Each argument: frame hex, then the state the agent received it in (x, y, z, heading, speed,
+# t, segment or -), comma-separated; ";" separates frames of one scenario.
+_ONBOARD = (
+    """
+import sys
+from planner import VehicleState
+from sim_bridge.agent import OnboardAgent
+from sim_bridge.guidance import Guidance
+for case in sys.argv[1:]:
+    agent = OnboardAgent(Guidance())
+    for item in case.split(";"):
+        f = item.split(",")
+        state = VehicleState(*map(float, f[1:7]), None if f[7] == "-" else int(f[7]))
+        ack, ref = agent.receive(int(f[0], 16), 100, state)
+        if ack["outcome"] != "accepted" or ref is None:
+            raise SystemExit(ack["detail"])
+"""
+    + _PEAK
+)
+
+
+@dataclass(frozen=True, slots=True)
+class RetaskCase:
+    """A scenario's retask frame and the simulated vehicle about to receive it."""
+
+    name: str
+    retask: str  # e.g. "lawnmower -> lawnmower"
+    bits: int
+    sim: Simulation
+
+
+@dataclass(frozen=True, slots=True)
+class ScenarioLatency:
+    """One scenario's replan figures: medians over rounds of each round's 10-trial mean."""
+
+    name: str
+    retask: str
+    waypoints: int
+    replan_ms: float  # total replanning time
+    decode_ms: float  # this scenario's decodes alone
+    round_normalised_ms: tuple[float, ...]  # every round's mean, for the spread
+
+    @property
+    def normalised_ms(self) -> float:
+        """Total replanning time / waypoints (the paper's normalised replan latency)."""
+        return self.replan_ms / self.waypoints
+
+    @property
+    def paper_normalised_ms(self) -> float:
+        return PAPER_NORMALISED_MS[self.name]
+
+    @property
+    def paper_name(self) -> str:
+        return PAPER_NAMES[self.name]
+
+
+@dataclass(frozen=True, slots=True)
+class ReconfigReport:
+    """Everything ``nemesys bench reconfig`` measures (latencies in ms, memory in KiB)."""
+
+    scenarios: tuple[ScenarioLatency, ...]
+    decode_ms: float  # median over rounds of the 30-trial mean
+    round_decode_ms: tuple[float, ...]
+    rounds: int
+    trials_per_scenario: int
+    bare_kb: int
+    peak_kb: int
+    memory_runs: int
+    seconds: float
+    machine: str
+
+    @property
+    def increment_kb(self) -> int:
+        return self.peak_kb - self.bare_kb
+
+    @property
+    def decode_trials(self) -> int:
+        return self.trials_per_scenario * len(self.scenarios)
+
+
+def machine() -> str:
+    """CPU model, core count and Python of this machine, in one line."""
+    model = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            model = next(
+                (ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), model
+            )
+    except OSError:
+        pass
+    return (
+        f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, "
+        f"CPython {platform.python_version()}"
+    )
+
+
+def retask_cases() -> dict[str, RetaskCase]:
+    """Each retask scenario's vehicle at its retask time, flying the first command."""
+    cases: dict[str, RetaskCase] = {}
+    for name in RETASK_SCENARIOS:
+        sc = SCENARIOS[name]
+        sim = Simulation(SimConfig(start_z_m=sc.start_z_m))
+        first, cmd = sc.commands[0], sc.commands[sc.retask]
+        sim.submit_frame(encode_frame(first.pattern, first.params).frame.to_bytes())
+        sim.run_until(cmd.t_s)
+        bits = int(encode_frame(cmd.pattern, cmd.params).frame.bits, 2)
+        cases[name] = RetaskCase(name, f"{first.pattern} -> {cmd.pattern}", bits, sim)
+    return cases
+
+
+def _trial(case: RetaskCase) -> dict[str, Any]:
+    agent: OnboardAgent = copy.deepcopy(case.sim.agent)  # the same vehicle for every trial
+    ack, ref = agent.receive(case.bits, 100, case.sim.state())
+    if ack["outcome"] != "accepted" or ref is None:
+        raise RuntimeError(f"{case.name}: the retask frame was not accepted: {ack['detail']}")
+    return ack
+
+
+def measure_latency(
+    rounds: int, trials: int = PAPER_REPLAN_TRIALS
+) -> tuple[tuple[ScenarioLatency, ...], tuple[float, ...]]:
+    """Per-scenario replan figures and every round's mean decode latency (ms)."""
+    cases = retask_cases()
+    for case in cases.values():  # warm-up, not counted: imports, first-call caches
+        _trial(case)
+    decode_means: list[float] = []
+    replan: dict[str, list[float]] = {n: [] for n in cases}
+    decode_by: dict[str, list[float]] = {n: [] for n in cases}
+    waypoints: dict[str, int] = {}
+    for _ in range(rounds):
+        decodes: list[float] = []
+        replans: dict[str, list[float]] = {n: [] for n in cases}
+        for _ in range(trials):
+            for name, case in cases.items():
+                ack = _trial(case)
+                decodes.append(ack["decode_latency_ms"])
+                decode_by[name].append(ack["decode_latency_ms"])
+                replans[name].append(ack["replan_latency_ms"])
+                waypoints[name] = ack["waypoints"]
+        decode_means.append(statistics.fmean(decodes))
+        for name in cases:
+            replan[name].append(statistics.fmean(replans[name]))
+    scenarios = tuple(
+        ScenarioLatency(
+            name,
+            case.retask,
+            waypoints[name],
+            statistics.median(replan[name]),
+            statistics.median(decode_by[name]),
+            tuple(r / waypoints[name] for r in replan[name]),
+        )
+        for name, case in cases.items()
+    )
+    return scenarios, tuple(decode_means)
+
+
+def compile_onboard() -> None:
+    """Write the onboard packages' bytecode, as installing them on a vehicle does."""
+    for package in (codec, planner, sim_bridge):
+        compileall.compile_dir(
+            str(pathlib.Path(package.__file__ or "").parent), quiet=1, force=False
+        )
+
+
+def onboard_arguments() -> list[str]:
+    """One argument per scenario: its first and retask frames, with the states the agent
+    received them in (from a full run's acknowledgments)."""
+    args = []
+    for name in RETASK_SCENARIOS:
+        sc = SCENARIOS[name]
+        result = run_scenario(name)
+        items = []
+        for k in (0, sc.retask):
+            ack = result.acks[k]
+            s = ack["from"]
+            seg = "-" if s["segment"] is None else str(s["segment"])
+            fields = (s["x_m"], s["y_m"], s["z_m"], s["heading_deg"], s["speed_mps"], s["t_s"])
+            items.append(",".join([ack["frame_hex"], *(repr(float(v)) for v in fields), seg]))
+        args.append(";".join(items))
+    return args
+
+
+def _peak_rss_kb(code: str, args: list[str], runs: int) -> int:
+    values = []
+    for _ in range(runs):
+        done = subprocess.run(
+            [sys.executable, "-c", code, *args], capture_output=True, text=True, check=True
+        )
+        values.append(int(done.stdout.strip().splitlines()[-1]))
+    return int(statistics.median(values))
+
+
+def measure_memory(runs: int) -> tuple[int, int]:
+    """Median peak RSS (KiB) of a bare interpreter and of the onboard decode + replan of the
+    three scenarios, ``runs`` fresh processes each, interleaved."""
+    compile_onboard()
+    args = onboard_arguments()
+    bare: list[int] = []
+    onboard: list[int] = []
+    for _ in range(runs):
+        bare.append(_peak_rss_kb(_BARE, args, 1))
+        onboard.append(_peak_rss_kb(_ONBOARD, args, 1))
+    return int(statistics.median(bare)), int(statistics.median(onboard))
+
+
+def measure(quick: bool = False) -> ReconfigReport:
+    """Run the whole table: latencies (rounds of the paper's protocol) and memory."""
+    t0 = time.perf_counter()
+    rounds = 3 if quick else 15
+    scenarios, decode_means = measure_latency(rounds)
+    runs = 3 if quick else 7
+    bare, peak = measure_memory(runs)
+    return ReconfigReport(
+        scenarios=scenarios,
+        decode_ms=statistics.median(decode_means),
+        round_decode_ms=decode_means,
+        rounds=rounds,
+        trials_per_scenario=PAPER_REPLAN_TRIALS,
+        bare_kb=bare,
+        peak_kb=peak,
+        memory_runs=runs,
+        seconds=time.perf_counter() - t0,
+        machine=machine(),
+    )
+
+
+def ratio(paper: float, ours: float, better: str = "faster", worse: str = "slower") -> str:
+    """``paper / ours`` with what it means, e.g. ``3,052x faster`` or ``0.62x (1.61x slower)``."""
+    r = paper / ours
+    if r >= 1:
+        return f"{r:,.0f}x {better}" if r >= 100 else f"{r:.3g}x {better}"
+    return f"{r:.2g}x ({1 / r:.3g}x {worse})"
+
+
+def paper_rows(report: ReconfigReport) -> list[list[str]]:
+    """The paper's table, row by row: metric, paper, ours, paper/ours."""
+    rows = [
+        [
+            f"{s.paper_name}: normalised replan latency (ms/waypoint)",
+            f"{s.paper_normalised_ms:g}",
+            f"{s.normalised_ms:.4f}",
+            ratio(s.paper_normalised_ms, s.normalised_ms),
+        ]
+        for s in report.scenarios
+    ]
+    rows.append(
+        [
+            f"decode latency (ms, mean of {report.decode_trials} trials)",
+            f"{PAPER_DECODE_MS:g}",
+            f"{report.decode_ms:.4f}",
+            ratio(PAPER_DECODE_MS, report.decode_ms),
+        ]
+    )
+    peak_mb, inc_mb = report.peak_kb / 1024, report.increment_kb / 1024
+    rows.append(
+        [
+            "memory: peak RSS of the decode + replan process (MB)",
+            f"{PAPER_RSS_MB:g}",
+            f"{peak_mb:.2f}",
+            ratio(PAPER_RSS_MB, peak_mb, "smaller", "larger"),
+        ]
+    )
+    rows.append(
+        [
+            "memory: increment over a bare interpreter (MB)",
+            f"{PAPER_RSS_MB:g}",
+            f"{inc_mb:.2f}",
+            ratio(PAPER_RSS_MB, inc_mb, "smaller", "larger"),
+        ]
+    )
+    return rows
+
+
+def detail_rows(report: ReconfigReport) -> list[list[str]]:
+    """Per scenario: retask, waypoints, total replan, decode, switch (decode + replan)."""
+    rows = []
+    for s in report.scenarios:
+        spread = s.round_normalised_ms
+        rows.append(
+            [
+                s.paper_name,
+                s.retask,
+                str(s.waypoints),
+                f"{s.replan_ms:.3f}",
+                f"{min(spread):.4f}-{max(spread):.4f}",
+                f"{s.decode_ms:.4f}",
+                f"{s.decode_ms + s.replan_ms:.3f}",
+                f"< {PAPER_TOTAL_MS:g}",
+            ]
+        )
+    return rows
+
+
+DETAIL_HEADERS = [
+    "scenario",
+    "retask",
+    "waypoints",
+    "replan ms (total)",
+    "normalised ms/wp, round range",
+    "decode ms",
+    "decode + replan ms",
+    "paper total ms",
+]
+
+
+def format_report(report: ReconfigReport) -> str:
+    """The printed tables."""
+    lines = [
+        "Mission adaptation performance (the paper's Table tab:reconfig_metrics): each "
+        "scenario's retask frame",
+        "through the onboard agent, vehicle mid-scenario; medians over "
+        f"{report.rounds} rounds of the paper's protocol",
+        f"({report.trials_per_scenario} trials per scenario, {report.decode_trials} decodes "
+        "per round, means per round). Ratio = paper / ours.",
+        "",
+        table(["metric", "paper", "ours", "ratio (paper/ours)"], paper_rows(report)),
+        "",
+        "Per scenario (ms)",
+        "",
+        table(DETAIL_HEADERS, detail_rows(report)),
+        "",
+        f"Peak RSS (VmHWM), median of {report.memory_runs} fresh processes each: bare "
+        f"interpreter {report.bare_kb / 1024:.2f} MB, decode + replan of the three scenarios "
+        f"{report.peak_kb / 1024:.2f} MB (+{report.increment_kb / 1024:.2f} MB).",
+        f"Machine: {report.machine}. Paper: Intel Core i7, 16 GB RAM, Ubuntu 20.04.",
+    ]
+    return "\n".join(lines)
+
+
+def run(out: TextIO, quick: bool = False) -> int:
+    report = measure(quick)
+    out.write(format_report(report) + "\n")
+    return 0

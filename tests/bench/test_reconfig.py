@@ -1,0 +1,68 @@
+"""``nemesys bench reconfig`` prints the paper's Table tab:reconfig_metrics beside ours (figures
+are not asserted beyond being positive: timings belong to the benchmark, not the tests)."""
+
+from __future__ import annotations
+
+import io
+
+from bench import reconfig
+
+
+def _row(lines: list[str], start: str) -> list[str]:
+    row = next(ln for ln in lines if ln.startswith(start))
+    return [c.strip() for c in row[len(start) :].split("  ") if c.strip()]
+
+
+def test_quick_run_prints_paper_ours_and_ratio() -> None:
+    out = io.StringIO()
+    assert reconfig.run(out, quick=True) == 0
+    text = out.getvalue()
+    lines = text.splitlines()
+    header = next(ln for ln in lines if ln.startswith("metric"))
+    assert "paper" in header and "ours" in header and "ratio (paper/ours)" in header
+    for name, paper in (("Shipwreck", 42.0), ("BOP", 15.0), ("Pod", 46.0)):
+        cells = _row(lines, f"{name}: normalised replan latency (ms/waypoint)")
+        assert float(cells[0]) == paper
+        assert float(cells[1]) > 0  # ours
+        assert "x " in cells[2]  # e.g. "3,461x faster"
+    cells = _row(lines, "decode latency (ms, mean of 30 trials)")
+    assert float(cells[0]) == 0.027 and float(cells[1]) > 0
+    for start in ("memory: peak RSS", "memory: increment"):
+        row = next(ln for ln in lines if ln.startswith(start))
+        assert "13.2" in row
+    for name in ("Shipwreck", "BOP", "Pod"):
+        detail = next(ln for ln in lines if ln.startswith(name + " "))
+        assert int(detail.split()[4]) >= 2  # waypoints, after "name a -> b"
+    assert "bare interpreter" in text and "Machine:" in text
+
+
+def test_measure_quick_report_is_consistent() -> None:
+    report = reconfig.measure(quick=True)
+    assert [s.name for s in report.scenarios] == ["wreck", "panel", "pod"]
+    assert report.decode_trials == 30 and report.rounds == len(report.round_decode_ms)
+    assert report.decode_ms > 0
+    for s in report.scenarios:
+        assert s.replan_ms > 0 and s.normalised_ms > 0 and s.waypoints >= 2
+        assert s.normalised_ms == s.replan_ms / s.waypoints
+        assert len(s.round_normalised_ms) == report.rounds
+    assert report.scenarios[0].retask == "lawnmower -> lawnmower"
+    assert report.scenarios[2].retask == "square -> circle"
+    assert 1024 < report.bare_kb < report.peak_kb  # the onboard process loads something
+    assert report.increment_kb == report.peak_kb - report.bare_kb
+
+
+def test_onboard_arguments_carry_both_frames_of_each_scenario() -> None:
+    args = reconfig.onboard_arguments()
+    assert len(args) == 3
+    for arg in args:
+        frames = arg.split(";")
+        assert len(frames) == 2
+        for frame in frames:
+            fields = frame.split(",")
+            assert len(fields) == 8 and len(fields[0]) == 25  # 100-bit frame as hex
+
+
+def test_ratio_says_faster_or_slower() -> None:
+    assert reconfig.ratio(42.0, 0.01) == "4,200x faster"
+    assert reconfig.ratio(0.027, 0.0135) == "2x faster"
+    assert reconfig.ratio(13.2, 20.0, "smaller", "larger") == "0.66x (1.52x larger)"
