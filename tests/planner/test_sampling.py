@@ -92,7 +92,7 @@ def check_chords(p: Plan, r0: float, r1: float, total: float, s: int) -> float:
     ax, ay = p.anchor
     worst = 0.0
     for (i, t0), (j, t1) in itertools.pairwise(thetas):
-        assert 0.0 <= t1 - t0 <= MAX_STEP_RAD + 1e-9, f"chord {i} turns {t1 - t0} rad"
+        assert -1e-9 <= t1 - t0 <= MAX_STEP_RAD + 1e-9, f"chord {i} turns {t1 - t0} rad"
         curve = []
         for k in range(DENSE + 1):
             th = t0 + (t1 - t0) * k / DENSE
