@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import statistics
+import subprocess
+import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -40,3 +42,15 @@ def table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     lines.append("  ".join("-" * w for w in widths))
     lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
     return "\n".join(lines)
+
+
+def peak_rss_kb(code: str, args: Sequence[str], runs: int) -> int:
+    """Median peak RSS (KiB) of ``runs`` fresh ``python -c code args...`` processes; the code
+    prints its own peak (``VmHWM``) on its last line of output."""
+    values = []
+    for _ in range(runs):
+        done = subprocess.run(
+            [sys.executable, "-c", code, *args], capture_output=True, text=True, check=True
+        )
+        values.append(int(done.stdout.strip().splitlines()[-1]))
+    return int(statistics.median(values))

@@ -18,14 +18,11 @@ from __future__ import annotations
 
 import compileall
 import pathlib
-import statistics
-import subprocess
-import sys
 from typing import TextIO
 
 import codec
 import planner
-from bench._timing import interleaved_medians, table
+from bench._timing import interleaved_medians, peak_rss_kb, table
 from codec import DICTIONARY, Command, decode_frame, encode_frame
 from planner import Plan, VehicleState, plan
 
@@ -73,16 +70,6 @@ def running_square() -> tuple[Plan, VehicleState]:
     return first, state
 
 
-def _peak_rss_kb(code: str, *args: str, runs: int) -> int:
-    values = []
-    for _ in range(runs):
-        done = subprocess.run(
-            [sys.executable, "-c", code, *args], capture_output=True, text=True, check=True
-        )
-        values.append(int(done.stdout.strip().splitlines()[-1]))
-    return int(statistics.median(values))
-
-
 def compile_onboard() -> None:
     """Write the onboard packages' bytecode, as installing them on the vehicle does (even
     under PYTHONDONTWRITEBYTECODE): compiling source costs a fresh process ~1.5 MB of peak
@@ -97,8 +84,8 @@ def memory_kb(runs: int) -> tuple[int, int]:
     """Median peak RSS (KiB) of the bare interpreter and of the onboard decode + replan."""
     compile_onboard()
     frames = [encode_frame(name, p.defaults).frame.hex for name, p in DICTIONARY.items()]
-    bare = _peak_rss_kb(_BARE, *frames, runs=runs)
-    onboard = _peak_rss_kb(_ONBOARD, *frames, runs=runs)
+    bare = peak_rss_kb(_BARE, frames, runs)
+    onboard = peak_rss_kb(_ONBOARD, frames, runs)
     return bare, onboard
 
 

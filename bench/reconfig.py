@@ -42,8 +42,6 @@ import os
 import pathlib
 import platform
 import statistics
-import subprocess
-import sys
 import time
 from dataclasses import dataclass
 from typing import Any, TextIO
@@ -51,7 +49,7 @@ from typing import Any, TextIO
 import codec
 import planner
 import sim_bridge
-from bench._timing import table
+from bench._timing import peak_rss_kb, table
 from codec import encode_frame
 from sim_bridge.agent import OnboardAgent
 from sim_bridge.scenarios import SCENARIOS, run_scenario
@@ -255,16 +253,6 @@ def onboard_arguments() -> list[str]:
     return args
 
 
-def _peak_rss_kb(code: str, args: list[str], runs: int) -> int:
-    values = []
-    for _ in range(runs):
-        done = subprocess.run(
-            [sys.executable, "-c", code, *args], capture_output=True, text=True, check=True
-        )
-        values.append(int(done.stdout.strip().splitlines()[-1]))
-    return int(statistics.median(values))
-
-
 def measure_memory(runs: int) -> tuple[int, int]:
     """Median peak RSS (KiB) of a bare interpreter and of the onboard decode + replan of the
     three scenarios, ``runs`` fresh processes each, interleaved."""
@@ -273,8 +261,8 @@ def measure_memory(runs: int) -> tuple[int, int]:
     bare: list[int] = []
     onboard: list[int] = []
     for _ in range(runs):
-        bare.append(_peak_rss_kb(_BARE, args, 1))
-        onboard.append(_peak_rss_kb(_ONBOARD, args, 1))
+        bare.append(peak_rss_kb(_BARE, args, 1))
+        onboard.append(peak_rss_kb(_ONBOARD, args, 1))
     return int(statistics.median(bare)), int(statistics.median(onboard))
 
 
