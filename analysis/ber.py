@@ -110,7 +110,7 @@ class SuccessPoint:
     ci_low: float
     ci_high: float
     analytic: float
-    analytic_frame: float = math.nan
+    analytic_frame: float
 
 
 @dataclass(frozen=True)
@@ -129,7 +129,7 @@ class Efficiency:
     paper_efficiency: float
     code_rate: float
     frame_efficiency: float
-    paper_efficiency_m7: float = math.nan
+    paper_efficiency_m7: float
 
 
 @dataclass(frozen=True)
@@ -143,7 +143,7 @@ class WrongAcceptance:
     """
 
     t: int
-    errors: str
+    errors: ErrorKind
     level: float
     crc: bool
     frames: int
@@ -651,7 +651,7 @@ class ProgressBar:
         self._drawn = now
         filled = self.width * pct // 100
         bar = "#" * filled + "." * (self.width - filled)
-        elapsed = time.perf_counter() - self._start
+        elapsed = now - self._start
         self.stream.write(f"\r[{bar}] {pct:3d} %  {elapsed:4.0f} s  {self.label:<28}")
         self.stream.flush()
 
@@ -756,8 +756,8 @@ def analyze_config(
     wrong_csv_path = out_dir / "ber_wrong.csv"
     png_path = out_dir / "ber.png"
     efficiency = efficiency_table(config.ts)
-    write_success_csv(csv_path, points)
-    write_wrong_csv(wrong_csv_path, wrong)
+    write_csv(csv_path, SUCCESS_COLUMNS, points)
+    write_csv(wrong_csv_path, WRONG_COLUMNS, wrong)
     plot(png_path, points, efficiency, wrong)
     return BerReport(
         points=tuple(points),
@@ -795,20 +795,13 @@ def _cell(value: object) -> str:
     return str(value)
 
 
-def write_success_csv(path: Path, points: Sequence[SuccessPoint]) -> None:
+def write_csv(path: Path, columns: Sequence[str], rows: Sequence[object]) -> None:
+    """One line per row: its attributes named by ``columns``, under a header of them."""
     with path.open("w", newline="") as f:
         writer = csv.writer(f)
-        writer.writerow(SUCCESS_COLUMNS)
-        for p in points:
-            writer.writerow([_cell(getattr(p, col)) for col in SUCCESS_COLUMNS])
-
-
-def write_wrong_csv(path: Path, rows: Sequence[WrongAcceptance]) -> None:
-    with path.open("w", newline="") as f:
-        writer = csv.writer(f)
-        writer.writerow(WRONG_COLUMNS)
-        for w in rows:
-            writer.writerow([_cell(getattr(w, col)) for col in WRONG_COLUMNS])
+        writer.writerow(columns)
+        for row in rows:
+            writer.writerow([_cell(getattr(row, col)) for col in columns])
 
 
 _COLOURS: Final = {1: "tab:blue", 2: "tab:red", 3: "tab:green", 4: "tab:purple"}

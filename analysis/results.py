@@ -16,15 +16,16 @@ size (fewer frames, rounds and processes); the page says which mode made it.
 
 from __future__ import annotations
 
-import math
 import os
 import re
 import time
 from collections.abc import Callable, Sequence
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Protocol, TextIO, TypeVar
+from typing import TextIO, TypeVar
 
+from analysis import ber as ber_module
+from analysis.ber import PAPER_M, BerReport, SuccessPoint, WrongAcceptance, analyze
 from analysis.twin import (
     BATTERY_FLOOR_PCT,
     NOT_REPRODUCIBLE,
@@ -52,7 +53,6 @@ DEFAULT_IMG_DIR = DOCS / "results"
 
 #: The paper's figures quoted on the page.
 PAPER_BUDGET_MS = 1.0  # "an upper limit of 1 ms per command transmission"
-PAPER_M = 7  # "m is 7 for 56-bit payload"
 PAPER_N, PAPER_K, PAPER_T = 72, 56, 2  # "(n=72, k=56, T=2)", "n-k = 16 redundancy bits"
 PAPER_SQUARE_MS, PAPER_SQUARE_WP = 26.0, 4
 PAPER_CIRCLE_MS, PAPER_CIRCLE_WP = 1620.0, 36
@@ -61,98 +61,10 @@ TANK_STEP_M = 0.5
 _T = TypeVar("_T")
 
 
-# --- what the BER analysis returns (analysis.ber.BerReport), as far as this page reads it ---
-
-
-class SuccessPointLike(Protocol):
-    @property
-    def t(self) -> int: ...
-    @property
-    def n(self) -> int: ...
-    @property
-    def ber(self) -> float: ...
-    @property
-    def frames(self) -> int: ...
-    @property
-    def successes(self) -> int: ...
-    @property
-    def rate(self) -> float: ...
-    @property
-    def ci_low(self) -> float: ...
-    @property
-    def ci_high(self) -> float: ...
-    @property
-    def analytic(self) -> float: ...
-
-
-class EfficiencyLike(Protocol):
-    @property
-    def t(self) -> int: ...
-    @property
-    def n(self) -> int: ...
-    @property
-    def k(self) -> int: ...
-    @property
-    def m(self) -> int: ...
-    @property
-    def paper_efficiency(self) -> float: ...
-    @property
-    def code_rate(self) -> float: ...
-    @property
-    def frame_efficiency(self) -> float: ...
-
-
-class WrongAcceptanceLike(Protocol):
-    @property
-    def t(self) -> int: ...
-    @property
-    def errors(self) -> object: ...
-    @property
-    def level(self) -> object: ...
-    @property
-    def crc(self) -> object: ...
-    @property
-    def frames(self) -> int: ...
-    @property
-    def wrong(self) -> int: ...
-    @property
-    def rate(self) -> float: ...
-    @property
-    def ci_high(self) -> float: ...
-
-
-class BerReportLike(Protocol):
-    @property
-    def points(self) -> Sequence[SuccessPointLike]: ...
-    @property
-    def efficiency(self) -> Sequence[EfficiencyLike]: ...
-    @property
-    def wrong(self) -> Sequence[WrongAcceptanceLike]: ...
-    @property
-    def csv_path(self) -> Path: ...
-    @property
-    def png_path(self) -> Path: ...
-    @property
-    def wrong_csv_path(self) -> Path: ...
-    @property
-    def seconds(self) -> float: ...
-
-
-def _run_ber(img_dir: Path, quick: bool, seed: int, progress: TextIO | None) -> BerReportLike:
-    from analysis.ber import analyze
-
-    report: BerReportLike = analyze(img_dir, quick=quick, seed=seed, progress=progress)
-    return report
-
-
 def _ber_method() -> str:
     """How ``analysis.ber`` makes its figures: its docstring's first paragraph after the
     summary line, RST roles turned into Markdown code."""
-    try:
-        from analysis import ber
-    except ImportError:
-        return ""
-    paragraphs = [p for p in (ber.__doc__ or "").strip().split("\n\n") if p.strip()]
+    paragraphs = [p for p in (ber_module.__doc__ or "").strip().split("\n\n") if p.strip()]
     if len(paragraphs) < 2:
         return ""
     text = " ".join(paragraphs[1].split())
@@ -186,23 +98,17 @@ def _pct(value: float) -> str:
     return f"{value * 100:.3f} %"
 
 
-def _success_cell(p: SuccessPointLike) -> str:
+def _success_cell(p: SuccessPoint) -> str:
     """Simulated rate [Wilson interval], then the analytic codeword-only figure (the paper's
-    curve) and, when the analysis gives it, the whole frame's (sync word included)."""
-    frame = getattr(p, "analytic_frame", None)
-    extra = f" / {_pct(frame)}" if isinstance(frame, float) and math.isfinite(frame) else ""
+    curve) and the whole frame's (sync word included)."""
     return (
         f"**{_pct(p.rate)}** [{p.ci_low * 100:.3f}, {p.ci_high * 100:.3f}]; "
-        f"{_pct(p.analytic)}{extra}"
+        f"{_pct(p.analytic)} / {_pct(p.analytic_frame)}"
     )
 
 
-def _level(w: WrongAcceptanceLike) -> str:
-    if w.errors == "burst" and isinstance(w.level, int | float):
-        return f"{w.level:g}-bit burst"
-    if w.errors == "independent" and isinstance(w.level, int | float):
-        return f"BER {w.level:g}"
-    return f"{_num(w.errors)} {_num(w.level)}"
+def _level(w: WrongAcceptance) -> str:
+    return f"{w.level:g}-bit burst" if w.errors == "burst" else f"BER {w.level:g}"
 
 
 def _link(path: Path, base: Path) -> str:
@@ -488,17 +394,17 @@ def _reconfig(rep: ReconfigReport) -> list[str]:
     ]
 
 
-def _wrong_rows(wrong: Sequence[WrongAcceptanceLike]) -> list[list[str]]:
+def _wrong_rows(wrong: Sequence[WrongAcceptance]) -> list[list[str]]:
     """One row per (T, error level): without and with the CRC-4 side by side."""
     keys: list[tuple[int, str]] = []
-    cells: dict[tuple[int, str, bool], WrongAcceptanceLike] = {}
+    cells: dict[tuple[int, str, bool], WrongAcceptance] = {}
     for w in wrong:
         key = (w.t, _level(w))
         if key not in keys:
             keys.append(key)
-        cells[(*key, w.crc is True)] = w
+        cells[(*key, w.crc)] = w
 
-    def cell(w: WrongAcceptanceLike | None) -> list[str]:
+    def cell(w: WrongAcceptance | None) -> list[str]:
         if w is None:
             return ["-", "-"]
         return [f"{w.wrong:,} / {w.frames:,}", f"{_num(w.rate, 3)} ({_num(w.ci_high, 3)})"]
@@ -509,7 +415,7 @@ def _wrong_rows(wrong: Sequence[WrongAcceptanceLike]) -> list[list[str]]:
     ]
 
 
-def _ber(ber: BerReportLike, base: Path) -> list[str]:
+def _ber(ber: BerReport, base: Path) -> list[str]:
     ts = sorted({p.t for p in ber.points})
     bers = sorted({p.ber for p in ber.points})
     by = {(p.t, p.ber): p for p in ber.points}
@@ -525,7 +431,7 @@ def _ber(ber: BerReportLike, base: Path) -> list[str]:
         [
             str(e.t),
             f"({e.n}, {e.k})",
-            f"{e.k / (e.k + 2 * PAPER_M * e.t):.3f}",
+            f"{e.paper_efficiency_m7:.3f}",
             f"{e.paper_efficiency:.3f} (m = {e.m})",
             f"{e.code_rate:.3f}",
             f"{e.frame_efficiency:.3f}",
@@ -587,7 +493,7 @@ def _ber(ber: BerReportLike, base: Path) -> list[str]:
         + ("so it does here at every BER tested." if t2_better else "not at every BER here.")
         + ' "T = 2 ... maintains efficiency over 60 %": by the paper\'s formula with its '
         + (
-            f"m = {PAPER_M}, {eff2.k / (eff2.k + 2 * PAPER_M * eff2.t):.3f} "
+            f"m = {PAPER_M}, {eff2.paper_efficiency_m7:.3f} "
             f"({eff2.paper_efficiency:.3f} with the real field's m = {eff2.m}); the code's "
             f"real rate is {eff2.code_rate:.3f} and the whole frame's "
             f"{eff2.frame_efficiency:.3f}, below 60 %"
@@ -700,7 +606,7 @@ def _header(
 
 
 def render(
-    ber: BerReportLike,
+    ber: BerReport,
     reconfig: ReconfigReport,
     twin: TwinReport,
     base: Path,
@@ -731,7 +637,7 @@ def generate(
     quick: bool = False,
     progress: TextIO | None = None,
     seed: int = 0,
-    ber: BerReportLike | None = None,
+    ber: BerReport | None = None,
     reconfig: ReconfigReport | None = None,
     twin_report: TwinReport | None = None,
     command: str | None = None,
@@ -757,7 +663,9 @@ def generate(
         say(f"{label} done in {seconds[label]:.1f} s")
         return value
 
-    ber_report = timed("BER analysis", ber, lambda: _run_ber(img_dir, quick, seed, progress))
+    ber_report = timed(
+        "BER analysis", ber, lambda: analyze(img_dir, quick=quick, seed=seed, progress=progress)
+    )
     twin = timed("twin", twin_report, lambda: reproduce(img_dir, seed=seed, progress=progress))
     rec = timed("reconfig bench", reconfig, lambda: measure(quick))
     cmd = command or ("nemesys results --quick" if quick else "nemesys results")

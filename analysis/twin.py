@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
+from bench.reconfig import RETASK_SCENARIOS
 from sim_bridge.environment import (
     NOMINAL_THRUST_POWER_W,
     PAPER_SOC_TABLE,
@@ -66,7 +67,6 @@ PAPER_TRANSIENT_S = 5.0
 PAPER_BAND_M = 0.03
 #: The paper's battery floor ("we limit discharge to above 20 %").
 BATTERY_FLOOR_PCT = 20.0
-RETASK_SCENARIOS = ("wreck", "panel", "pod")
 #: Panel letters and short titles as in the paper's Fig. fig:sim_reconfig.
 PAPER_PANELS = {
     "wreck": "(a) shipwreck mapping: lawnmower sweep length extended",

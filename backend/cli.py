@@ -10,6 +10,7 @@ Errors are one line on standard error, never a traceback.
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import sys
@@ -36,6 +37,7 @@ from codec import (
 )
 from codec._fields import fmt
 from sim_bridge import cli as sim_cli
+from sim_bridge.agent import command_json
 
 if TYPE_CHECKING:
     from sim_bridge.transmit import SendResult
@@ -121,11 +123,8 @@ def _write_snaps(out: TextIO, snaps: Sequence[Snap]) -> None:
 
 def _command_json(enc: Encoded) -> dict[str, Any]:
     """The encoded command as JSON: pattern, values sent, values requested, what was snapped."""
-    cmd = enc.command
     return {
-        "pattern": cmd.pattern.name,
-        "pattern_id": cmd.pattern.id,
-        "params": cmd.params,
+        **command_json(enc.command),
         "requested": {s.field: _number_or_text(s.requested) for s in enc.snaps},
         "snapped": [str(s) for s in enc.snaps if s.changed],
     }
@@ -169,9 +168,7 @@ def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
 
 def _decoded_json(dec: Decoded) -> dict[str, Any]:
     return {
-        "pattern": dec.command.pattern.name,
-        "pattern_id": dec.command.pattern.id,
-        "params": dec.command.params,
+        **command_json(dec.command),
         "corrected": dec.corrected,
         "sync_errors": dec.sync_errors,
     }
@@ -324,28 +321,16 @@ def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
 # --- bench --------------------------------------------------------------------------------
 
 
+#: The benchmarks: each is ``bench.<name>`` with ``run(out, quick=...)``, imported on use.
+BENCHMARKS = ("codec", "planner", "sim", "console", "reconfig")
+
+
 def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
-    if args.target == "codec":
-        from bench import codec as bench_codec
-
-        return bench_codec.run(out, quick=args.quick)
-    if args.target == "planner":
-        from bench import planner as bench_planner
-
-        return bench_planner.run(out, quick=args.quick)
-    if args.target == "sim":
-        from bench import sim as bench_sim
-
-        return bench_sim.run(out, quick=args.quick)
-    if args.target == "console":
-        from bench import console as bench_console
-
-        return bench_console.run(out, quick=args.quick)
-    if args.target == "reconfig":
-        from bench import reconfig as bench_reconfig
-
-        return bench_reconfig.run(out, quick=args.quick)
-    raise UsageError(f"unknown benchmark {args.target!r}")
+    if args.target not in BENCHMARKS:
+        raise UsageError(f"unknown benchmark {args.target!r}")
+    bench = importlib.import_module(f"bench.{args.target}")
+    status: int = bench.run(out, quick=args.quick)
+    return status
 
 
 def cmd_results(args: argparse.Namespace, out: TextIO) -> int:
@@ -471,11 +456,7 @@ def build_parser() -> argparse.ArgumentParser:
     _serve().add_parser(sub)
 
     p = sub.add_parser("bench", help="run a benchmark and print its table")
-    p.add_argument(
-        "target",
-        choices=["codec", "planner", "sim", "console", "reconfig"],
-        help="what to benchmark",
-    )
+    p.add_argument("target", choices=BENCHMARKS, help="what to benchmark")
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
 
     p = sub.add_parser(

@@ -26,6 +26,7 @@ from backend.store import MissionLog, now_iso
 from backend.telemetry import TelemetryHub
 from codec import Encoded, decode_frame, encode_frame
 from planner import Plan, PlanError, VehicleState, plan
+from sim_bridge.agent import command_json
 from sim_bridge.transmit import ack_match
 
 logger = logging.getLogger("backend.commands")
@@ -84,8 +85,9 @@ class CommandManager:
         self.mirror: Plan | None = None  # the vehicle's plan, as replayed here
         self.vehicle_active: dict[str, Any] | None = None  # the vehicle's echoed command
         self.last_sent: dict[str, Any] | None = None
+        #: The newest command (by id) the vehicle accepted from this console: its record.
+        self._accepted: dict[str, Any] | None = None
         self.on_plan: Callable[[Plan], None] = lambda _p: None
-        self.on_ack: Callable[[dict[str, Any], dict[str, Any] | None], None] = lambda _a, _r: None
 
     async def close(self) -> None:
         for handle in self._timeouts.values():
@@ -103,6 +105,7 @@ class CommandManager:
         """The vehicle started afresh (training reset): forget its plan and echoes."""
         self.mirror = None
         self.vehicle_active = None
+        self._accepted = None
         for handle in self._timeouts.values():
             handle.cancel()
         self._timeouts.clear()
@@ -119,10 +122,9 @@ class CommandManager:
         if len(self._sends) >= self.max_sends_per_minute:
             raise RateLimited(60.0 - (now - self._sends[0]), self.max_sends_per_minute)
 
-    async def submit(
-        self, enc: Encoded, requested: dict[str, Any], kind: str = "command"
-    ) -> dict[str, Any]:
-        """Log the command (queued), then transmit it in the background; returns the record.
+    async def submit(self, enc: Encoded, kind: str = "command") -> dict[str, Any]:
+        """Log the command (queued) with the values asked for (``enc.snaps``), then transmit
+        it in the background; returns the record.
 
         Raises:
             RateLimited: too many transmissions in the last minute (never for surface).
@@ -130,17 +132,14 @@ class CommandManager:
         if kind != "surface":
             self._check_rate()
             self._sends.append(time.monotonic())
-        cmd = enc.command
         record = self.log.insert_command(
             self._dive(),
             {
                 "operator": self.operator,
                 "target": self.target,
                 "kind": kind,
-                "pattern": cmd.pattern.name,
-                "pattern_id": cmd.pattern.id,
-                "params": dict(cmd.params),
-                "requested": requested,
+                **command_json(enc.command),
+                "requested": {s.field: s.requested for s in enc.snaps},
                 "bits": enc.frame.bits,
                 "hex": enc.frame.hex,
             },
@@ -155,8 +154,7 @@ class CommandManager:
         return record
 
     async def surface(self) -> dict[str, Any]:
-        enc = encode_frame("surface", {})
-        return await self.submit(enc, {}, kind="surface")
+        return await self.submit(encode_frame("surface", {}), kind="surface")
 
     def retry(self, command_id: int) -> dict[str, Any]:
         record = self.log.command(command_id)
@@ -185,7 +183,7 @@ class CommandManager:
         if reason is not None:
             self._update(command_id, state="failed", attempts=attempts, reason=reason)
             return
-        self.last_sent = {"id": command_id, **_command_json(enc)}
+        self.last_sent = {"id": command_id, **command_json(enc.command)}
         now = self.log.command(command_id)
         if now is not None and now["state"] == "acknowledged":
             # an earlier attempt was acknowledged while this one was on its way (a Surface
@@ -233,7 +231,6 @@ class CommandManager:
         """An acknowledgement from the vehicle: settle the command it answers."""
         self.vehicle_active = ack.get("active")
         command_id = self._match(ack)
-        record: dict[str, Any] | None = None
         if command_id is not None:
             self._awaiting.pop(command_id, None)
             handle = self._timeouts.pop(command_id, None)
@@ -247,12 +244,14 @@ class CommandManager:
                 ack=ack,
                 reason=None if accepted else f"{ack.get('reason')}: {ack.get('detail')}",
             )
+            newest = self._accepted is None or command_id > self._accepted["id"]
+            if accepted and newest:
+                self._accepted = record
         if ack.get("outcome") == "accepted" and not ack.get("duplicate") and ack.get("from"):
             self._replay_plan(ack)
         self.hub.publish(
             {"type": "vehicle", "active": self.vehicle_active, "echo_mismatch": self.echo_mismatch}
         )
-        self.on_ack(ack, record)
 
     def _match(self, ack: dict[str, Any]) -> int | None:
         if not self._awaiting:
@@ -281,11 +280,10 @@ class CommandManager:
     def echo_mismatch(self) -> bool:
         """The vehicle's echo of its active command (the last acknowledgement's ``active``,
         and the pattern in its status) differs from the last command it accepted from this
-        console: retasked by someone else, restarted, or a console bug."""
-        accepted = self.log.commands(state="acknowledged", dive=self._dive(), limit=1)
-        if not accepted:
+        console (in this dive): retasked by someone else, restarted, or a console bug."""
+        last = self._accepted
+        if last is None or last["dive"] != self._dive():
             return False
-        last = accepted[0]
         status = self.hub.status or {}
         acked_t_s = (last.get("ack") or {}).get("t_s", 0.0)
         # a status from before the acknowledgement still shows the old pattern: not a mismatch
@@ -295,8 +293,3 @@ class CommandManager:
         if active is None:
             return False
         return (active.get("pattern"), active.get("params")) != (last["pattern"], last["params"])
-
-
-def _command_json(enc: Encoded) -> dict[str, Any]:
-    cmd = enc.command
-    return {"pattern": cmd.pattern.name, "pattern_id": cmd.pattern.id, "params": dict(cmd.params)}

@@ -11,8 +11,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import time
 from collections.abc import Coroutine
+from dataclasses import replace
 from typing import Any
 
 from backend.commands import CommandManager
@@ -22,6 +22,7 @@ from backend.store import MissionLog
 from backend.telemetry import TelemetryHub, pose_from_message
 from codec import FRAME_BITS, Encoded, airtime_s, decode_frame, encode_frame, sections
 from planner import Limits, Plan, VehicleState, compare, estimate, plan, validate
+from sim_bridge.agent import command_json
 from sim_bridge.environment import SOC_LINEAR_PCT_PER_H
 
 logger = logging.getLogger("backend.console")
@@ -53,7 +54,6 @@ class Console:
         self._preview_ready = asyncio.Event()
         self._drawer: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
-        self.started_s = time.monotonic()
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -198,9 +198,7 @@ class Console:
         cmd, frame = enc.command, enc.frame
         bits = frame.bits
         doc = {
-            "pattern": cmd.pattern.name,
-            "pattern_id": cmd.pattern.id,
-            "params": dict(cmd.params),
+            **command_json(cmd),
             "requested": {s.field: s.requested for s in enc.snaps},
             "snaps": [
                 {
@@ -236,6 +234,15 @@ class Console:
         Raises:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
+        return self._preview(pattern, params, show=show)[1]
+
+    def prepare(self, pattern: str, params: dict[str, Any]) -> tuple[Encoded, dict[str, Any]]:
+        """For a send: the frame, and its preview (not drawn) to check the limits on."""
+        return self._preview(pattern, params, show=False)
+
+    def _preview(
+        self, pattern: str, params: dict[str, Any], *, show: bool
+    ) -> tuple[Encoded, dict[str, Any]]:
         enc, doc = self.encode(pattern, params)
         cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
         state = self.vehicle_state()
@@ -288,7 +295,7 @@ class Console:
             self._draw_later(
                 path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
             )
-        return doc
+        return enc, doc
 
     def _draw_later(self, *preview: Any) -> None:
         """Draw a preview in the 3D view off the request path, latest wins: a burst of
@@ -315,8 +322,6 @@ class Console:
         if start_z_m is None:
             self.sim.reset()
         else:
-            from dataclasses import replace
-
             self.sim.reset(replace(self.sim.config, start_z_m=start_z_m))
         self.hub.pose = None
         self.dive = self.log.new_dive(self.settings.target)

@@ -6,15 +6,15 @@
 * :class:`ModemLink`: an ME transmitter on a serial port or behind a TCP gateway
   (:class:`sim_bridge.transmit.SerialTransmitter`): frames out, nothing back.
 
-The protocol side (message shapes) lives in :mod:`sim_bridge.rosbridge`; this module is the
-transport.
+The protocol side (the messages, :class:`sim_bridge.rosbridge.ClientProtocol`, and their
+decoding) lives in :mod:`sim_bridge.rosbridge`, shared with the station's transmitter; this
+module is the transport.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import time
 from collections.abc import Callable
@@ -27,13 +27,16 @@ from codec import Frame
 from sim_bridge.rosbridge import (
     FRAME_TOPIC,
     MISSION_TOPIC,
-    POSE_STAMPED_TYPE,
     POSE_TOPIC,
     STATUS_TOPIC,
-    STRING_TYPE,
-    UINT8_MULTIARRAY_TYPE,
+    BinaryMessage,
+    BridgeError,
+    ClientProtocol,
+    InvalidData,
+    decode_json_string,
+    decode_server_message,
 )
-from sim_bridge.transmit import failure_reason, open_transmitter
+from sim_bridge.transmit import failure_reason, frame_msg, open_transmitter
 
 logger = logging.getLogger("backend.link")
 
@@ -82,7 +85,9 @@ class RosbridgeLink(Link):
         self._conn: ClientConnection | None = None
         self._task: asyncio.Task[None] | None = None
         self._ready = asyncio.Event()
-        self._ids = 0
+        self._protocol = ClientProtocol(
+            advertise=[FRAME_TOPIC], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC]
+        )
 
     @property
     def connected(self) -> bool:
@@ -106,10 +111,6 @@ class RosbridgeLink(Link):
             await self._conn.close()
             self._conn = None
 
-    def _id(self, op: str) -> str:
-        self._ids += 1
-        return f"console:{op}:{self._ids}"
-
     async def _run(self) -> None:
         backoff = 0.2
         while True:
@@ -117,7 +118,8 @@ class RosbridgeLink(Link):
                 async with connect(
                     self.target, open_timeout=self.open_timeout_s, max_size=2**22, proxy=None
                 ) as conn:
-                    await self._open(conn)
+                    for opening in self._protocol.open_messages():
+                        await conn.send(opening)
                     self._conn = conn
                     self._ready.set()
                     backoff = 0.2
@@ -134,51 +136,33 @@ class RosbridgeLink(Link):
             await asyncio.sleep(backoff)
             backoff = min(backoff * 2, 5.0)
 
-    async def _open(self, conn: ClientConnection) -> None:
-        await conn.send(
-            json.dumps(
-                {
-                    "op": "advertise",
-                    "id": self._id("advertise"),
-                    "topic": FRAME_TOPIC,
-                    "type": UINT8_MULTIARRAY_TYPE,
-                }
-            )
-        )
-        for topic, kind in (
-            (POSE_TOPIC, POSE_STAMPED_TYPE),
-            (STATUS_TOPIC, STRING_TYPE),
-            (MISSION_TOPIC, STRING_TYPE),
-        ):
-            await conn.send(
-                json.dumps(
-                    {"op": "subscribe", "id": self._id("subscribe"), "topic": topic, "type": kind}
-                )
-            )
-
-    def _dispatch(self, message: str | bytes) -> None:
-        if not isinstance(message, str):
-            return
+    def _dispatch(self, data: str | bytes) -> None:
         try:
-            data = json.loads(message)
-        except ValueError:
-            logger.warning("link: ignoring a message that is not JSON")
+            message = decode_server_message(data)
+        except BinaryMessage:
             return
-        if not isinstance(data, dict) or data.get("op") != "publish":
+        except BridgeError as error:
+            logger.warning("link: ignoring %s", error.reason)
+            return
+        if message.get("op") != "publish":
             return
         self.last_message_s = time.monotonic()
-        topic, msg = data.get("topic"), data.get("msg")
+        topic, msg = message.get("topic"), message.get("msg")
         if not isinstance(msg, dict):
             return
         try:
             if topic == POSE_TOPIC:
-                self.on_pose(msg)
+                handler, body = self.on_pose, msg
             elif topic in (STATUS_TOPIC, MISSION_TOPIC):
-                body = json.loads(msg.get("data", ""))
-                if isinstance(body, dict):
-                    (self.on_status if topic == STATUS_TOPIC else self.on_mission)(body)
-        except ValueError:
-            logger.warning("link: ignoring a %s message whose data is not JSON", topic)
+                handler = self.on_status if topic == STATUS_TOPIC else self.on_mission
+                body = decode_json_string(msg)
+            else:
+                return
+        except InvalidData as error:
+            logger.warning("link: ignoring a %s message: %s", topic, error.reason)
+            return
+        try:
+            handler(body)
         except Exception:  # a console bug must not take the link down
             logger.exception("link: handler for %s failed", topic)
 
@@ -186,14 +170,8 @@ class RosbridgeLink(Link):
         conn = self._conn
         if conn is None:
             return "not connected to the vehicle"
-        message = {
-            "op": "publish",
-            "id": self._id("publish"),
-            "topic": FRAME_TOPIC,
-            "msg": {"data": list(frame.to_bytes())},
-        }
         try:
-            await conn.send(json.dumps(message))
+            await conn.send(self._protocol.publish(FRAME_TOPIC, frame_msg(frame)))
         except (OSError, ConnectionClosed) as err:
             return failure_reason(err)
         return None

@@ -39,7 +39,8 @@ states use the vehicle's mission clock (``start.t_s`` + script time).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from bisect import bisect_right
+from dataclasses import dataclass, replace
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
@@ -277,14 +278,7 @@ def _segment_at(path: Path, t_rel_s: float) -> int | None:
         t_loop = times[path.loop_start]
         lap = times[-1] - t_loop
         t = t_loop + math.fmod(t - t_loop, lap) if lap > 0 else t_loop
-    lo, hi = 0, n - 1
-    while hi - lo > 1:
-        mid = (lo + hi) // 2
-        if times[mid] <= t:
-            lo = mid
-        else:
-            hi = mid
-    return min(lo, n - 2)
+    return min(max(bisect_right(times, t) - 1, 0), n - 2)
 
 
 def _state_at(p: Plan, t_rel_s: float, t_abs_s: float) -> VehicleState:
@@ -389,7 +383,7 @@ def expand(
             loc: Loc = ("steps", i, "params", e.field) if e.field else ("steps", i)
             raise ScriptError(str(e), loc) from e
         if prev is not None:
-            out[-1] = _replace_end(prev, t_start)
+            out[-1] = replace(prev, t_end_s=t_start)
         out.append(
             ExpandedStep(
                 i, step, encoded, p, state, t_start, t_start + p.path.duration_s, tuple(warnings)
@@ -397,12 +391,6 @@ def expand(
         )
         in_force = p
     return out
-
-
-def _replace_end(s: ExpandedStep, t_end_s: float) -> ExpandedStep:
-    return ExpandedStep(
-        s.index, s.step, s.encoded, s.plan, s.state, s.t_start_s, t_end_s, s.warnings
-    )
 
 
 # --- preview ----------------------------------------------------------------------------
@@ -645,14 +633,7 @@ def _step_preview(s: ExpandedStep, t0_abs_s: float) -> StepPreview:
         duration_s=s.duration_s,
         repeats=s.repeats,
         waypoints=len(s.plan.path),
-        start=StartPose(
-            x_m=s.state.x_m,
-            y_m=s.state.y_m,
-            z_m=s.state.z_m,
-            heading_deg=s.state.heading_deg,
-            speed_mps=s.state.speed_mps,
-            t_s=s.state.t_s - t0_abs_s,
-        ),
+        start=StartPose.model_validate({**s.state.as_dict(), "t_s": s.state.t_s - t0_abs_s}),
         warnings=list(s.warnings),
     )
 
@@ -784,6 +765,10 @@ class ScriptRunner:
     def next_index(self) -> int | None:
         """The next step to hand out, or ``None`` when every step has been."""
         return self._next if self._next < len(self.script.steps) else None
+
+    def step_state(self, i: int) -> StepState:
+        """Step ``i``'s state: pending, sent, acknowledged or failed."""
+        return self._states[i]
 
     def _previous_acknowledged(self) -> bool:
         return self._next == 0 or self._states[self._next - 1] == "acknowledged"

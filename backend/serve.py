@@ -1,13 +1,14 @@
 """``nemesys console``: run the console (FastAPI on uvicorn, viser, and in training mode the
-simulated vehicle) and print the operator URL with its token, as Jupyter does."""
+simulated vehicle) and print the operator URL with its token, as Jupyter does.
+
+Imported by every ``nemesys`` command for its parser: the console's dependencies (pydantic,
+FastAPI, uvicorn) are imported only when the console runs."""
 
 from __future__ import annotations
 
 import argparse
 import os
 from typing import Any, TextIO
-
-from pydantic import ValidationError
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -34,6 +35,7 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
 
 def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     import uvicorn
+    from pydantic import ValidationError
 
     from backend.app import create_app
     from backend.settings import Settings

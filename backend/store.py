@@ -60,6 +60,27 @@ _JSON = ("params", "requested", "ack")
 _UPDATABLE = frozenset({"state", "attempts", "sent_at", "acked_at", "ack", "reason"})
 STATES = ("queued", "transmitted", "acknowledged", "rejected", "timed_out", "failed")
 FINAL_STATES = frozenset({"acknowledged", "rejected", "timed_out", "failed"})
+#: CSV columns taken from the acknowledgement (the rest are the record's own).
+CSV_ACK_COLUMNS = ("corrected_bits", "decode_latency_ms", "replan_latency_ms")
+#: The CSV export's columns, in order.
+CSV_COLUMNS = (
+    "id",
+    "dive",
+    "created_at",
+    "operator",
+    "target",
+    "kind",
+    "pattern",
+    "params",
+    "hex",
+    "bits",
+    "state",
+    "attempts",
+    "sent_at",
+    "acked_at",
+    "reason",
+    *CSV_ACK_COLUMNS,
+)
 
 
 def now_iso() -> str:
@@ -134,8 +155,7 @@ class MissionLog:
                 f"INSERT INTO commands ({', '.join(cols)}) VALUES ({', '.join('?' * len(cols))})",
                 values,
             )
-            new_id = int(cur.lastrowid or 0)
-        got = self.command(new_id)
+            got = self._command(int(cur.lastrowid or 0))
         assert got is not None
         return got
 
@@ -151,14 +171,18 @@ class MissionLog:
         values = [json.dumps(v) if k in _JSON else v for k, v in fields.items()]
         with self._lock:
             self._db.execute(f"UPDATE commands SET {sets} WHERE id = ?", [*values, command_id])
-        got = self.command(command_id)
+            got = self._command(command_id)
         if got is None:
             raise KeyError(command_id)
         return got
 
     def command(self, command_id: int) -> dict[str, Any] | None:
         with self._lock:
-            row = self._db.execute("SELECT * FROM commands WHERE id = ?", (command_id,)).fetchone()
+            return self._command(command_id)
+
+    def _command(self, command_id: int) -> dict[str, Any] | None:
+        """The record as written (under the lock: the row this call's statement left)."""
+        row = self._db.execute("SELECT * FROM commands WHERE id = ?", (command_id,)).fetchone()
         return _record(row) if row is not None else None
 
     def commands(
@@ -173,21 +197,16 @@ class MissionLog:
         limit: int = 200,
         oldest_first: bool = False,
     ) -> list[dict[str, Any]]:
-        where: list[str] = []
-        args: list[Any] = []
-        for col, value in (("state", state), ("pattern", pattern), ("target", target)):
-            if value is not None:
-                where.append(f"{col} = ?")
-                args.append(value)
-        if dive is not None:
-            where.append("dive = ?")
-            args.append(dive)
-        if since is not None:
-            where.append("created_at >= ?")
-            args.append(since)
-        if until is not None:
-            where.append("created_at <= ?")
-            args.append(until)
+        filters = (
+            ("state = ?", state),
+            ("pattern = ?", pattern),
+            ("target = ?", target),
+            ("dive = ?", dive),
+            ("created_at >= ?", since),
+            ("created_at <= ?", until),
+        )
+        where = [clause for clause, value in filters if value is not None]
+        args: list[Any] = [value for _, value in filters if value is not None]
         sql = "SELECT * FROM commands"
         if where:
             sql += " WHERE " + " AND ".join(where)
@@ -232,36 +251,12 @@ def _record(row: sqlite3.Row) -> dict[str, Any]:
 
 
 def csv_rows(records: Iterable[Mapping[str, Any]]) -> Iterable[list[str]]:
-    """The log as CSV rows (header first); JSON columns as JSON text."""
-    cols = [
-        "id",
-        "dive",
-        "created_at",
-        "operator",
-        "target",
-        "kind",
-        "pattern",
-        "params",
-        "hex",
-        "bits",
-        "state",
-        "attempts",
-        "sent_at",
-        "acked_at",
-        "reason",
-        "corrected_bits",
-        "decode_latency_ms",
-        "replan_latency_ms",
-    ]
-    yield cols
+    """The log as CSV rows (header first, :data:`CSV_COLUMNS`); JSON columns as JSON text."""
+    yield list(CSV_COLUMNS)
     for r in records:
         ack = r.get("ack") or {}
-        row: list[str] = []
-        for c in cols:
-            v = (
-                ack.get(c)
-                if c in ("corrected_bits", "decode_latency_ms", "replan_latency_ms")
-                else r.get(c)
-            )
-            row.append(json.dumps(v) if isinstance(v, dict | list) else "" if v is None else str(v))
-        yield row
+        values = (ack.get(c) if c in CSV_ACK_COLUMNS else r.get(c) for c in CSV_COLUMNS)
+        yield [
+            json.dumps(v) if isinstance(v, dict | list) else "" if v is None else str(v)
+            for v in values
+        ]

@@ -418,15 +418,20 @@ class Viewer:
 
     def _polyline(self, name: str, points: FloatArray, color: Rgb) -> None:
         if len(points) >= 2:
-            self._add(
-                self._server.scene.add_line_segments(
-                    name,
-                    _segments(points),
-                    color,
-                    thickness=PATH_PX,
-                    thickness_units="screen",
-                )
+            self._lines(name, _segments(points), color)
+
+    def _lines(self, name: str, segments: npt.NDArray[np.float32], color: Rgb) -> None:
+        """Line segments ``name``, path thickness: drawn anew, or their points replaced
+        when the node exists (only the points are resent)."""
+        handle = self._nodes.get(name)
+        if isinstance(handle, viser.LineSegmentsHandle):
+            handle.points = segments
+            return
+        self._add(
+            self._server.scene.add_line_segments(
+                name, segments, color, thickness=PATH_PX, thickness_units="screen"
             )
+        )
 
     def _points(
         self, name: str, points: FloatArray, color: Rgb | npt.NDArray[np.uint8], size_m: float
@@ -631,10 +636,14 @@ class Viewer:
         with self._lock:
             self._remove_group("/track")
             self._track.clear()
-            self._frozen_end = 0
-            self._chunks = 0
-            self._drawn = 0
-            self._last_redraw_s = -math.inf
+            self._undraw_track()
+
+    def _undraw_track(self) -> None:
+        """Nothing of the track counts as drawn: the next redraw draws it all."""
+        self._frozen_end = 0
+        self._chunks = 0
+        self._drawn = 0
+        self._last_redraw_s = -math.inf
 
     def _append_track(self, p: tuple[float, float, float]) -> None:
         track = self._track
@@ -649,10 +658,7 @@ class Viewer:
             self._track = [*track[-2::-2][::-1], track[-1]]
             for name in self.node_names("/track/chunk_"):
                 self._remove(name)
-            self._frozen_end = 0
-            self._chunks = 0
-            self._drawn = 0
-            self._last_redraw_s = -math.inf
+            self._undraw_track()
 
     def _redraw_track(self) -> None:
         track = self._track
@@ -664,7 +670,6 @@ class Viewer:
             return
         if "/track" not in self._nodes:
             self._group("/track")
-        scene = self._server.scene
         # freeze full chunks: drawn once, never resent
         while len(track) - 1 - self._frozen_end >= self._track_chunk_segments:
             end = self._frozen_end + self._track_chunk_segments
@@ -681,16 +686,7 @@ class Viewer:
         if len(live) < 2:
             self._remove("/track/live")
             return
-        segments = _segments(ned_to_view(live[:, 0], live[:, 1], live[:, 2]))
-        handle = self._nodes.get("/track/live")
-        if isinstance(handle, viser.LineSegmentsHandle):
-            handle.points = segments
-        else:
-            self._add(
-                scene.add_line_segments(
-                    "/track/live", segments, TRACK_RGB, thickness=PATH_PX, thickness_units="screen"
-                )
-            )
+        self._polyline("/track/live", ned_to_view(live[:, 0], live[:, 1], live[:, 2]), TRACK_RGB)
 
     def _draw_tail(self) -> None:
         """One segment from the last drawn track point to the vehicle."""
@@ -698,16 +694,9 @@ class Viewer:
             return
         a = self._track[self._drawn - 1]
         b = self._pose_ned
-        segment = _segments(ned_to_view([a[0], b[0]], [a[1], b[1]], [a[2], b[2]]))
-        handle = self._nodes.get("/track/tail")
-        if isinstance(handle, viser.LineSegmentsHandle):
-            handle.points = segment
-        else:
-            self._add(
-                self._server.scene.add_line_segments(
-                    "/track/tail", segment, TRACK_RGB, thickness=PATH_PX, thickness_units="screen"
-                )
-            )
+        self._polyline(
+            "/track/tail", ned_to_view([a[0], b[0]], [a[1], b[1]], [a[2], b[2]]), TRACK_RGB
+        )
 
     # --- replay ---------------------------------------------------------------------------
 

@@ -1,4 +1,4 @@
-"""Timing helpers shared by the benchmarks: interleaved rounds, medians."""
+"""Timing helpers shared by the benchmarks: interleaved rounds, medians, tables, peak RSS."""
 
 from __future__ import annotations
 
@@ -42,6 +42,11 @@ def table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
     lines.append("  ".join("-" * w for w in widths))
     lines += ["  ".join(c.ljust(w) for c, w in zip(r, widths, strict=True)) for r in rows]
     return "\n".join(lines)
+
+
+def verdict(ok: bool) -> str:
+    """A target's verdict cell: ``met`` or ``MISSED``."""
+    return "met" if ok else "MISSED"
 
 
 def peak_rss_kb(code: str, args: Sequence[str], runs: int) -> int:

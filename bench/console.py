@@ -56,14 +56,11 @@ import asyncio
 import contextlib
 import json
 import math
+import multiprocessing
 import os
 import random
-import re
 import secrets
-import socket
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from collections.abc import AsyncIterator, Iterator, Sequence
@@ -75,7 +72,9 @@ import httpx
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, WebSocketException
 
-from bench._timing import table
+from backend.store import FINAL_STATES
+from bench._server import ConsoleProcess, start_console
+from bench._timing import table, verdict
 from codec import FRAME_BITS
 
 TARGET_P50_MS = 5.0
@@ -93,19 +92,9 @@ CHANNEL_DELAY_S = 0.5
 SENDS_PER_MINUTE = 600
 START_TIMEOUT_S = 60.0
 ACK_TIMEOUT_S = 15.0
-FINAL_STATES = ("acknowledged", "rejected", "timed_out", "failed")
-_URL = re.compile(r"(http://[^/\s]+)/\?token=(\S+)")
 
 
 # --- the server ---------------------------------------------------------------------------
-
-
-def free_port() -> int:
-    """A loopback port free right now (the server binds it a moment later)."""
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as sock:
-        sock.bind(("127.0.0.1", 0))
-        port: int = sock.getsockname()[1]
-        return port
 
 
 def cpu_s(pid: int) -> float | None:
@@ -164,114 +153,23 @@ class CpuMeter:
         return CpuShare(server, bench, others)
 
 
-@dataclass
-class Server:
-    """A running ``nemesys console`` subprocess."""
-
-    proc: subprocess.Popen[bytes]
-    base_url: str
-    token: str
-    log_path: Path
-
-    @property
-    def pid(self) -> int:
-        return self.proc.pid
-
-    @property
-    def ws_url(self) -> str:
-        return self.base_url.replace("http://", "ws://", 1) + "/ws"
-
-    def log_tail(self, lines: int = 20) -> str:
-        try:
-            text = self.log_path.read_text(errors="replace")
-        except OSError:
-            return ""
-        return "\n".join(text.splitlines()[-lines:])
-
-    def stop(self, timeout_s: float = 15.0) -> None:
-        """SIGTERM (uvicorn shuts the lifespan down), SIGKILL if it does not exit in time."""
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(timeout_s)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-
-
-def _server_env(token: str) -> dict[str, str]:
-    # No inherited NEMESYS_* setting (a target, a settings file) may point this at a vehicle.
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NEMESYS_")}
-    env["NEMESYS_TOKEN"] = token
-    env["NEMESYS_MAX_SENDS_PER_MINUTE"] = str(SENDS_PER_MINUTE)
-    return env
-
-
-def _wait_ready(server: Server, deadline: float) -> None:
-    """Poll ``/api/session`` until it answers 200 in training mode."""
-    while True:
-        if server.proc.poll() is not None:
-            raise RuntimeError(
-                f"the console exited ({server.proc.returncode}):\n{server.log_tail()}"
-            )
-        try:
-            r = httpx.get(f"{server.base_url}/api/session", timeout=2.0)
-            if r.status_code == 200:
-                if r.json().get("mode") != "training":
-                    raise RuntimeError("the console did not start in training mode")
-                return
-        except httpx.HTTPError:
-            pass
-        if time.monotonic() > deadline:
-            raise RuntimeError(f"the console did not answer in time:\n{server.log_tail()}")
-        time.sleep(0.1)
-
-
 @contextlib.contextmanager
-def console_server(workdir: Path) -> Iterator[Server]:
+def console_server(workdir: Path) -> Iterator[ConsoleProcess]:
     """``nemesys console`` on a free loopback port, training mode; stopped on exit."""
     token = secrets.token_urlsafe(24)
-    port = free_port()
-    log_path = workdir / "console.log"
-    cmd = [
-        sys.executable,
-        "-m",
-        "backend.cli",
-        "console",
-        "--port",
-        str(port),
-        "--viewer-port",
-        "0",
-        "--target",
-        "sim",
-        "--db",
-        str(workdir / "missions.sqlite3"),
-    ]
-    with log_path.open("wb") as log:
-        proc = subprocess.Popen(
-            cmd,
-            stdout=log,
-            stderr=subprocess.STDOUT,
-            stdin=subprocess.DEVNULL,
-            env=_server_env(token),
-        )
-    server = Server(proc, "", token, log_path)
-    try:
-        deadline = time.monotonic() + START_TIMEOUT_S
-        while not server.base_url:
-            match = _URL.search(log_path.read_text(errors="replace"))
-            if match:
-                if match.group(2) != token:
-                    raise RuntimeError("the console printed another token than it was given")
-                server.base_url = match.group(1)
-            elif proc.poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError(f"the console printed no URL:\n{server.log_tail()}")
-            else:
-                time.sleep(0.05)
-        _wait_ready(server, deadline)
+    with start_console(
+        workdir / "console.log",
+        token,
+        *("--target", "sim", "--db", str(workdir / "missions.sqlite3")),
+        env={"NEMESYS_MAX_SENDS_PER_MINUTE": str(SENDS_PER_MINUTE)},
+        timeout_s=START_TIMEOUT_S,
+    ) as server:
+        if server.token != token:
+            raise RuntimeError("the console printed another token than it was given")
+        with server.client() as http:
+            if http.get("/api/session").json().get("mode") != "training":
+                raise RuntimeError("the console did not start in training mode")
         yield server
-    finally:
-        server.stop()
 
 
 # --- statistics ---------------------------------------------------------------------------
@@ -292,10 +190,6 @@ def _ms(value: float) -> str:
     return "-" if math.isnan(value) else f"{value:.1f}"  # NaN: no sample
 
 
-def _verdict(ok: bool) -> str:
-    return "met" if ok else "MISSED"
-
-
 # --- 1. preview / encode ------------------------------------------------------------------
 
 
@@ -308,10 +202,8 @@ class ApiRun:
     errors: int
     wall_s: float
     cpu: CpuShare
-
-    @property
-    def requests(self) -> int:
-        return sum(len(v) for v in self.latencies_ms.values())
+    #: One pair per client at the page's pace (graded against the targets), not back to back.
+    paced: bool
 
     def both(self) -> list[float]:
         return [x for v in self.latencies_ms.values() for x in v]
@@ -326,7 +218,7 @@ def default_bodies(dictionary: list[dict[str, Any]]) -> list[dict[str, Any]]:
 
 
 async def api_load(
-    server: Server,
+    server: ConsoleProcess,
     bodies: Sequence[dict[str, Any]],
     *,
     label: str,
@@ -377,7 +269,7 @@ async def api_load(
     t0 = time.perf_counter()
     await asyncio.gather(*(client(k) for k in range(clients)))
     wall = time.perf_counter() - t0
-    return ApiRun(label, latencies, errors, wall, meter.share())
+    return ApiRun(label, latencies, errors, wall, meter.share(), paced=interval_s > 0)
 
 
 # --- 2. send -> acknowledgement -----------------------------------------------------------
@@ -584,6 +476,10 @@ class TelemetryRun:
     sends: SendRun
 
 
+#: Per-client telemetry rates (Hz), the longest gap (s) and every error, from the child.
+TelemetryStats = tuple[list[float], float, list[str]]
+
+
 async def _pages(url: str, clients: int, duration_s: float, ready: Any) -> TelemetryStats:
     """Run ``clients`` page websockets; signal ``ready`` once all are connected, then count
     telemetry over ``duration_s``."""
@@ -612,9 +508,6 @@ async def _pages(url: str, clients: int, duration_s: float, ready: Any) -> Telem
     )
 
 
-TelemetryStats = tuple[list[float], float, list[str]]
-
-
 def _pages_process(url: str, clients: int, duration_s: float, ready: Any, out: Any) -> None:
     """Child process: the telemetry clients are other people's browsers, so they run apart
     from the operator's (this process's) websocket that times the acknowledgements."""
@@ -622,10 +515,8 @@ def _pages_process(url: str, clients: int, duration_s: float, ready: Any, out: A
 
 
 async def telemetry_load(
-    server: Server, sender: Sender, clients: int, duration_s: float, sends: int, seed: int
+    server: ConsoleProcess, sender: Sender, clients: int, duration_s: float, sends: int, seed: int
 ) -> TelemetryRun:
-    import multiprocessing
-
     ctx = multiprocessing.get_context("spawn")
     ready, out = ctx.Event(), ctx.Queue()
     child = ctx.Process(
@@ -650,18 +541,31 @@ async def telemetry_load(
 # --- the run ------------------------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class Sizes:
+    """Seconds per preview/encode load (a third for the one client), sends per series, and
+    seconds of the telemetry clients."""
+
+    api_s: float
+    sends: int
+    telemetry_s: float
+
+
+QUICK = Sizes(api_s=3.0, sends=10, telemetry_s=10.0)
+FULL = Sizes(api_s=15.0, sends=30, telemetry_s=60.0)
+
+
 @dataclass
 class Results:
+    sizes: Sizes
     api: list[ApiRun]
     sends: list[SendRun]
     telemetry: TelemetryRun
     airtime_ms: float
 
 
-async def measure(server: Server, quick: bool) -> Results:
-    api_s = 3.0 if quick else 15.0
-    sends = 10 if quick else 30
-    ws_s = 10.0 if quick else 60.0
+async def measure(server: ConsoleProcess, sizes: Sizes) -> Results:
+    api_s, sends = sizes.api_s, sizes.sends
     rng = random.Random(1)
     headers = {"Authorization": f"Bearer {server.token}"}
     async with (
@@ -715,11 +619,13 @@ async def measure(server: Server, quick: bool) -> Results:
         before = await send_series(
             sender, SendRun("delay 0 s (default), before the clients", 0.0), sends, rng
         )
-        telemetry = await telemetry_load(server, sender, WS_CLIENTS, ws_s, sends, seed=2)
+        telemetry = await telemetry_load(
+            server, sender, WS_CLIENTS, sizes.telemetry_s, sends, seed=2
+        )
         after = await send_series(
             sender, SendRun("delay 0 s (default), after the clients", 0.0), sends, rng
         )
-    return Results(api, [before, after, delayed], telemetry, airtime * 1e3)
+    return Results(sizes, api, [before, after, delayed], telemetry, airtime * 1e3)
 
 
 def _api_table(runs: Sequence[ApiRun]) -> str:
@@ -727,7 +633,7 @@ def _api_table(runs: Sequence[ApiRun]) -> str:
     for run in runs:
         # graded: 20 clients at the page's pace; a closed loop with no pause is a saturation
         # test (its latency is 20 / throughput), shown for reference
-        graded = run.label.startswith(f"{API_CLIENTS} clients, 1 pair")
+        graded = run.paced
         kinds = [("preview", run.latencies_ms["preview"]), ("encode", run.latencies_ms["encode"])]
         kinds.append(("both", run.both()))
         for kind, values in kinds:
@@ -743,7 +649,7 @@ def _api_table(runs: Sequence[ApiRun]) -> str:
                     _ms(p50),
                     _ms(p99),
                     target,
-                    _verdict(ok) if graded else "",
+                    verdict(ok) if graded else "",
                     str(run.errors) if kind == "both" else "",
                     str(run.cpu) if kind == "both" else "",
                 ]
@@ -776,7 +682,7 @@ def _send_table(runs: Sequence[SendRun]) -> str:
                 _ms(run.p99),
                 _ms(max(run.excess_ms, default=float("nan"))),
                 f"<= {TARGET_EXCESS_MS:g}",
-                _verdict(run.median <= TARGET_EXCESS_MS and not run.failures),
+                verdict(run.median <= TARGET_EXCESS_MS and not run.failures),
             ]
         )
     headers = [
@@ -803,16 +709,16 @@ def _telemetry_table(t: TelemetryRun, base: SendRun) -> str:
             "telemetry per client, min",
             f"{rmin:.2f} Hz",
             f">= {MIN_TELEMETRY_HZ:g} Hz ({TARGET_TELEMETRY_HZ:g} Hz nominal)",
-            _verdict(rmin >= MIN_TELEMETRY_HZ),
+            verdict(rmin >= MIN_TELEMETRY_HZ),
         ],
         ["telemetry per client, median", f"{rmed:.2f} Hz", "", ""],
         ["longest gap between two telemetry messages", f"{t.max_gap_s * 1e3:.0f} ms", "", ""],
-        ["errors and closes, all clients", str(len(t.errors)), "0", _verdict(not t.errors)],
+        ["errors and closes, all clients", str(len(t.errors)), "0", verdict(not t.errors)],
         [
             "send->ack excess median, with clients",
             f"{loaded.median:.1f} ms ({len(loaded.excess_ms)}/{loaded.sends} acked)",
             f"<= {TARGET_EXCESS_MS:g} ms",
-            _verdict(loaded.median <= TARGET_EXCESS_MS and not loaded.failures),
+            verdict(loaded.median <= TARGET_EXCESS_MS and not loaded.failures),
         ],
         [
             "send->ack excess median, without",
@@ -824,7 +730,7 @@ def _telemetry_table(t: TelemetryRun, base: SendRun) -> str:
             "with - without (medians)",
             f"{diff:+.1f} ms (ratio {ratio:.2f})",
             f"<= +{NO_EFFECT_MS:g} ms: no effect",
-            _verdict(diff <= NO_EFFECT_MS),
+            verdict(diff <= NO_EFFECT_MS),
         ],
         [
             "send->ack excess p99, with / without",
@@ -848,8 +754,8 @@ def run(out: TextIO, quick: bool = False) -> int:
             f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at the start\n\n"
         )
         out.flush()
-        res = asyncio.run(measure(server, quick))
-    api_s = 3.0 if quick else 15.0
+        res = asyncio.run(measure(server, QUICK if quick else FULL))
+    api_s = res.sizes.api_s
     out.write(
         f"Preview/encode latency: POST /api/preview then /api/encode, every pattern at its "
         f"defaults in turn,\n{api_s:g} s per load ({api_s / 3:g} s for one client); the preview "
@@ -865,7 +771,7 @@ def run(out: TextIO, quick: bool = False) -> int:
     t = res.telemetry
     out.write(
         f"{WS_CLIENTS} telemetry websocket clients on /ws for "
-        f"{10 if quick else 60} s, {t.sends.sends} sends spread over the window "
+        f"{res.sizes.telemetry_s:g} s, {t.sends.sends} sends spread over the window "
         "(no effect: median excess <= without + "
         f"{NO_EFFECT_MS:g} ms)\n\n"
     )

@@ -50,7 +50,7 @@ import codec
 import planner
 import sim_bridge
 from bench._timing import peak_rss_kb, table
-from codec import encode_frame
+from codec import FRAME_BITS, encode_frame
 from sim_bridge.agent import OnboardAgent
 from sim_bridge.scenarios import SCENARIOS, run_scenario
 from sim_bridge.sim import SimConfig, Simulation
@@ -181,12 +181,18 @@ def retask_cases() -> dict[str, RetaskCase]:
     return cases
 
 
-def _trial(case: RetaskCase) -> dict[str, Any]:
-    agent: OnboardAgent = copy.deepcopy(case.sim.agent)  # the same vehicle for every trial
-    ack, ref = agent.receive(case.bits, 100, case.sim.state())
+def receive_afresh(sim: Simulation, bits: int, label: str) -> tuple[dict[str, Any], float]:
+    """A deep copy of ``sim``'s agent (the same vehicle and plan at every call) receives the
+    frame ``bits``: its acknowledgment and the wall ms of ``receive`` (frame in -> first new
+    setpoint). Raises unless the frame was accepted."""
+    agent: OnboardAgent = copy.deepcopy(sim.agent)
+    state = sim.state()
+    t0 = time.perf_counter()
+    ack, ref = agent.receive(bits, FRAME_BITS, state)
+    wall_ms = (time.perf_counter() - t0) * 1e3
     if ack["outcome"] != "accepted" or ref is None:
-        raise RuntimeError(f"{case.name}: the retask frame was not accepted: {ack['detail']}")
-    return ack
+        raise RuntimeError(f"{label}: the frame was not accepted: {ack['detail']}")
+    return ack, wall_ms
 
 
 def measure_latency(
@@ -195,7 +201,7 @@ def measure_latency(
     """Per-scenario replan figures and every round's mean decode latency (ms)."""
     cases = retask_cases()
     for case in cases.values():  # warm-up, not counted: imports, first-call caches
-        _trial(case)
+        receive_afresh(case.sim, case.bits, case.name)
     decode_means: list[float] = []
     replan: dict[str, list[float]] = {n: [] for n in cases}
     decode_by: dict[str, list[float]] = {n: [] for n in cases}
@@ -205,7 +211,7 @@ def measure_latency(
         replans: dict[str, list[float]] = {n: [] for n in cases}
         for _ in range(trials):
             for name, case in cases.items():
-                ack = _trial(case)
+                ack, _ = receive_afresh(case.sim, case.bits, case.name)
                 decodes.append(ack["decode_latency_ms"])
                 decode_by[name].append(ack["decode_latency_ms"])
                 replans[name].append(ack["replan_latency_ms"])

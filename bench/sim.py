@@ -15,13 +15,13 @@ Medians over repeated runs: the machine is shared.
 
 from __future__ import annotations
 
-import copy
 import multiprocessing
 import statistics
 import time
 from typing import TextIO
 
-from bench._timing import table
+from bench._timing import table, verdict
+from bench.reconfig import receive_afresh, retask_cases
 from codec import DICTIONARY, encode_frame
 from sim_bridge.scenarios import SCENARIOS
 from sim_bridge.sim import SimConfig, Simulation
@@ -63,9 +63,14 @@ def _fleet_worker(args: tuple[int, int, float]) -> float:
     return time.perf_counter() - t0
 
 
+def fleet_shares(n: int, workers: int) -> list[int]:
+    """How many of ``n`` vehicles each worker flies: as even as can be, ``n`` in all."""
+    return [n // workers + (1 if k < n % workers else 0) for k in range(workers)]
+
+
 def fleet_factor(n: int, sim_s: float, workers: int) -> float:
     """Real-time factor of ``n`` vehicles over ``workers`` processes (slowest worker)."""
-    shares = [n // workers + (1 if k < n % workers else 0) for k in range(workers)]
+    shares = fleet_shares(n, workers)
     jobs = [(sum(shares[:k]), shares[k], sim_s) for k in range(workers)]
     if workers == 1:
         walls = [_fleet_worker(jobs[0])]
@@ -83,32 +88,13 @@ def setpoint_latencies(trials: int) -> dict[str, list[float]]:
     for name, pattern in DICTIONARY.items():
         bits = int(encode_frame(name, pattern.defaults).frame.bits, 2)
         cases[f"{name} (defaults)"] = (base, bits)
-    for name, sc in SCENARIOS.items():
-        if name == "tank":
-            continue
-        sim = Simulation(SimConfig(start_z_m=sc.start_z_m))
-        first, cmd = sc.commands[0], sc.commands[sc.retask]
-        sim.submit_frame(encode_frame(first.pattern, first.params).frame.to_bytes())
-        sim.run_until(cmd.t_s)
-        bits = int(encode_frame(cmd.pattern, cmd.params).frame.bits, 2)
-        cases[f"{name} retask ({cmd.pattern})"] = (sim, bits)
-    out: dict[str, list[float]] = {}
-    for label, (sim, bits) in cases.items():
-        samples = []
-        for _ in range(trials):
-            agent = copy.deepcopy(sim.agent)  # the same vehicle state for every trial
-            state = sim.state()
-            t0 = time.perf_counter()
-            ack, ref = agent.receive(bits, 100, state)
-            samples.append((time.perf_counter() - t0) * 1e3)
-            if ack["outcome"] != "accepted" or ref is None:
-                raise RuntimeError(f"{label}: the frame was not accepted: {ack['detail']}")
-        out[label] = samples
-    return out
-
-
-def _verdict(ok: bool) -> str:
-    return "met" if ok else "MISSED"
+    for name, case in retask_cases().items():
+        sc = SCENARIOS[name]
+        cases[f"{name} retask ({sc.commands[sc.retask].pattern})"] = (case.sim, case.bits)
+    return {
+        label: [receive_afresh(sim, bits, label)[1] for _ in range(trials)]
+        for label, (sim, bits) in cases.items()
+    }
 
 
 def run(out: TextIO, quick: bool = False) -> int:
@@ -125,13 +111,13 @@ def run(out: TextIO, quick: bool = False) -> int:
             "1 vehicle, one core",
             f"{sp:,.0f}x real time",
             f">= {TARGET_SPEEDUP:.0f}x",
-            _verdict(sp >= TARGET_SPEEDUP),
+            verdict(sp >= TARGET_SPEEDUP),
         ],
         [
             f"{TARGET_FLEET} vehicles, {WORKERS} processes",
             f"{f2:,.1f}x real time",
             ">= 1x",
-            _verdict(f2 >= 1.0),
+            verdict(f2 >= 1.0),
         ],
         [f"{TARGET_FLEET} vehicles, one process", f"{f1:,.1f}x real time", "(for comparison)", ""],
     ]
@@ -145,7 +131,13 @@ def run(out: TextIO, quick: bool = False) -> int:
     for label, samples in lat.items():
         med, worst = statistics.median(samples), max(samples)
         lrows.append(
-            [label, f"{med:.3f}", f"{worst:.3f}", f"<= {TARGET_SETPOINT_MS:g}", _verdict(med <= 1)]
+            [
+                label,
+                f"{med:.3f}",
+                f"{worst:.3f}",
+                f"<= {TARGET_SETPOINT_MS:g}",
+                verdict(med <= TARGET_SETPOINT_MS),
+            ]
         )
     out.write(table(["frame", "median ms", "max ms", "target ms", ""], lrows) + "\n")
     return 0

@@ -7,7 +7,7 @@ import { $, el, notify, notifyError, applyAuth } from "./ui.js";
 const CHANNEL = [
   ["ber", "bit error rate", "", { min: 0, max: 0.5, step: "any" }],
   ["burst_rate", "burst probability per frame", "", { min: 0, max: 1, step: "any" }],
-  ["burst_length_bits", "burst length", "bits", { min: 0, max: 100, step: 1 }],
+  ["burst_length_bits", "burst length", "bits", { min: 1, max: 100, step: 1 }],
   ["loss", "frame loss probability", "", { min: 0, max: 1, step: "any" }],
   ["range_m", "link range (empty: unlimited)", "m", { min: 0, step: "any" }],
   ["delay_s", "extra delay", "s", { min: 0, step: "any" }],

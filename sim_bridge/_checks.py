@@ -3,6 +3,8 @@ the allowed range."""
 
 from __future__ import annotations
 
+import math
+
 
 def number(name: str, value: object) -> float:
     """``value`` as a float; bools and non-numbers are refused."""
@@ -16,3 +18,15 @@ def in_range(name: str, value: object, lo: float, hi: float, allowed: str) -> No
     x = number(name, value)
     if not lo <= x <= hi:
         raise ValueError(f"{name} must be in {allowed}, got {value!r}")
+
+
+def positive(name: str, value: object) -> None:
+    """``value`` in (0, inf): finite and above zero."""
+    if not 0.0 < number(name, value) < math.inf:
+        raise ValueError(f"{name} must be in (0, inf), got {value!r}")
+
+
+def non_negative(name: str, value: object) -> None:
+    """``value`` in [0, inf): finite and not below zero."""
+    if not 0.0 <= number(name, value) < math.inf:
+        raise ValueError(f"{name} must be in [0, inf), got {value!r}")

@@ -21,13 +21,23 @@ from __future__ import annotations
 import time
 from typing import Any
 
-from codec import FRAME_BITS, Accepted, Command, Decoded, FrameReceiver, RejectReason
+from codec import (
+    FRAME_BITS,
+    FRAME_BYTES,
+    Accepted,
+    Command,
+    Decoded,
+    Frame,
+    FrameReceiver,
+    RejectReason,
+)
 from planner import Limits, Plan, PlanError, VehicleState, plan, validate
 from sim_bridge.guidance import Guidance, Reference
 
 #: Reject reasons beyond the codec's (:class:`codec.RejectReason`).
 INVALID_PLAN = "invalid_plan"
 LIMIT_VIOLATION = "limit_violation"
+#: The pattern executed whatever the limits (pattern 15).
 SURFACE = "surface"
 
 
@@ -68,11 +78,11 @@ class OnboardAgent:
                 None,
                 None,
                 RejectReason.MALFORMED.value,
-                f"a frame is {FRAME_BITS} bits (13 bytes); got {n_bits} bits",
+                f"a frame is {FRAME_BITS} bits ({FRAME_BYTES} bytes); got {n_bits} bits",
             ), None
-        frame_hex = f"{bits:025x}"
-        rx = FrameReceiver()
-        events = rx.feed_bytes((bits << 4).to_bytes(13, "big"))
+        frame = Frame(bits)
+        frame_hex = frame.hex
+        events = FrameReceiver().feed_bytes(frame.to_bytes())
         event = next((e for e in events if isinstance(e, Accepted)), events[-1] if events else None)
         if event is None:
             return self._reject(
@@ -91,7 +101,7 @@ class OnboardAgent:
         command = decoded.command
         current = self.active
         if current is not None and current.command == command:
-            return self._ack(state, frame_hex, decoded, decode_ms, None, None, True), None
+            return self._ack(state, frame_hex, decoded, decode_ms), None
         try:
             new = plan(command, state, current)
         except PlanError as err:
@@ -108,14 +118,11 @@ class OnboardAgent:
                 ), None
         self.active = new
         self.guidance.set_plan(new, state.t_s)
-        ref = self.guidance.update(state.x_m, state.y_m, state.z_m, state.heading_rad, state.t_s)
+        ref = self.guidance.update(state.x_m, state.y_m, state.z_m, state.t_s)
         replan_ms = (time.perf_counter() - t1) * 1e3
-        return self._ack(state, frame_hex, decoded, decode_ms, replan_ms, new, False), ref
+        return self._ack(state, frame_hex, decoded, decode_ms, new, replan_ms), ref
 
     # --- acknowledgements ----------------------------------------------------------------
-
-    def _active_json(self) -> dict[str, Any] | None:
-        return command_json(self.active.command) if self.active is not None else None
 
     def _ack(
         self,
@@ -123,37 +130,21 @@ class OnboardAgent:
         frame_hex: str,
         decoded: Decoded,
         decode_ms: float,
-        replan_ms: float | None,
-        new: Plan | None,
-        duplicate: bool,
+        new: Plan | None = None,
+        replan_ms: float | None = None,
     ) -> dict[str, Any]:
+        """An accepted frame: ``new`` is the plan switched to, ``None`` for a duplicate of the
+        active command."""
         self.accepted += 1
         pattern = decoded.command.pattern.name
         detail = (
             f"{pattern}: already active, not replanned"
-            if duplicate
-            else f"{pattern}: replanned, {len(new.path) if new else 0} waypoints"
+            if new is None
+            else f"{pattern}: replanned, {len(new.path)} waypoints"
         )
-        return {
-            "seq": self.seq,
-            "t_s": state.t_s,
-            "outcome": "accepted",
-            "frame_hex": frame_hex,
-            "corrected_bits": decoded.corrected,
-            "sync_errors": decoded.sync_errors,
-            "reason": None,
-            "detail": detail,
-            "field": None,
-            "command": command_json(decoded.command),
-            "duplicate": duplicate,
-            "decode_latency_ms": decode_ms,
-            "replan_latency_ms": replan_ms,
-            "waypoints": len(new.path) if new is not None else None,
-            "active": self._active_json(),
-            # the state the plan was made from: a console replays plan() from it and gets the
-            # very path the vehicle flies (same anchor, same join)
-            "from": _state_json(state) if new is not None else None,
-        }
+        return self._record(
+            state, frame_hex, decoded, None, detail, None, decode_ms, new, replan_ms
+        )
 
     def _reject(
         self,
@@ -166,33 +157,38 @@ class OnboardAgent:
         decode_ms: float | None = None,
     ) -> dict[str, Any]:
         self.rejected += 1
+        return self._record(state, frame_hex, decoded, reason, detail, field, decode_ms)
+
+    def _record(
+        self,
+        state: VehicleState,
+        frame_hex: str | None,
+        decoded: Decoded | None,
+        reason: str | None,
+        detail: str,
+        field: str | None,
+        decode_ms: float | None,
+        new: Plan | None = None,
+        replan_ms: float | None = None,
+    ) -> dict[str, Any]:
+        """The acknowledgement of frame ``seq``: ``reason`` is ``None`` when it was accepted."""
         return {
             "seq": self.seq,
             "t_s": state.t_s,
-            "outcome": "rejected",
+            "outcome": "accepted" if reason is None else "rejected",
             "frame_hex": frame_hex,
-            "corrected_bits": decoded.corrected if decoded else None,
-            "sync_errors": decoded.sync_errors if decoded else None,
+            "corrected_bits": decoded.corrected if decoded is not None else None,
+            "sync_errors": decoded.sync_errors if decoded is not None else None,
             "reason": reason,
             "detail": detail,
             "field": field,
-            "command": command_json(decoded.command) if decoded else None,
-            "duplicate": False,
+            "command": command_json(decoded.command) if decoded is not None else None,
+            "duplicate": reason is None and new is None,
             "decode_latency_ms": decode_ms,
-            "replan_latency_ms": None,
-            "waypoints": None,
-            "active": self._active_json(),
-            "from": None,
+            "replan_latency_ms": replan_ms,
+            "waypoints": len(new.path) if new is not None else None,
+            "active": command_json(self.active.command) if self.active is not None else None,
+            # the state the plan was made from: a console replays plan() from it and gets the
+            # very path the vehicle flies (same anchor, same join)
+            "from": state.as_dict() if new is not None else None,
         }
-
-
-def _state_json(state: VehicleState) -> dict[str, Any]:
-    return {
-        "x_m": state.x_m,
-        "y_m": state.y_m,
-        "z_m": state.z_m,
-        "heading_deg": state.heading_deg,
-        "speed_mps": state.speed_mps,
-        "t_s": state.t_s,
-        "segment": state.segment,
-    }

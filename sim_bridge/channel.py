@@ -40,10 +40,10 @@ from __future__ import annotations
 
 import math
 import random
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
-from codec import DEFAULT_BITRATE_BPS, FRAME_BITS
-from sim_bridge._checks import in_range, number
+from codec import DEFAULT_BITRATE_BPS, FRAME_BITS, airtime_s
+from sim_bridge._checks import in_range, non_negative, positive
 
 __all__ = [
     "DEFAULT_RANGE_M",
@@ -85,9 +85,7 @@ class ChannelConfig:
     delay_s: float = 0.0
 
     def __post_init__(self) -> None:
-        rate = number("bitrate_bps", self.bitrate_bps)
-        if not 0.0 < rate < math.inf:
-            raise ValueError(f"bitrate_bps must be in (0, inf), got {self.bitrate_bps!r}")
+        positive("bitrate_bps", self.bitrate_bps)
         in_range("range_m", self.range_m, 0.0, math.inf, "[0, inf]")
         in_range("ber", self.ber, 0.0, MAX_BER, f"[0, {MAX_BER}]")
         in_range("burst_rate", self.burst_rate, 0.0, 1.0, "[0, 1]")
@@ -99,13 +97,11 @@ class ChannelConfig:
                 f"burst_length_bits must be in [1, {MAX_BURST_LENGTH_BITS}], got {length!r}"
             )
         in_range("loss", self.loss, 0.0, 1.0, "[0, 1]")
-        in_range("delay_s", self.delay_s, 0.0, math.inf, "[0, inf)")
-        if self.delay_s == math.inf:
-            raise ValueError(f"delay_s must be in [0, inf), got {self.delay_s!r}")
+        non_negative("delay_s", self.delay_s)
 
     def airtime_s(self, n_bits: int = FRAME_BITS) -> float:
-        """Time on the air for ``n_bits`` at this bit rate (s); as :func:`codec.airtime_s`."""
-        return n_bits / self.bitrate_bps
+        """Time on the air for ``n_bits`` at this bit rate (s)."""
+        return airtime_s(self.bitrate_bps, n_bits)
 
 
 @dataclass(frozen=True, slots=True)
@@ -162,8 +158,6 @@ class MEChannel:
     def __init__(self, config: ChannelConfig | None = None, seed: int = 0) -> None:
         self._rng = random.Random(seed)
         self._stats = ChannelStats()
-        self._config = ChannelConfig()
-        self._inv_log_keep = 0.0
         self.set_config(config if config is not None else ChannelConfig())
 
     @property
@@ -185,16 +179,7 @@ class MEChannel:
     @property
     def stats(self) -> ChannelStats:
         """A snapshot of the counters (a copy: changing it does not change the channel's)."""
-        s = self._stats
-        return ChannelStats(
-            s.frames_in,
-            s.frames_delivered,
-            s.frames_lost_range,
-            s.frames_lost_random,
-            s.bits_sent,
-            s.bits_flipped,
-            s.bursts,
-        )
+        return replace(self._stats)
 
     @property
     def measured_ber(self) -> float:
@@ -252,7 +237,7 @@ class MEChannel:
         stats.frames_delivered += 1
         stats.bits_sent += n_bits
         stats.bits_flipped += flipped
-        arrive_t_s = t_s + n_bits / cfg.bitrate_bps + cfg.delay_s
+        arrive_t_s = t_s + cfg.airtime_s(n_bits) + cfg.delay_s
         return Delivery(bits ^ errors, n_bits, arrive_t_s, flipped, burst)
 
     def transmit_bytes(

@@ -12,6 +12,8 @@ import pathlib
 from collections.abc import Callable
 from typing import TextIO
 
+from codec import DEFAULT_BITRATE_BPS
+
 # Scenario names, for the help text (checked against sim_bridge.scenarios by the tests; the
 # CLI does not import the simulator until a simulator subcommand runs).
 SCENARIO_NAMES = ("wreck", "panel", "pod", "tank")
@@ -68,7 +70,10 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         "--range", type=_number(0, math.inf, "--range"), default=730.0, help="link range (m)"
     )
     p.add_argument(
-        "--bitrate", type=_number(1, 1e9, "--bitrate"), default=36000.0, help="bit rate (b/s)"
+        "--bitrate",
+        type=_number(1, 1e9, "--bitrate"),
+        default=float(DEFAULT_BITRATE_BPS),
+        help="bit rate (b/s)",
     )
     p.add_argument(
         "--current",
@@ -102,6 +107,8 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
 
 
 def cmd_scenario(args: argparse.Namespace, out: TextIO) -> int:
+    from dataclasses import asdict
+
     from sim_bridge.scenarios import SCENARIOS, format_result, run_scenario
 
     if args.name not in SCENARIOS:
@@ -117,9 +124,7 @@ def cmd_scenario(args: argparse.Namespace, out: TextIO) -> int:
             "scenario": args.name,
             "seed": args.seed,
             "metrics": result.metrics,
-            "depth_steps": [
-                {k: getattr(st, k) for k in st.__dataclass_fields__} for st in result.steps
-            ],
+            "depth_steps": [asdict(st) for st in result.steps],
             "plot": str(png) if png else None,
         }
         json.dump(doc, out, indent=1)

@@ -3,8 +3,8 @@
 * Depth: PD on the Bar30 reading (derivative on the measurement, low-pass filtered, so a
   depth step gives no derivative kick) plus a constant buoyancy trim, in force units. The
   paper's tank test: 0.5 <-> 1.0 m steps with ~5 s transients and +-3 cm steady state.
-* Heading: a yaw-rate reference ``r_d = k_psi * error + feed-forward``, limited to the
-  planner's 20 deg/s, tracked with the yaw damping as feed-forward plus a P term.
+* Heading: a yaw-rate reference ``r_d = k_psi * error``, limited to the planner's 20 deg/s,
+  tracked with the yaw damping as feed-forward plus a P term.
 * Surge: drag feed-forward plus a P term on the speed through the water.
 * Roll: PD towards zero (the vertical pair's differential).
 * Allocation: yaw before surge and heave before roll when a pair saturates.
@@ -84,7 +84,6 @@ class Autopilot:
         self,
         course_rad: float,
         speed_mps: float,
-        yaw_rate_ff_rps: float,
         heave_n: float,
         heading_rad: float,
         yaw_rate_rps: float,
@@ -96,7 +95,7 @@ class Autopilot:
         q, g = self.params, self.gains
         r_max = math.radians(g.yaw_rate_max_dps)
         err = wrap_rad(course_rad - heading_rad)
-        r_d = min(r_max, max(-r_max, g.heading_k_per_s * err + yaw_rate_ff_rps))
+        r_d = min(r_max, max(-r_max, g.heading_k_per_s * err))
         yaw_n = (q.nr + q.nrr * abs(r_d)) * r_d + g.yaw_rate_kp_nms * (r_d - yaw_rate_rps)
         # slow down while turning hard: full speed only when facing the course
         u_d = speed_mps * max(0.0, math.cos(err)) ** 2

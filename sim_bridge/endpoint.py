@@ -12,8 +12,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-#: Bytes of one packed frame on the wire: 100 bits MSB first plus 4 zero bits.
-FRAME_BYTES = 13
+from codec import FRAME_BYTES  # one packed frame: 100 bits MSB first plus 4 zero bits
+
+__all__ = ["FRAME_BYTES", "Pose", "VehicleEndpoint"]
 
 
 @dataclass(frozen=True, slots=True)

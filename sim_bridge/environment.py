@@ -22,7 +22,7 @@ import random
 from collections.abc import Iterable
 from dataclasses import dataclass
 
-from sim_bridge._checks import in_range, number
+from sim_bridge._checks import in_range, non_negative, number, positive
 
 __all__ = [
     "CALIBRATED_THRUST_N",
@@ -43,12 +43,6 @@ __all__ = [
     "paper_soc_pct",
     "thrust_power_w",
 ]
-
-
-def _check_positive(name: str, value: object) -> None:
-    x = number(name, value)
-    if not 0.0 < x < math.inf:
-        raise ValueError(f"{name} must be in (0, inf), got {value!r}")
 
 
 def _check_dt(dt_s: float) -> None:
@@ -101,7 +95,7 @@ class CurrentConfig:
             f"[0, {MAX_CURRENT_MPS:g}]",
         )
         in_range("direction_sigma_deg", self.direction_sigma_deg, 0.0, 180.0, "[0, 180]")
-        _check_positive("time_constant_s", self.time_constant_s)
+        positive("time_constant_s", self.time_constant_s)
         x = number("bound_sigmas", self.bound_sigmas)
         if not 0.0 < x <= 10.0:
             raise ValueError(f"bound_sigmas must be in (0, 10], got {self.bound_sigmas!r}")
@@ -125,7 +119,6 @@ class Current:
 
     def __init__(self, config: CurrentConfig | None = None, seed: int = 0) -> None:
         self._rng = random.Random(seed)
-        self._config = CurrentConfig()
         self._dv_mps = 0.0
         self._dpsi_rad = 0.0
         self._vn = 0.0
@@ -247,7 +240,7 @@ class DepthSensorConfig:
         in_range("noise_sigma_m", self.noise_sigma_m, 0.0, 1.0, "[0, 1]")
         in_range("quantum_m", self.quantum_m, 0.0, 1.0, "[0, 1]")
         if self.rate_hz is not None:
-            _check_positive("rate_hz", self.rate_hz)
+            positive("rate_hz", self.rate_hz)
 
 
 class DepthSensor:
@@ -264,13 +257,11 @@ class DepthSensor:
 
     def __init__(self, config: DepthSensorConfig | None = None, seed: int = 0) -> None:
         self._rng = random.Random(seed)
-        self._config = config if config is not None else DepthSensorConfig()
-        self._k: int | None = None
         self._reading_m = 0.0
         self._sample_t_s = math.nan
         #: How many samples have been taken.
         self.samples = 0
-        self.set_config(self._config)
+        self.set_config(config if config is not None else DepthSensorConfig())
 
     @property
     def config(self) -> DepthSensorConfig:
@@ -281,7 +272,7 @@ class DepthSensor:
         if not isinstance(config, DepthSensorConfig):
             raise TypeError(f"config must be a DepthSensorConfig, got {type(config).__name__}")
         self._config = config
-        self._k = None
+        self._k: int | None = None
 
     def read(self, true_depth_m: float, t_s: float) -> float:
         """The reading (m, positive down) at simulated time ``t_s`` for the true depth."""
@@ -391,10 +382,8 @@ class BatteryConfig:
     reserve_pct: float = 20.0
 
     def __post_init__(self) -> None:
-        _check_positive("hotel_power_w", self.hotel_power_w)
-        in_range("nominal_thrust_power_w", self.nominal_thrust_power_w, 0.0, math.inf, "[0, inf)")
-        if self.nominal_thrust_power_w == math.inf:
-            raise ValueError("nominal_thrust_power_w must be in [0, inf), got inf")
+        positive("hotel_power_w", self.hotel_power_w)
+        non_negative("nominal_thrust_power_w", self.nominal_thrust_power_w)
         in_range("reserve_pct", self.reserve_pct, 0.0, 100.0, "[0, 100]")
         in_range(
             "cutoff_pct",
@@ -423,14 +412,9 @@ class Battery:
     def __init__(self, config: BatteryConfig | None = None, start_h: float = 0.0) -> None:
         """``start_h``: hours already run at nominal load (a part-used battery; 0 = full)."""
         in_range("start_h", start_h, 0.0, math.inf, "[0, inf)")
-        self._config = BatteryConfig()
-        self._inv_nominal_w = 0.0
-        self._elapsed_h = 0.0
-        self._load_h = 0.0
-        self._soc_pct = 100.0
         self.set_config(config if config is not None else BatteryConfig())
         self._elapsed_h = self._load_h = float(start_h)
-        self._soc_pct = max(0.0, paper_soc_pct(start_h))
+        self._soc_pct = paper_soc_pct(start_h)
 
     @property
     def config(self) -> BatteryConfig:

@@ -19,9 +19,9 @@ transient.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from enum import StrEnum
 
+from codec._record import Record, init
 from planner import Plan
 
 
@@ -36,36 +36,54 @@ class Mode(StrEnum):
     BATTERY_EMPTY = "battery_empty"
 
 
-@dataclass(frozen=True, slots=True)
-class GuidanceConfig:
-    lookahead_m: float = 1.5
-    capture_m: float = 1.0  # start approaching the hold point beyond this
-    settle_m: float = 0.3  # stop approaching inside this
-    approach_mps: float = 0.2
-    approach_gain_per_s: float = 0.3
-    surfaced_depth_m: float = 0.05
+class GuidanceConfig(Record):
+    """Guidance settings. A :class:`codec._record.Record`, not a dataclass: this module is on
+    the onboard path, which keeps :mod:`dataclasses` (about 1.2 MB resident) out."""
+
+    __slots__ = (
+        "approach_gain_per_s",
+        "approach_mps",
+        "capture_m",
+        "lookahead_m",
+        "settle_m",
+        "surfaced_depth_m",
+    )
+    lookahead_m: float
+    capture_m: float  # start approaching the hold point beyond this
+    settle_m: float  # stop approaching inside this
+    approach_mps: float
+    approach_gain_per_s: float
+    surfaced_depth_m: float
+
+    def __init__(
+        self,
+        lookahead_m: float = 1.5,
+        capture_m: float = 1.0,
+        settle_m: float = 0.3,
+        approach_mps: float = 0.2,
+        approach_gain_per_s: float = 0.3,
+        surfaced_depth_m: float = 0.05,
+    ) -> None:
+        init(self, "lookahead_m", lookahead_m)
+        init(self, "capture_m", capture_m)
+        init(self, "settle_m", settle_m)
+        init(self, "approach_mps", approach_mps)
+        init(self, "approach_gain_per_s", approach_gain_per_s)
+        init(self, "surfaced_depth_m", surfaced_depth_m)
 
 
 class Reference:
     """What guidance asks of the autopilot for one tick."""
 
-    __slots__ = ("course_rad", "depth_m", "segment", "speed_mps", "vertical", "yaw_rate_ff_rps")
+    __slots__ = ("course_rad", "depth_m", "speed_mps", "vertical")
 
     def __init__(
-        self,
-        course_rad: float,
-        speed_mps: float,
-        depth_m: float,
-        vertical: bool = True,
-        segment: int | None = None,
-        yaw_rate_ff_rps: float = 0.0,
+        self, course_rad: float, speed_mps: float, depth_m: float, vertical: bool = True
     ) -> None:
         self.course_rad = course_rad
         self.speed_mps = speed_mps
         self.depth_m = depth_m
         self.vertical = vertical  # False: vertical thrusters off (afloat at the surface)
-        self.segment = segment
-        self.yaw_rate_ff_rps = yaw_rate_ff_rps
 
 
 class Guidance:
@@ -105,9 +123,7 @@ class Guidance:
         else:
             self.mode = Mode.RUNNING
 
-    def update(
-        self, x_m: float, y_m: float, z_m: float, heading_rad: float, t_s: float
-    ) -> Reference:
+    def update(self, x_m: float, y_m: float, z_m: float, t_s: float) -> Reference:
         """References for the vehicle at ``(x, y, z)`` (NED m) and ``t_s`` (s)."""
         plan = self.plan
         if self.mode is Mode.SURFACING or self.mode is Mode.SURFACED:
@@ -116,22 +132,22 @@ class Guidance:
                 self.mode = Mode.SURFACED
             return Reference(hdg, 0.0, 0.0, self.mode is Mode.SURFACING)
         if plan is None or self.mode is Mode.HOLDING or self.mode is Mode.IDLE:
-            return self._station(x_m, y_m, heading_rad)
+            return self._station(x_m, y_m)
         if plan.pattern == "hover":
             if t_s - self._started_s >= plan.path.duration_s:
                 self.mode = Mode.HOLDING
-            return self._station(x_m, y_m, heading_rad)
-        return self._follow(plan, x_m, y_m, z_m)
+            return self._station(x_m, y_m)
+        return self._follow(plan, x_m, y_m)
 
     # --- path following ------------------------------------------------------------------
 
-    def _follow(self, plan: Plan, x: float, y: float, z: float) -> Reference:
+    def _follow(self, plan: Plan, x: float, y: float) -> Reference:
         path = plan.path
         xs, ys, zs = path.xs, path.ys, path.zs
         n = len(xs)
         if n == 1:
             self._finish(plan)
-            return self._station(x, y, 0.0)
+            return self._station(x, y)
         look = self.config.lookahead_m
         loop = path.loop_start
         # window search: segments from the active one up to `look` metres of path beyond it
@@ -156,7 +172,7 @@ class Guidance:
         self.cross_track_m = best_d
         if loop is None and i == n - 2 and f >= 1.0:
             self._finish(plan)
-            return self._station(x, y, 0.0)
+            return self._station(x, y)
         # the lookahead point
         px = xs[i] + f * (xs[i + 1] - xs[i])
         py = ys[i] + f * (ys[i + 1] - ys[i])
@@ -180,23 +196,22 @@ class Guidance:
             course = math.radians(path.course_deg(i))
         else:
             course = math.atan2(cy - y, cx - x)
-        return Reference(course, path.speeds[i], depth, True, i)
+        return Reference(course, path.speeds[i], depth)
 
     def _finish(self, plan: Plan) -> None:
         path = plan.path
-        heading = (
-            path.hold_heading_deg
-            if path.hold_heading_deg is not None
-            else path.course_deg(len(path) - 2)
-            if len(path) > 1
-            else plan.angle_deg
-        )
+        if path.hold_heading_deg is not None:
+            heading = path.hold_heading_deg
+        elif len(path) > 1:
+            heading = path.course_deg(len(path) - 2)
+        else:
+            heading = plan.angle_deg
         self.hold_here(path.xs[-1], path.ys[-1], path.zs[-1], heading)
         self.mode = Mode.HOLDING
 
     # --- station keeping -----------------------------------------------------------------
 
-    def _station(self, x: float, y: float, heading_rad: float) -> Reference:
+    def _station(self, x: float, y: float) -> Reference:
         cfg = self.config
         hx, hy, hz, hdg = self.hold
         dist = math.hypot(hx - x, hy - y)

@@ -28,8 +28,10 @@ software-capped thrust (sim.md 2.4). Set ``thrust_max_n`` to model the nameplate
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, fields, replace
+
+from planner._geometry import heading_deg
 
 G_MPS2 = 9.81
 #: T200 reverse/forward thrust at 16 V (40.2 N / 51.5 N).
@@ -102,6 +104,8 @@ class Vehicle:
 
     __slots__ = (
         "_c",
+        "_lag",
+        "_lag_dt_s",
         "current_e",
         "current_n",
         "p",
@@ -159,6 +163,8 @@ class Vehicle:
         self.t1 = self.t2 = self.t3 = self.t4 = 0.0
         self.tc = (0.0, 0.0, 0.0, 0.0)
         self.current_n = self.current_e = 0.0
+        # the thruster lag's step factor, for the step it was computed for
+        self._lag_dt_s = self._lag = 0.0
 
     # --- commands ------------------------------------------------------------------------
 
@@ -181,7 +187,7 @@ class Vehicle:
 
     @property
     def heading_deg(self) -> float:
-        return math.degrees(self.psi) % 360.0
+        return heading_deg(self.psi)
 
     @property
     def roll_deg(self) -> float:
@@ -208,7 +214,10 @@ class Vehicle:
 
     def step(self, dt_s: float) -> None:
         """Advance by ``dt_s``: thruster lag (exact), then RK4 on the rigid body."""
-        a = 1.0 - math.exp(-dt_s / self.params.tau_thrust_s)
+        if dt_s != self._lag_dt_s:
+            self._lag_dt_s = dt_s
+            self._lag = 1.0 - math.exp(-dt_s / self.params.tau_thrust_s)
+        a = self._lag
         c1, c2, c3, c4 = self.tc
         self.t1 += (c1 - self.t1) * a
         self.t2 += (c2 - self.t2) * a
@@ -226,7 +235,11 @@ class Vehicle:
         k2 = f(_axpy(s0, k1, h / 2), force_x, force_z, force_k, force_n)
         k3 = f(_axpy(s0, k2, h / 2), force_x, force_z, force_k, force_n)
         k4 = f(_axpy(s0, k3, h), force_x, force_z, force_k, force_n)
-        s = [s0[i] + h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]) for i in range(10)]
+        h6 = h / 6
+        s = [
+            x0 + h6 * (b1 + 2 * b2 + 2 * b3 + b4)
+            for x0, b1, b2, b3, b4 in zip(s0, k1, k2, k3, k4, strict=True)
+        ]
         self.u, self.v, self.w, self.p, self.r, self.x, self.y, self.z, self.phi, self.psi = s
         if self.z < 0.0:  # afloat at the surface: it cannot rise out of the water
             self.z = 0.0
@@ -234,7 +247,7 @@ class Vehicle:
 
     def _deriv(
         self,
-        s: tuple[float, ...] | list[float],
+        s: Sequence[float],
         force_x: float,
         force_z: float,
         force_k: float,
@@ -258,8 +271,9 @@ class Vehicle:
         )
 
 
-def _axpy(s: tuple[float, ...], k: tuple[float, ...], h: float) -> tuple[float, ...]:
-    return tuple(a + h * b for a, b in zip(s, k, strict=True))
+def _axpy(s: Sequence[float], k: Sequence[float], h: float) -> list[float]:
+    """``s + h k``, element by element (a list comprehension: this runs 3 times a step)."""
+    return [a + h * b for a, b in zip(s, k, strict=True)]
 
 
 # --- the paper's full-thrust tests ---------------------------------------------------------
@@ -300,17 +314,23 @@ def calibrate(
     q = params or VehicleParams()
 
     def solve(
-        lo: float, hi: float, rate: Callable[[VehicleParams], float], target: float, name: str
+        name: str,
+        lo: float,
+        hi: float,
+        rate: Callable[[VehicleParams], float],
+        target: float,
+        rising: bool,
     ) -> float:
+        """The value of ``name`` in [lo, hi] at which ``rate`` meets ``target``; ``rising``:
+        the rate grows with the parameter."""
         for _ in range(40):
             mid = (lo + hi) / 2
-            got = rate(replace(q, **{name: mid}))
-            # heave rate grows with thrust; yaw rate falls with damping
-            if (got < target) == (name == "thrust_max_n"):
+            if (rate(replace(q, **{name: mid})) < target) == rising:
                 lo = mid
             else:
                 hi = mid
         return (lo + hi) / 2
 
-    q = replace(q, thrust_max_n=solve(0.1, 5.0, heave_test, heave_mps, "thrust_max_n"))
-    return replace(q, nrr=solve(0.0, 5.0, yaw_test, yaw_dps, "nrr"))
+    # heave rate grows with thrust; yaw rate falls with damping
+    q = replace(q, thrust_max_n=solve("thrust_max_n", 0.1, 5.0, heave_test, heave_mps, True))
+    return replace(q, nrr=solve("nrr", 0.0, 5.0, yaw_test, yaw_dps, False))

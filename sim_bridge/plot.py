@@ -37,7 +37,9 @@ def plot_scenario(result: ScenarioResult, path: str | pathlib.Path) -> pathlib.P
         if plan is None:
             continue
         label = f"plan {k + 1}: {plan.pattern}"
-        ax_map.plot(plan.path.ys, plan.path.xs, "--", lw=1, color=colours[k % 5], label=label)
+        ax_map.plot(
+            plan.path.ys, plan.path.xs, "--", lw=1, color=colours[k % len(colours)], label=label
+        )
     before = [s for s in track if t_retask is None or s.t_s <= t_retask]
     after = [s for s in track if t_retask is not None and s.t_s > t_retask]
     ax_map.plot([s.y_m for s in before], [s.x_m for s in before], color="k", lw=1.5, label="track")

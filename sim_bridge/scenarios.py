@@ -28,9 +28,8 @@ from __future__ import annotations
 
 import math
 import statistics
-import time
 import tracemalloc
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from codec import encode_frame
@@ -169,15 +168,7 @@ def run_scenario(name: str, seed: int = 0, config: SimConfig | None = None) -> S
     if name not in SCENARIOS:
         raise KeyError(f"unknown scenario {name!r}; choose from {', '.join(SCENARIOS)}")
     sc = SCENARIOS[name]
-    base = config or SimConfig()
-    cfg = SimConfig(
-        **{
-            **{f: getattr(base, f) for f in base.__dataclass_fields__},
-            "seed": seed,
-            "start_z_m": sc.start_z_m,
-            "record_hz": RECORD_HZ,
-        }
-    )
+    cfg = replace(config or SimConfig(), seed=seed, start_z_m=sc.start_z_m, record_hz=RECORD_HZ)
     sim = Simulation(cfg)
     plans: list[Any] = []
     heap_peak_kib: float | None = None
@@ -353,10 +344,3 @@ def _fmt(v: object) -> str:
     if isinstance(v, float):
         return f"{v:.4g}"
     return str(v)
-
-
-def timed_run(name: str, seed: int = 0) -> tuple[ScenarioResult, float]:
-    """Run a scenario and return it with its wall time (s)."""
-    t = time.perf_counter()
-    result = run_scenario(name, seed)
-    return result, time.perf_counter() - t

@@ -52,9 +52,9 @@ from sim_bridge.rosbridge import (
     ClientSession,
     JsonObject,
     Outcome,
+    json_string_msg,
     pose_stamped_msg,
     publish_message,
-    string_msg,
     to_json,
     uint8_multiarray_msg,
 )
@@ -376,7 +376,7 @@ class BridgeServer:
         missions = self._guard("endpoint.take_missions", self._endpoint.take_missions)
         for mission in missions or ():
             try:
-                text = to_json(publish_message(MISSION_TOPIC, string_msg(to_json(mission))))
+                text = to_json(publish_message(MISSION_TOPIC, json_string_msg(mission)))
             except (TypeError, ValueError):
                 logger.exception("mission acknowledgement not serializable, dropped: %r", mission)
                 continue
@@ -384,22 +384,24 @@ class BridgeServer:
                 client.enqueue(text)
 
     def _publish_pose(self) -> None:
-        if not self._subscribers(POSE_TOPIC):
-            return
-        pose = self._guard("endpoint.pose", self._endpoint.pose)
-        if pose is not None:
-            text = to_json(publish_message(POSE_TOPIC, pose_stamped_msg(pose)))
-            for client in self._subscribers(POSE_TOPIC):
-                client.offer_latest(POSE_TOPIC, text)
+        self._stream(POSE_TOPIC, "endpoint.pose", self._endpoint.pose, pose_stamped_msg)
 
     def _publish_status(self) -> None:
-        if not self._subscribers(STATUS_TOPIC):
+        self._stream(STATUS_TOPIC, "endpoint.status", self._endpoint.status, json_string_msg)
+
+    def _stream(
+        self, topic: str, what: str, read: Callable[[], Any], to_msg: Callable[[Any], JsonObject]
+    ) -> None:
+        """Offer the newest value of a streamed topic to its subscribers (latest wins); the
+        endpoint is only read when someone listens."""
+        subscribers = self._subscribers(topic)
+        if not subscribers:
             return
-        status = self._guard("endpoint.status", self._endpoint.status)
-        if status is not None:
-            text = to_json(publish_message(STATUS_TOPIC, string_msg(to_json(status))))
-            for client in self._subscribers(STATUS_TOPIC):
-                client.offer_latest(STATUS_TOPIC, text)
+        value = self._guard(what, read)
+        if value is not None:
+            text = to_json(publish_message(topic, to_msg(value)))
+            for client in subscribers:
+                client.offer_latest(topic, text)
 
     def _broadcast(self, topic: str, build: Callable[[], JsonObject]) -> None:
         subscribers = self._subscribers(topic)

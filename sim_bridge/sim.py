@@ -19,11 +19,12 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+from codec import FRAME_BYTES
 from planner import Limits, VehicleState
 from sim_bridge.agent import OnboardAgent
 from sim_bridge.channel import ChannelConfig, Delivery, MEChannel
 from sim_bridge.control import Autopilot, AutopilotGains
-from sim_bridge.endpoint import FRAME_BYTES, Pose
+from sim_bridge.endpoint import Pose
 from sim_bridge.environment import (
     Battery,
     BatteryConfig,
@@ -79,42 +80,20 @@ class SimConfig:
             raise ValueError(f"start_z_m is a depth and must be >= 0, got {self.start_z_m}")
 
 
+@dataclass(slots=True, eq=False)
 class Sample:
-    """One recorded instant (for plots and metrics)."""
+    """One recorded instant (for plots and metrics). Compared by identity: a track holds
+    thousands, and ``in`` over a track stays a pointer comparison."""
 
-    __slots__ = (
-        "cross_track_m",
-        "depth_ref_m",
-        "heading_deg",
-        "mode",
-        "segment",
-        "t_s",
-        "x_m",
-        "y_m",
-        "z_m",
-    )
-
-    def __init__(
-        self,
-        t_s: float,
-        x_m: float,
-        y_m: float,
-        z_m: float,
-        heading_deg: float,
-        depth_ref_m: float,
-        cross_track_m: float,
-        mode: str,
-        segment: int,
-    ) -> None:
-        self.t_s = t_s
-        self.x_m = x_m
-        self.y_m = y_m
-        self.z_m = z_m
-        self.heading_deg = heading_deg
-        self.depth_ref_m = depth_ref_m
-        self.cross_track_m = cross_track_m
-        self.mode = mode
-        self.segment = segment  # the active plan's segment guidance tracks
+    t_s: float
+    x_m: float
+    y_m: float
+    z_m: float
+    depth_ref_m: float
+    cross_track_m: float
+    mode: str
+    #: The active plan's segment guidance tracks.
+    segment: int
 
 
 class Simulation:
@@ -212,6 +191,7 @@ class Simulation:
         v = self.vehicle
         active = self.agent.active
         cfg = self.channel.config
+        distance_m = self.distance_m
         return {
             "t_s": self.t_s,
             "x_m": v.x,
@@ -228,9 +208,9 @@ class Simulation:
                 "accepted": self.agent.accepted,
                 "rejected": self.agent.rejected,
                 "last_frame_t_s": self.last_frame_t_s,
-                "distance_m": self.distance_m,
+                "distance_m": distance_m,
                 "range_m": cfg.range_m,
-                "in_range": self.distance_m <= cfg.range_m,
+                "in_range": distance_m <= cfg.range_m,
                 "ber": cfg.ber,
             },
         }
@@ -266,7 +246,6 @@ class Simulation:
                     v.x,
                     v.y,
                     v.z,
-                    v.heading_deg,
                     self.ref.depth_m,
                     self.guidance.cross_track_m,
                     self.mode.value,
@@ -299,9 +278,7 @@ class Simulation:
     def _control(self, dt: float) -> None:
         v = self.vehicle
         self.depth_m = self.sensor.read(v.z, self.t_s)
-        ref = self._deliver(self.t_s) or self.guidance.update(
-            v.x, v.y, self.depth_m, v.psi, self.t_s
-        )
+        ref = self._deliver(self.t_s) or self.guidance.update(v.x, v.y, self.depth_m, self.t_s)
         self.ref = ref
         heave = self.autopilot.depth_force(ref.depth_m, self.depth_m, dt) if ref.vertical else 0.0
         self._heave_n = heave
@@ -315,7 +292,6 @@ class Simulation:
         t1, t2, t3, t4 = self.autopilot.thrusts(
             ref.course_rad,
             ref.speed_mps,
-            ref.yaw_rate_ff_rps,
             heave_n,
             v.psi,
             v.r,

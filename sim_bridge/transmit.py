@@ -48,7 +48,6 @@ import abc
 import asyncio
 import contextlib
 import errno
-import json
 import logging
 import socket
 import threading
@@ -81,17 +80,21 @@ from codec import (
     airtime_s,
     parse_frame,
 )
+from sim_bridge.rosbridge import (
+    FRAME_TOPIC,
+    MISSION_TOPIC,
+    BinaryMessage,
+    BridgeError,
+    ClientProtocol,
+    InvalidData,
+    decode_json_string,
+    decode_server_message,
+)
 
 logger = logging.getLogger(__name__)
 logger.addHandler(logging.NullHandler())  # a library: the application configures output
 
 DEFAULT_ROSBRIDGE_URL = "ws://127.0.0.1:9090"
-#: Topic and type of the frames the station publishes.
-FRAME_TOPIC = "/nemesys/frame"
-FRAME_TYPE = "std_msgs/UInt8MultiArray"
-#: Topic and type of the vehicle's acknowledgements (``data`` is a JSON object).
-MISSION_TOPIC = "/nemesys/mission"
-MISSION_TYPE = "std_msgs/String"
 
 #: How long ``send`` waits for an acknowledgement by default (s).
 DEFAULT_ACK_TIMEOUT_S = 5.0
@@ -425,110 +428,57 @@ class _AckMatcher:
         return until - time.monotonic()
 
 
-class _RosbridgeProtocol:
-    """The rosbridge v2 JSON messages of the transmitter (sans-IO); ids as roslibpy makes them."""
+def frame_msg(frame: Frame) -> dict[str, Any]:
+    """The ``std_msgs/UInt8MultiArray`` a station publishes for ``frame``: its 13 bytes as
+    ``{"data": [13 ints]}`` (no layout, as roslibpy users write it)."""
+    return {"data": list(frame.to_bytes())}
 
-    def __init__(self, frame_topic: str, mission_topic: str) -> None:
-        self.frame_topic = frame_topic
-        self.mission_topic = mission_topic
-        self._count = 0
-        # One advertisement and one subscription per transmitter, the same on every connection.
-        self._advertise_id = self._id("advertise", frame_topic)
-        self._subscribe_id = self._id("subscribe", mission_topic)
 
-    def _id(self, op: str, topic: str) -> str:
-        self._count += 1
-        return f"{op}:{topic}:{self._count}"
-
-    def open_messages(self) -> tuple[str, str]:
-        """Advertise the frame topic, subscribe to the mission topic."""
-        advertise = {
-            "op": "advertise",
-            "id": self._advertise_id,
-            "type": FRAME_TYPE,
-            "topic": self.frame_topic,
-            "latch": False,
-            "queue_size": 100,
-        }
-        subscribe = {
-            "op": "subscribe",
-            "id": self._subscribe_id,
-            "type": MISSION_TYPE,
-            "topic": self.mission_topic,
-            "compression": "none",
-            "throttle_rate": 0,
-            "queue_length": 0,
-        }
-        return json.dumps(advertise), json.dumps(subscribe)
-
-    def close_messages(self) -> tuple[str, str]:
-        unsubscribe = {"op": "unsubscribe", "id": self._subscribe_id, "topic": self.mission_topic}
-        unadvertise = {"op": "unadvertise", "id": self._advertise_id, "topic": self.frame_topic}
-        return json.dumps(unsubscribe), json.dumps(unadvertise)
-
-    def publish_message(self, frame: Frame) -> str:
-        return json.dumps(
-            {
-                "op": "publish",
-                "id": self._id("publish", self.frame_topic),
-                "topic": self.frame_topic,
-                "msg": {"data": list(frame.to_bytes())},
-                "latch": False,
-            }
-        )
-
-    def mission_of(self, data: str | bytes) -> dict[str, Any] | None:
-        """The acknowledgement in one received message, or None (logged) if it holds none."""
-        if isinstance(data, bytes):
-            logger.debug("ignoring a binary message of %d bytes", len(data))
-            return None
-        try:
-            message = json.loads(data)
-        except ValueError:
-            logger.warning("ignoring a message that is not JSON: %.80r", data)
-            return None
-        if not isinstance(message, dict):
-            logger.warning("ignoring a message that is not a JSON object: %.80r", data)
-            return None
-        op = message.get("op")
-        if op == "status":
-            level = (
-                logging.WARNING if message.get("level") in ("error", "warning") else logging.INFO
-            )
-            logger.log(level, "rosbridge status: %s", message.get("msg", message))
-            return None
-        if op != "publish" or message.get("topic") != self.mission_topic:
-            logger.debug("ignoring %s on %s", op, message.get("topic"))
-            return None
-        body = message.get("msg")
-        payload = body.get("data") if isinstance(body, dict) else None
-        if isinstance(payload, str):
-            try:
-                payload = json.loads(payload)
-            except ValueError:
-                logger.warning("ignoring a mission message whose data is not JSON: %.80r", payload)
-                return None
-        if not isinstance(payload, dict):
-            logger.warning("ignoring a mission message without a JSON object: %.80r", data)
-            return None
-        return payload
+def _mission_of(data: str | bytes) -> dict[str, Any] | None:
+    """The acknowledgement in one received message, or None (logged) if it holds none."""
+    try:
+        message = decode_server_message(data)
+    except BinaryMessage as error:
+        logger.debug("ignoring %s", error.reason)
+        return None
+    except BridgeError as error:
+        logger.warning("ignoring %s", error.reason)
+        return None
+    op, topic = message.get("op"), message.get("topic")
+    if op == "status":
+        level = logging.WARNING if message.get("level") in ("error", "warning") else logging.INFO
+        logger.log(level, "rosbridge status: %s", message.get("msg", message))
+        return None
+    if op != "publish" or topic != MISSION_TOPIC:
+        logger.debug("ignoring %s on %s", op, topic)
+        return None
+    try:
+        return decode_json_string(message.get("msg"))
+    except InvalidData as error:
+        logger.warning("ignoring a mission message: %s", error.reason)
+        return None
 
 
 class _AsyncLink:
     """An asyncio connection with a reader task that queues acknowledgements (None: closed)."""
 
-    def __init__(self, conn: AsyncConnection, protocol: _RosbridgeProtocol) -> None:
+    def __init__(self, conn: AsyncConnection) -> None:
         self.conn = conn
         self.loop = asyncio.get_running_loop()
         self.acks: asyncio.Queue[dict[str, Any] | None] = asyncio.Queue()
         self.closed = False
-        self._protocol = protocol
         self.reader = asyncio.create_task(self._read())
+
+    def abort_threadsafe(self) -> None:
+        """Cancel the reader and abort the connection from outside its event loop."""
+        if not self.loop.is_closed():
+            self.loop.call_soon_threadsafe(self.reader.cancel)
+            self.loop.call_soon_threadsafe(self.conn.transport.abort)
 
     async def _read(self) -> None:
         try:
             async for data in self.conn:
-                ack = self._protocol.mission_of(data)
+                ack = _mission_of(data)
                 if ack is not None:
                     self.acks.put_nowait(ack)
         except ConnectionClosed:
@@ -564,8 +514,6 @@ class RosbridgeTransmitter(Transmitter):
         self,
         url: str = DEFAULT_ROSBRIDGE_URL,
         *,
-        frame_topic: str = FRAME_TOPIC,
-        mission_topic: str = MISSION_TOPIC,
         open_timeout_s: float = DEFAULT_OPEN_TIMEOUT_S,
         settle_s: float = ACK_SETTLE_S,
     ) -> None:
@@ -573,7 +521,7 @@ class RosbridgeTransmitter(Transmitter):
         self.url = url
         self.open_timeout_s = open_timeout_s
         self.settle_s = settle_s
-        self._protocol = _RosbridgeProtocol(frame_topic, mission_topic)
+        self._protocol = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[MISSION_TOPIC])
         self._conn: SyncConnection | None = None
         self._lock = threading.Lock()
         self._link: _AsyncLink | None = None
@@ -606,7 +554,7 @@ class RosbridgeTransmitter(Transmitter):
                 data = conn.recv(timeout=0)
             except TimeoutError:
                 return
-            ack = self._protocol.mission_of(data)
+            ack = _mission_of(data)
             if ack is not None:
                 logger.debug("discarding earlier acknowledgement seq=%s", ack.get("seq"))
 
@@ -626,17 +574,18 @@ class RosbridgeTransmitter(Transmitter):
     def _publish(self, frame: Frame) -> SyncConnection:
         """Publish on a ready connection; if a kept connection turns out closed (the frame was
         not written), publish once more on a new one."""
+        message = self._protocol.publish(FRAME_TOPIC, frame_msg(frame))
         reused = self._conn is not None
         conn = self._ready()
         try:
-            conn.send(self._protocol.publish_message(frame))
+            conn.send(message)
         except ConnectionClosed:
             if not reused:
                 raise
             logger.info("connection to %s was closed; reconnecting", self.url)
             self._drop()
             conn = self._ready()
-            conn.send(self._protocol.publish_message(frame))
+            conn.send(message)
         return conn
 
     def _drop(self) -> None:
@@ -661,9 +610,7 @@ class RosbridgeTransmitter(Transmitter):
             return self._failed(failure_reason(exc), f"{self.url}: {_message(exc)}")
         sent_t = time.time()
         logger.info("published frame %s to %s", frame.hex, self.url)
-        if wait_ack_s <= 0:
-            return self._published(sent_t)
-        matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)
+        matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)  # expired at once if not waiting
         closed = False
         try:
             while (remaining_s := matcher.remaining_s()) > 0:
@@ -671,7 +618,7 @@ class RosbridgeTransmitter(Transmitter):
                     data = conn.recv(timeout=remaining_s)
                 except TimeoutError:
                     break
-                ack = self._protocol.mission_of(data)
+                ack = _mission_of(data)
                 if ack is not None and matcher.offer(ack):
                     break
         except (OSError, WebSocketException) as exc:
@@ -680,18 +627,17 @@ class RosbridgeTransmitter(Transmitter):
             closed = True
         return self._outcome(matcher, sent_t, wait_ack_s, closed)
 
-    def _published(self, sent_t: float) -> SendResult:
-        return SendResult(
-            ok=True,
-            transport=self.transport,
-            target=self.target,
-            sent_t=sent_t,
-            detail="published; not waiting for an acknowledgement",
-        )
-
     def _outcome(
         self, matcher: _AckMatcher, sent_t: float, wait_ack_s: float, closed: bool
     ) -> SendResult:
+        if wait_ack_s <= 0:
+            return SendResult(
+                ok=True,
+                transport=self.transport,
+                target=self.target,
+                sent_t=sent_t,
+                detail="published; not waiting for an acknowledgement",
+            )
         if matcher.ack is None:
             if closed:
                 return self._failed(
@@ -732,9 +678,8 @@ class RosbridgeTransmitter(Transmitter):
                     logger.debug("closing %s: %s", self.url, exc)
                 conn.close()
         link, self._link = self._link, None
-        if link is not None and not link.loop.is_closed():
-            link.loop.call_soon_threadsafe(link.reader.cancel)
-            link.loop.call_soon_threadsafe(link.conn.transport.abort)
+        if link is not None:
+            link.abort_threadsafe()
 
     # async --------------------------------------------------------------------------------
 
@@ -763,22 +708,23 @@ class RosbridgeTransmitter(Transmitter):
             await conn.close()
             raise
         logger.info("connected to %s", self.url)
-        self._link = _AsyncLink(conn, self._protocol)
+        self._link = _AsyncLink(conn)
         return self._link
 
     async def _async_publish(self, frame: Frame) -> _AsyncLink:
         """As :meth:`_publish`, on the async connection."""
+        message = self._protocol.publish(FRAME_TOPIC, frame_msg(frame))
         reused = self._link is not None
         link = await self._async_ready()
         try:
-            await link.conn.send(self._protocol.publish_message(frame))
+            await link.conn.send(message)
         except ConnectionClosed:
             if not reused:
                 raise
             logger.info("connection to %s was closed; reconnecting", self.url)
             await self._async_drop()
             link = await self._async_ready()
-            await link.conn.send(self._protocol.publish_message(frame))
+            await link.conn.send(message)
         return link
 
     async def _async_drop(self, *, polite: bool = False) -> None:
@@ -786,9 +732,7 @@ class RosbridgeTransmitter(Transmitter):
         if link is None:
             return
         if link.loop is not asyncio.get_running_loop():  # opened under another event loop
-            if not link.loop.is_closed():
-                link.loop.call_soon_threadsafe(link.reader.cancel)
-                link.loop.call_soon_threadsafe(link.conn.transport.abort)
+            link.abort_threadsafe()
             return
         if polite and not link.closed:
             try:
@@ -821,9 +765,7 @@ class RosbridgeTransmitter(Transmitter):
             return self._failed(failure_reason(exc), f"{self.url}: {_message(exc)}")
         sent_t = time.time()
         logger.info("published frame %s to %s", frame.hex, self.url)
-        if wait_ack_s <= 0:
-            return self._published(sent_t)
-        matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)
+        matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)  # expired at once if not waiting
         closed = False
         while (remaining_s := matcher.remaining_s()) > 0:
             try:

@@ -10,6 +10,7 @@ from fastapi.responses import JSONResponse
 from backend.api.deps import ConsoleDep, token_from, token_ok
 from backend.api.models import CommandIn, DecodeIn
 from codec import DecodeError, decode_frame, describe_dictionary
+from sim_bridge.agent import command_json
 
 router = APIRouter(prefix="/api", tags=["authoring"])
 
@@ -67,14 +68,9 @@ def decode(body: DecodeIn) -> dict[str, Any]:
         raise HTTPException(
             422, {"reason": err.reason.value, "message": str(err), "field": err.field}
         ) from None
-    cmd = dec.command
     return {
         "ok": True,
-        "command": {
-            "pattern": cmd.pattern.name,
-            "pattern_id": cmd.pattern.id,
-            "params": cmd.params,
-        },
+        "command": command_json(dec.command),
         "corrected": dec.corrected,
         "sync_errors": dec.sync_errors,
     }

@@ -12,13 +12,13 @@ from pydantic import BaseModel, Field
 
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.models import SendIn
-from backend.commands import NotRetryable
+from backend.commands import CommandManager, NotRetryable
 from backend.store import STATES, csv_rows
 
 router = APIRouter(prefix="/api", tags=["commands"])
 
 
-def _manager(console: ConsoleDep) -> Any:
+def _manager(console: ConsoleDep) -> CommandManager:
     if console.commands is None:
         raise HTTPException(503, "the console is starting")
     return console.commands
@@ -28,7 +28,7 @@ def _manager(console: ConsoleDep) -> Any:
 async def send(body: SendIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Queue a command for transmission (logged first). 422: limits that cannot be
     overridden or bad values; 409: overridable limits without ``override``; 429: rate limit."""
-    doc = console.preview(body.pattern, dict(body.params), show=False)
+    enc, doc = console.prepare(body.pattern, dict(body.params))
     hard = [v for v in doc["violations"] if not v["overridable"]]
     soft = [v for v in doc["violations"] if v["overridable"]]
     if hard:
@@ -41,28 +41,24 @@ async def send(body: SendIn, console: ConsoleDep, _op: OperatorDep) -> dict[str,
                 "violations": soft,
             },
         )
-    enc, _ = console.encode(body.pattern, dict(body.params))
-    record: dict[str, Any] = await _manager(console).submit(enc, doc["requested"])
-    return record
+    return await _manager(console).submit(enc)
 
 
 @router.post("/surface", status_code=status.HTTP_202_ACCEPTED)
 async def surface(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Abort: send surface now and again every few seconds until the vehicle acknowledges."""
-    record: dict[str, Any] = await _manager(console).surface()
-    return record
+    return await _manager(console).surface()
 
 
 @router.post("/commands/{command_id}/retry", status_code=status.HTTP_202_ACCEPTED)
 async def retry(command_id: int, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Send a timed-out, failed or rejected command's frame again."""
     try:
-        record: dict[str, Any] = _manager(console).retry(command_id)
+        return _manager(console).retry(command_id)
     except KeyError:
         raise HTTPException(404, f"no command {command_id}") from None
     except NotRetryable as err:
         raise HTTPException(409, str(err)) from None
-    return record
 
 
 StateQ = Annotated[str | None, Query(pattern="^(" + "|".join(STATES) + ")$")]

@@ -84,14 +84,13 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
             pattern, params = msg.get("pattern"), msg.get("params", {})
             if not isinstance(pattern, str) or not isinstance(params, dict):
                 return {"type": "error", "detail": "send needs a pattern (str) and params (object)"}
-            doc = console.preview(pattern, params, show=False)
+            enc, doc = console.prepare(pattern, params)
             if doc["violations"]:
                 return {
                     "type": "error",
                     "detail": "; ".join(v["message"] for v in doc["violations"]),
                 }
-            enc, _ = console.encode(pattern, params)
-            record = await console.commands.submit(enc, doc["requested"])
+            record = await console.commands.submit(enc)
     except (CodecError, PlanError) as err:
         return {"type": "error", "detail": str(err), "field": getattr(err, "field", None)}
     except RateLimited as err:

@@ -20,11 +20,23 @@ from backend.scripts import (
     onboard_csv,
     preview,
 )
+from backend.store import FINAL_STATES
+from codec import encode_frame
 
 router = APIRouter(prefix="/api/scripts", tags=["scripts"])
 
 #: How often a run checks its triggers (s).
 POLL_S = 0.2
+#: The run state before any run.
+IDLE: dict[str, Any] = {
+    "running": False,
+    "outcome": None,
+    "mode": None,
+    "step": None,
+    "next": None,
+    "waiting_for": None,
+    "steps": [],
+}
 
 
 class RunIn(BaseModel):
@@ -80,20 +92,9 @@ def script_export(
 
 
 def _state(console: Console) -> dict[str, Any]:
-    if console.runner is None:
-        return {
-            "running": False,
-            "outcome": None,
-            "mode": None,
-            "step": None,
-            "next": None,
-            "waiting_for": None,
-            "steps": [],
-            "commands": {},
-        }
-    state: dict[str, Any] = console.runner.state()
-    state["commands"] = console.script_commands
-    return state
+    """The run's state with the command ids of its steps sent so far."""
+    state = console.runner.state() if console.runner is not None else dict(IDLE)
+    return {**state, "commands": console.script_commands}
 
 
 @router.get("/run")
@@ -105,7 +106,7 @@ def run_state(console: ConsoleDep) -> dict[str, Any]:
 async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Run a script against the vehicle: ``auto`` sends each step at its trigger; ``step``
     proposes each step and waits for the operator's go (``/run/next``)."""
-    if console.runner is not None and console.runner.state()["running"]:
+    if console.runner is not None and console.runner.running:
         raise HTTPException(409, "a script is already running; stop it first")
     console.runner = ScriptRunner(body.script, body.mode)
     console.script_commands = {}
@@ -139,8 +140,8 @@ async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
     step = runner.script.steps[index]
     assert console.commands is not None
     try:
-        enc, doc = console.encode(step.pattern, dict(step.params))
-        record = await console.commands.submit(enc, doc["requested"], kind="script")
+        enc = encode_frame(step.pattern, dict(step.params))
+        record = await console.commands.submit(enc, kind="script")
     except Exception as err:  # rate limit, link down: the run stops with the reason
         runner.mark_failed(index, str(err))
         return
@@ -151,15 +152,17 @@ async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
 async def _loop(console: Console) -> None:
     runner = console.runner
     assert runner is not None and console.log is not None
-    while runner.state()["running"]:
+    while runner.running:
+        # only the steps on their way are looked up in the log (one at a time, in practice)
         for index, command_id in list(console.script_commands.items()):
+            if runner.step_state(index) != "sent":
+                continue
             record = console.log.command(command_id)
-            steps = runner.state()["steps"]
-            if record is None or steps[index]["state"] != "sent":
+            if record is None:
                 continue
             if record["state"] == "acknowledged":
                 runner.mark_acknowledged(index)
-            elif record["state"] in ("rejected", "failed", "timed_out"):
+            elif record["state"] in FINAL_STATES:  # rejected, timed_out, failed
                 runner.mark_failed(
                     index, f"step {index + 1}: {record['state']}: {record['reason']}"
                 )

@@ -11,6 +11,7 @@ from fastapi import APIRouter, HTTPException
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.models import ChannelIn, CurrentIn, TimeScaleIn
 from backend.console import SCENARIO_PRESETS
+from codec import encode_frame
 
 router = APIRouter(prefix="/api/training", tags=["training"])
 
@@ -19,6 +20,11 @@ def _sim(console: ConsoleDep) -> Any:
     if console.sim is None:
         raise HTTPException(409, "training controls need the simulated vehicle (target 'sim')")
     return console.sim
+
+
+def _given(body: ChannelIn | CurrentIn) -> dict[str, Any]:
+    """The fields a PUT sets: those given, and not null (null keeps the current value)."""
+    return {k: v for k, v in body.model_dump(exclude_unset=True).items() if v is not None}
 
 
 @router.get("")
@@ -39,7 +45,7 @@ def training(console: ConsoleDep) -> dict[str, Any]:
 @router.put("/channel")
 def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     sim = _sim(console)
-    fields = {k: v for k, v in body.model_dump(exclude_unset=True).items() if v is not None}
+    fields = _given(body)
     if "range_m" in body.model_fields_set and body.range_m is None:
         fields["range_m"] = math.inf
     sim.channel.set_config(replace(sim.channel.config, **fields))
@@ -49,8 +55,7 @@ def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> dict[str,
 @router.put("/current")
 def current(body: CurrentIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     sim = _sim(console)
-    fields = {k: v for k, v in body.model_dump(exclude_unset=True).items() if v is not None}
-    sim.current.set_config(replace(sim.current.config, **fields))
+    sim.current.set_config(replace(sim.current.config, **_given(body)))
     return asdict(sim.current.config)
 
 
@@ -80,9 +85,8 @@ async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str
     sc = SCENARIOS[name]
     dive = console.reset_vehicle(start_z_m=sc.start_z_m)
     first, retask = sc.commands[0], sc.commands[sc.retask]
-    enc, doc = console.encode(first.pattern, dict(first.params))
     assert console.commands is not None
-    record = await console.commands.submit(enc, doc["requested"])
+    record = await console.commands.submit(encode_frame(first.pattern, dict(first.params)))
     return {
         "dive": dive,
         "scenario": name,

@@ -1,98 +1,36 @@
 """``nemesys results`` writes the whole page: every section and table, images that exist and
-are PNGs, links that resolve, and the paper's inconsistencies spelled out. The BER analysis is
-a stub here (its own tests run it); the twin and the reconfiguration bench run in quick mode."""
+are PNGs, links that resolve, and the paper's inconsistencies spelled out. The BER analysis runs
+at a tiny size here (its own tests check its figures); the twin and the reconfiguration bench
+run in quick mode."""
 
 from __future__ import annotations
 
 import argparse
 import io
 import re
-from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
-from analysis import results
+from analysis import ber, results
+from analysis.ber import BerConfig
 from backend import cli
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
-@dataclass(frozen=True)
-class Point:
-    t: int
-    n: int
-    ber: float
-    frames: int
-    successes: int
-    rate: float
-    ci_low: float
-    ci_high: float
-    analytic: float
-    analytic_frame: float
-
-
-@dataclass(frozen=True)
-class Eff:
-    t: int
-    n: int
-    k: int
-    m: int
-    paper_efficiency: float
-    code_rate: float
-    frame_efficiency: float
-
-
-@dataclass(frozen=True)
-class Wrong:
-    t: int
-    errors: str
-    level: float
-    crc: bool
-    frames: int
-    wrong: int
-    rate: float
-    ci_high: float
-
-
-@dataclass(frozen=True)
-class StubBer:
-    points: tuple[Point, ...]
-    efficiency: tuple[Eff, ...]
-    wrong: tuple[Wrong, ...]
-    csv_path: Path
-    png_path: Path
-    wrong_csv_path: Path
-    seconds: float
-
-
-def stub_ber(img_dir: Path) -> StubBer:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.image
-
-    img_dir.mkdir(parents=True, exist_ok=True)
-    png = img_dir / "ber.png"
-    matplotlib.image.imsave(png, [[0.0, 1.0], [1.0, 0.0]])
-    csv, wrong_csv = img_dir / "ber.csv", img_dir / "ber_wrong.csv"
-    csv.write_text("t,ber\n", encoding="utf-8")
-    wrong_csv.write_text("t,errors\n", encoding="utf-8")
-    points = tuple(
-        Point(t, 56 + 8 * t, ber, 1000, 990 - t, 0.99, 0.98, 0.995, 0.99, 0.989)
-        for t in (1, 2, 3, 4)
-        for ber in (1e-3, 1e-2)
-    )
-    eff = tuple(
-        Eff(t, 56 + 8 * t, 56, 7, 56 / (56 + 14 * t), 56 / (56 + 8 * t), 52 / (84 + 8 * t))
-        for t in (1, 2, 3, 4)
-    )
-    wrong = tuple(
-        Wrong(2, kind, level, crc, 1000, 0 if crc else 3, 0.0 if crc else 0.003, 0.004)
-        for kind, level in (("independent", 0.01), ("burst", 16.0))
-        for crc in (False, True)
-    )
-    return StubBer(points, eff, wrong, csv, png, wrong_csv, 0.5)
+#: A BER run of a second or two: real outputs (CSVs, PNG, report), figures too noisy to quote.
+TINY = BerConfig(
+    "tiny",
+    2000,
+    500,
+    2000,
+    500,
+    bers=(1e-3, 1e-2),
+    wrong_ts=(2,),
+    wrong_bers=(1e-2,),
+    burst_lengths=(16,),
+)
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +43,7 @@ def page(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
         img_dir,
         quick=True,
         progress=progress,
-        ber=stub_ber(img_dir),
+        ber=ber.analyze_config(img_dir, TINY),
     )
     assert "twin" in progress.getvalue() and "reconfig bench" in progress.getvalue()
     return path, path.read_text(encoding="utf-8")

@@ -14,7 +14,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from backend.app import create_app
+from backend.console import Console
 from backend.settings import Settings
+from backend.store import FINAL_STATES
 
 TOKEN = "x" * 20
 WRONG_TOKEN = "y" * 20
@@ -25,7 +27,7 @@ TIME_SCALE = 50.0
 
 CIRCLE: dict[str, Any] = {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"}
 SQUARE: dict[str, Any] = {"speed": 0.18, "depth": 2, "side_span": 6, "direction": "cw"}
-FINAL = ("acknowledged", "rejected", "timed_out", "failed")
+FINAL = tuple(sorted(FINAL_STATES))
 
 T = TypeVar("T")
 
@@ -76,6 +78,13 @@ def make_client(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Mak
 def client(make_client: MakeClient) -> TestClient:
     """The console in training mode: the simulated vehicle at 50x."""
     return make_client()
+
+
+def console_of(client: TestClient) -> Console:
+    """The running console behind a started test client (call into it with
+    ``client.portal.call``: it lives on the app's event loop)."""
+    console: Console = client.app.state.console  # type: ignore[attr-defined]
+    return console
 
 
 def wait_until(

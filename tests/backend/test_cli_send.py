@@ -8,7 +8,6 @@ import io
 import json
 import os
 import select
-import socket
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -29,6 +28,7 @@ from codec import FRAME_BYTES, GUARD_BITS, Frame, decode_frame, encode_frame
 from sim_bridge.transmit import DEFAULT_ACK_TIMEOUT_S, DEFAULT_ROSBRIDGE_URL
 
 from ..sim_bridge.fake_rosbridge import FakeRosbridge, ack_for, mission
+from ..sim_bridge.helpers import free_port
 
 CIRCLE = ["circle", "speed=0.5", "depth=2", "radius=5.1", "direction=cw"]
 SENT = encode_frame("circle", speed=0.5, depth=2, radius=5.1, direction="cw")
@@ -58,13 +58,6 @@ def decoded_ack(data: bytes, **fields: Any) -> dict[str, Any]:
 
 def accept(data: bytes) -> list[dict[str, Any] | str]:
     return [mission(decoded_ack(data))]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-    return port
 
 
 @pytest.fixture

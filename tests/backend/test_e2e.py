@@ -5,17 +5,9 @@ log surviving a killed server (SIGKILL), row by row."""
 from __future__ import annotations
 
 import json
-import os
-import queue
 import re
-import socket
 import sqlite3
-import subprocess
-import sys
-import threading
-import time
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -24,12 +16,11 @@ import pytest
 
 from backend.settings import Settings
 from backend.store import STATES, MissionLog
+from bench._server import ConsoleProcess, start_console
 
-from .conftest import CIRCLE, SQUARE, TOKEN, clear_nemesys_env, wait_until
+from .conftest import CIRCLE, FINAL, SQUARE, TOKEN, clear_nemesys_env, wait_until
 
-REPO = Path(__file__).resolve().parents[2]
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
-URL_LINE = re.compile(r"(http://(127\.0\.0\.1):(\d+))/\?token=(\S+)")
 EAST = {"speed": 1.0, "depth": 2, "duration": 600, "heading": 90}
 #: Links to anything off this machine in the page's HTML, scripts or styles.
 EXTERNAL = re.compile(
@@ -43,109 +34,29 @@ LOCAL_REF = re.compile(r"""(?:src|href)\s*=\s*["'](/[^"']*)["']""")
 JS_IMPORT = re.compile(r"""\bfrom\s*["'](\./[^"']+)["']|\bimport\s*\(\s*["'](\./[^"']+)["']""")
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
-
-
-@dataclass
-class Server:
-    proc: subprocess.Popen[str]
-    base: str
-    host: str
-    port: int
-    token: str
-    output: list[str] = field(default_factory=list)
-
-    def client(self) -> httpx.Client:
-        return httpx.Client(base_url=self.base, timeout=5.0, trust_env=False)
-
-    def kill(self) -> None:
-        """SIGKILL: no shutdown, no flush, no lifespan exit."""
-        self.proc.kill()
-        self.proc.wait(timeout=10)
-
-
-def _pump(stream: Any, lines: queue.Queue[str | None]) -> None:
-    for line in stream:
-        lines.put(line)
-    lines.put(None)
-
-
 @pytest.fixture
 def start_server(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> Iterator[Callable[[Path], Server]]:
+) -> Iterator[Callable[[Path], ConsoleProcess]]:
     """Start ``nemesys console`` on a free port with ``db``; every server is stopped at the
     end of the test (killed if it does not stop)."""
     clear_nemesys_env(monkeypatch)
-    servers: list[Server] = []
+    servers: list[ConsoleProcess] = []
 
-    def start(db: Path) -> Server:
-        port = free_port()
-        env = {k: v for k, v in os.environ.items() if not k.startswith("NEMESYS_")}
-        env["NEMESYS_TOKEN"] = TOKEN
-        env["NO_PROXY"] = "127.0.0.1,localhost"
-        stderr = (tmp_path / f"console-{len(servers)}.err").open("w")
-        argv = [
-            sys.executable,
-            "-m",
-            "backend.cli",
-            "console",
-            "--port",
-            str(port),
-            "--viewer-port",
-            "0",
-            "--db",
-            str(db),
-            "--time-scale",
-            "10",
-        ]
-        proc = subprocess.Popen(
-            argv, cwd=REPO, env=env, stdout=subprocess.PIPE, stderr=stderr, text=True
+    def start(db: Path) -> ConsoleProcess:
+        server = start_console(
+            tmp_path / f"console-{len(servers)}.log",
+            TOKEN,
+            *("--db", str(db), "--time-scale", "10"),
+            env={"NO_PROXY": "127.0.0.1,localhost"},
         )
-        stderr.close()
-        lines: queue.Queue[str | None] = queue.Queue()
-        threading.Thread(target=_pump, args=(proc.stdout, lines), daemon=True).start()
-        output: list[str] = []
-        deadline = time.monotonic() + 20.0
-        match: re.Match[str] | None = None
-        while match is None:
-            try:
-                line = lines.get(timeout=max(0.0, deadline - time.monotonic()))
-            except queue.Empty:
-                line = None
-            if line is None:
-                proc.kill()
-                err = (tmp_path / f"console-{len(servers)}.err").read_text()
-                raise AssertionError(f"no URL printed: {output!r} {err}")
-            output.append(line)
-            match = URL_LINE.search(line)
-        server = Server(proc, match[1], match[2], int(match[3]), match[4], output)
         servers.append(server)
-        assert server.port == port
-
-        def up() -> bool:
-            assert proc.poll() is None, (tmp_path / f"console-{len(servers) - 1}.err").read_text()
-            try:
-                with server.client() as c:
-                    return c.get("/api/session").status_code == 200
-            except httpx.TransportError:
-                return False
-
-        wait_until(up, timeout_s=20.0, interval_s=0.05, what="the console to answer")
+        assert server.base_url == f"http://{server.host}:{server.port}", server.base_url
         return server
 
     yield start
     for server in servers:
-        if server.proc.poll() is None:
-            server.proc.terminate()
-            try:
-                server.proc.wait(timeout=10)
-            except subprocess.TimeoutExpired:
-                server.kill()
+        server.stop(timeout_s=10)
 
 
 def wait_command(
@@ -190,7 +101,7 @@ def test_settings_bind_loopback_by_default(monkeypatch: pytest.MonkeyPatch) -> N
 
 
 def test_console_drives_the_simulated_vehicle_and_serves_the_page(
-    tmp_path: Path, start_server: Callable[[Path], Server]
+    tmp_path: Path, start_server: Callable[[Path], ConsoleProcess]
 ) -> None:
     server = start_server(tmp_path / "missions.sqlite3")
     assert server.host == "127.0.0.1"  # the default: loopback only
@@ -207,7 +118,7 @@ def test_console_drives_the_simulated_vehicle_and_serves_the_page(
         start = wait_until(lambda: c.get("/api/vehicle").json()["pose"], what="a pose")
         cmd = post_command(c, "straight", EAST)
         assert cmd["state"] == "queued"
-        rec = wait_command(c, cmd["id"], ("acknowledged", "rejected", "timed_out", "failed"))
+        rec = wait_command(c, cmd["id"], FINAL)
         assert rec["state"] == "acknowledged", rec
         assert rec["ack"]["outcome"] == "accepted"
 
@@ -255,14 +166,14 @@ def test_console_drives_the_simulated_vehicle_and_serves_the_page(
 
 
 def test_the_log_survives_a_killed_server(
-    tmp_path: Path, start_server: Callable[[Path], Server]
+    tmp_path: Path, start_server: Callable[[Path], ConsoleProcess]
 ) -> None:
     db = tmp_path / "missions.sqlite3"
     first = start_server(db)
     with first.client() as c:
         wait_until(lambda: c.get("/api/vehicle").json()["pose"], what="a pose")
         cmd = post_command(c, "circle", CIRCLE)
-        acked = wait_command(c, cmd["id"], ("acknowledged", "rejected", "timed_out", "failed"))
+        acked = wait_command(c, cmd["id"], FINAL)
     first.kill()  # right after the acknowledgement was reported
     assert acked["state"] == "acknowledged"
 

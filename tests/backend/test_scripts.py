@@ -4,6 +4,7 @@ the onboard export, and the run's state machine."""
 from __future__ import annotations
 
 import copy
+import json
 import math
 from typing import Any
 
@@ -678,8 +679,6 @@ def test_marks_for_steps_not_handed_out_are_refused() -> None:
 
 
 def test_state_is_json_ready() -> None:
-    import json
-
     r = ScriptRunner(three_step(), "auto")
     r.poll(5.0, "idle")
     st = json.loads(json.dumps(r.state()))

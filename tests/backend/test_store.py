@@ -17,6 +17,9 @@ import pytest
 from backend.store import FINAL_STATES, STATES, MissionLog, csv_rows, now_iso
 from codec import encode_frame
 
+from .conftest import SQUARE
+
+#: The export's columns, written out: the contract (not imported from the store).
 CSV_HEADER = [
     "id",
     "dive",
@@ -58,7 +61,6 @@ def command_fields(pattern: str = "circle", **params: Any) -> dict[str, Any]:
     }
 
 
-SQUARE = {"speed": 0.18, "depth": 2, "side_span": 6, "direction": "cw"}
 ACK: dict[str, Any] = {
     "outcome": "accepted",
     "corrected_bits": 1,

@@ -30,3 +30,5 @@ def test_fleet_factor_counts_every_vehicle_once() -> None:
     # one worker, two vehicles, a short run: a positive, finite real-time factor
     factor = bench_sim.fleet_factor(2, 2.0, 1)
     assert 0 < factor < float("inf")
+    assert bench_sim.fleet_shares(20, 2) == [10, 10]
+    assert bench_sim.fleet_shares(7, 3) == [3, 2, 2]

@@ -11,10 +11,6 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import socket
-import subprocess
-import sys
-import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,6 +19,8 @@ from typing import Any
 import httpx
 import pytest
 from playwright.sync_api import Browser, Page, Request, sync_playwright
+
+from bench._server import ConsoleProcess, start_console
 
 REPO = Path(__file__).resolve().parents[2]
 #: Screenshots of every test (artefacts, not committed: see .gitignore).
@@ -50,26 +48,20 @@ def chromium_path() -> str:
     )
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-        return port
-
-
 @dataclass
 class Console:
-    """A running console: its base URL, the operator URL and a REST client."""
+    """A running console (``server``) and a REST client of it."""
 
-    proc: subprocess.Popen[bytes]
-    port: int
-    base: str
-    operator_url: str
-    log: Path
-    http: httpx.Client = field(init=False)
+    server: ConsoleProcess
+    http: httpx.Client
 
-    def __post_init__(self) -> None:
-        self.http = httpx.Client(base_url=self.base, timeout=10.0)
+    @property
+    def base(self) -> str:
+        return self.server.base_url
+
+    @property
+    def port(self) -> int:
+        return self.server.port
 
     def get(self, path: str, **params: str) -> Any:
         r = self.http.get(path, params=params)
@@ -82,82 +74,22 @@ class Console:
         r.raise_for_status()
         return r.json()
 
-    def output(self) -> str:
-        return self.log.read_text(errors="replace")
-
-
-def _start(tmp_path: Path) -> Console:
-    port = free_port()
-    log = tmp_path / "console.log"
-    # only our settings: none of the caller's NEMESYS_* variables (operator name, settings file)
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NEMESYS_")}
-    env["NEMESYS_TOKEN"] = TOKEN
-    cmd = [
-        sys.executable,
-        "-m",
-        "backend.cli",
-        "console",
-        "--port",
-        str(port),
-        "--viewer-port",
-        "0",
-        "--db",
-        str(tmp_path / "log.sqlite3"),
-        "--time-scale",
-        "10",
-    ]
-    with log.open("wb") as out:
-        proc = subprocess.Popen(cmd, cwd=REPO, env=env, stdout=out, stderr=subprocess.STDOUT)
-    deadline = time.monotonic() + START_TIMEOUT_S
-    url = None
-    try:
-        while time.monotonic() < deadline:
-            if proc.poll() is not None:
-                raise RuntimeError(f"the console exited ({proc.returncode}):\n{log.read_text()}")
-            m = re.search(r"http://\S+/\?token=\S+", log.read_text(errors="replace"))
-            if m:
-                url = m.group(0)
-                break
-            time.sleep(0.05)
-        if url is None:
-            raise RuntimeError(f"the console printed no URL:\n{log.read_text()}")
-        base = url.split("/?", 1)[0]
-        assert base == f"http://127.0.0.1:{port}", url
-        console = Console(proc, port, base, url, log)
-        while time.monotonic() < deadline:
-            if proc.poll() is not None:
-                raise RuntimeError(f"the console exited ({proc.returncode}):\n{log.read_text()}")
-            try:
-                if console.http.get("/api/session").status_code == 200:
-                    return console
-            except httpx.TransportError:
-                pass
-            time.sleep(0.05)
-        raise RuntimeError(f"GET /api/session never answered:\n{log.read_text()}")
-    except BaseException:
-        _stop(proc)
-        raise
-
-
-def _stop(proc: subprocess.Popen[bytes]) -> None:
-    if proc.poll() is None:
-        proc.terminate()
-        try:
-            proc.wait(10)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(10)
-
 
 @pytest.fixture
 def console(tmp_path: Path) -> Iterator[Console]:
     """A fresh console per test (it starts in well under a second); stopped afterwards."""
-    c = _start(tmp_path)
-    try:
-        yield c
-    finally:
-        c.http.close()
-        _stop(c.proc)
+    db = str(tmp_path / "log.sqlite3")
+    with (
+        start_console(
+            tmp_path / "console.log",
+            TOKEN,
+            *("--db", db, "--time-scale", "10"),
+            timeout_s=START_TIMEOUT_S,
+        ) as server,
+        server.client() as http,
+    ):
+        assert server.base_url == f"http://127.0.0.1:{server.port}", server.base_url
+        yield Console(server, http)
 
 
 @pytest.fixture(scope="module")

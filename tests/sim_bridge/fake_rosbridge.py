@@ -5,14 +5,22 @@ and answers each frame published on ``/nemesys/frame`` with whatever ``respond``
 
 from __future__ import annotations
 
-import asyncio
 import json
-import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from types import TracebackType
 from typing import Any, Self
 
 from websockets.asyncio.server import Server, ServerConnection, serve
+
+from sim_bridge.rosbridge import (
+    FRAME_TOPIC,
+    MISSION_TOPIC,
+    decode_uint8_multiarray,
+    json_string_msg,
+    publish_message,
+)
+
+from .helpers import LoopThread
 
 #: Replies to one published frame: rosbridge messages (dicts) or raw text.
 Respond = Callable[[bytes], list[dict[str, Any] | str]]
@@ -20,7 +28,7 @@ Respond = Callable[[bytes], list[dict[str, Any] | str]]
 
 def mission(ack: dict[str, Any]) -> dict[str, Any]:
     """A ``/nemesys/mission`` publish carrying ``ack`` as a JSON string, as rosbridge sends."""
-    return {"op": "publish", "topic": "/nemesys/mission", "msg": {"data": json.dumps(ack)}}
+    return publish_message(MISSION_TOPIC, json_string_msg(ack))
 
 
 def ack_for(data: bytes, seq: int = 1, outcome: str = "accepted", **fields: Any) -> dict[str, Any]:
@@ -61,8 +69,7 @@ class FakeRosbridge:
         self.received: list[dict[str, Any]] = []
         self.connections = 0
         self.frames = 0
-        self._loop = asyncio.new_event_loop()
-        self._thread = threading.Thread(target=self._loop.run_forever, daemon=True)
+        self._loop = LoopThread()
         self._server: Server | None = None
         self.port = 0
 
@@ -71,8 +78,8 @@ class FakeRosbridge:
         return f"ws://127.0.0.1:{self.port}"
 
     def __enter__(self) -> Self:
-        self._thread.start()
-        self.port = asyncio.run_coroutine_threadsafe(self._start(), self._loop).result(5)
+        self._loop.start()
+        self.port = self._loop.run(self._start())
         return self
 
     def __exit__(
@@ -81,10 +88,8 @@ class FakeRosbridge:
         exc: BaseException | None,
         tb: TracebackType | None,
     ) -> None:
-        asyncio.run_coroutine_threadsafe(self._stop(), self._loop).result(5)
-        self._loop.call_soon_threadsafe(self._loop.stop)
-        self._thread.join(5)
-        self._loop.close()
+        self._loop.run(self._stop())
+        self._loop.stop()
 
     async def _start(self) -> int:
         self._server = await serve(self._handler, "127.0.0.1", 0)
@@ -100,22 +105,23 @@ class FakeRosbridge:
         return [m["op"] for m in self.received]
 
     def published(self) -> list[bytes]:
-        return [
-            bytes(m["msg"]["data"])
-            for m in self.received
-            if m["op"] == "publish" and m["topic"] == "/nemesys/frame"
-        ]
+        """The frames published so far, in order."""
+        return [decode_uint8_multiarray(m["msg"]) for m in self.received if _is_frame(m)]
 
     async def _handler(self, ws: ServerConnection) -> None:
         self.connections += 1
         async for text in ws:
             message: dict[str, Any] = json.loads(text)
             self.received.append(message)
-            if message["op"] != "publish" or message["topic"] != "/nemesys/frame":
+            if not _is_frame(message):
                 continue
             self.frames += 1
-            data = bytes(message["msg"]["data"])
+            data = decode_uint8_multiarray(message["msg"])
             for reply in self.respond(data) if self.respond else []:
                 await ws.send(reply if isinstance(reply, str) else json.dumps(reply))
             if self.close_after and self.frames % self.close_after == 0:
                 await ws.close()
+
+
+def _is_frame(message: Mapping[str, object]) -> bool:
+    return message["op"] == "publish" and message["topic"] == FRAME_TOPIC

@@ -10,22 +10,19 @@ from typing import Any
 import pytest
 
 from codec import (
-    CODE,
     CODEWORD_BITS,
-    CRC_BITS,
-    FIELD_BITS,
-    FIELDS_PER_FRAME,
     FRAME_BITS,
     GUARD_BITS,
     SYNC_BITS,
-    SYNC_WORD,
     ParamValue,
-    crc4,
+    decode_frame,
     encode_frame,
 )
 from planner import CircleFence, Limits, VehicleState, plan, validate
 from sim_bridge.agent import INVALID_PLAN, LIMIT_VIOLATION, OnboardAgent
 from sim_bridge.guidance import Guidance, Mode, Reference
+
+from ..codec.helpers import crafted_frame, flip_frame
 
 ACK_KEYS = {
     "seq",
@@ -54,28 +51,12 @@ def _bits(pattern: str, **params: ParamValue) -> int:
 
 
 def _flip_codeword(bits: int, *positions: int) -> int:
-    """Flip codeword bits (0 = the first codeword bit, frame bit 24)."""
-    for pos in positions:
-        assert 0 <= pos < CODEWORD_BITS
-        bits ^= 1 << (FRAME_BITS - 1 - SYNC_BITS - pos)
-    return bits
+    """Flip codeword bits counted on the wire (0 = the first codeword bit, frame bit 24)."""
+    return flip_frame(bits, codeword=[CODEWORD_BITS - 1 - pos for pos in positions])
 
 
 def _flip_sync(bits: int, *positions: int) -> int:
-    for pos in positions:
-        assert 0 <= pos < SYNC_BITS
-        bits ^= 1 << (FRAME_BITS - 1 - pos)
-    return bits
-
-
-def _crafted(pattern_id: int, codes: tuple[int, ...], crc_xor: int = 0) -> int:
-    """A frame with a valid BCH codeword around any payload (and optionally a wrong CRC-4)."""
-    payload = pattern_id
-    for j in range(FIELDS_PER_FRAME):
-        payload = (payload << FIELD_BITS) | (codes[j] if j < len(codes) else 0)
-    message = (payload << CRC_BITS) | (crc4(payload) ^ crc_xor)
-    codeword = CODE.encode(message)
-    return (SYNC_WORD << (CODEWORD_BITS + GUARD_BITS)) | (codeword << GUARD_BITS)
+    return flip_frame(bits, header=positions)
 
 
 def _circle_codes() -> tuple[int, ...]:
@@ -99,7 +80,7 @@ def _running_agent(limits: Limits | None = None) -> OnboardAgent:
     assert active is not None
     path = active.path
     for i in range(path.body_start + 3):
-        agent.guidance.update(path.xs[i], path.ys[i], path.zs[i], 0.0, STATE.t_s + i)
+        agent.guidance.update(path.xs[i], path.ys[i], path.zs[i], STATE.t_s + i)
     assert agent.guidance.segment > 0
     return agent
 
@@ -218,20 +199,20 @@ REJECTS: dict[str, tuple[Callable[[], int | None], str, str | None]] = {
         "uncorrectable",
         None,
     ),
-    "crc mismatch": (lambda: _crafted(3, _circle_codes(), crc_xor=1), "crc_mismatch", None),
-    "pattern 9": (lambda: _crafted(9, ()), "unknown_pattern", None),
+    "crc mismatch": (lambda: crafted_frame(3, _circle_codes(), crc_xor=1), "crc_mismatch", None),
+    "pattern 9": (lambda: crafted_frame(9, ()), "unknown_pattern", None),
     "direction code 2": (
-        lambda: _crafted(3, (*_circle_codes()[:3], 2)),
+        lambda: crafted_frame(3, (*_circle_codes()[:3], 2)),
         "field_out_of_range",
         "direction",
     ),
-    "zero laps": (lambda: _crafted(2, (20, 20, 70, 70, 0)), "field_out_of_range", "laps"),
+    "zero laps": (lambda: crafted_frame(2, (20, 20, 70, 70, 0)), "field_out_of_range", "laps"),
     "j5 set on a circle": (
-        lambda: _crafted(3, (*_circle_codes(), 1)),
+        lambda: crafted_frame(3, (*_circle_codes(), 1)),
         "unused_field_set",
         "j5",
     ),
-    "j1 set on surface": (lambda: _crafted(15, (7,)), "unused_field_set", "j1"),
+    "j1 set on surface": (lambda: crafted_frame(15, (7,)), "unused_field_set", "j1"),
     "circle radius 0": (
         lambda: _bits("circle", speed=0.2, depth=2, radius=0, direction="cw"),
         INVALID_PLAN,
@@ -438,14 +419,12 @@ def test_seq_increments_per_frame_whatever_the_outcome() -> None:
 
 
 def test_the_console_reproduces_the_vehicles_plan_from_the_ack() -> None:
-    from codec import decode_frame
-    from planner import plan
-
     agent = _agent()
     first = encode_frame("square", {"speed": 0.2, "depth": 2, "side_span": 8, "direction": "cw"})
     ack1, _ = agent.receive(first.frame.value, FRAME_BITS, STATE)
     mirror = plan(decode_frame(first.frame.bits).command, VehicleState(**ack1["from"]))
-    assert mirror.path == agent.active.path if agent.active else False
+    assert agent.active is not None
+    assert mirror.path == agent.active.path
     moved = VehicleState(3.0, 4.0, 2.0, 90.0, 0.2, 40.0, 2)
     second = encode_frame("circle", CIRCLE)
     ack2, _ = agent.receive(second.frame.value, FRAME_BITS, moved)

@@ -8,6 +8,7 @@ import random
 import pytest
 
 import codec
+from analysis.ber import wilson as wilson_interval
 from sim_bridge.channel import ChannelConfig, ChannelStats, Delivery, MEChannel
 
 #: Two-sided 99.9 % normal quantile: a correct channel fails a statistical check 1 run in 1000
@@ -17,12 +18,8 @@ FRAME = codec.FRAME_BITS
 
 
 def wilson(k: int, n: int, z: float = Z) -> tuple[float, float]:
-    """Wilson score interval for a binomial proportion k/n."""
-    p = k / n
-    denom = 1.0 + z * z / n
-    centre = (p + z * z / (2 * n)) / denom
-    half = z / denom * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return centre - half, centre + half
+    """Wilson score interval for a binomial proportion k/n, at 99.9 % by default."""
+    return wilson_interval(k, n, z)
 
 
 def random_frames(count: int, seed: int) -> list[int]:

@@ -242,11 +242,11 @@ def test_guidance_stays_on_the_later_pass_of_the_same_place() -> None:
     assert lap2 > body + 4
     # walk the vehicle along the path up to lap 2, then sit on that corner
     for i in range(lap2 + 1):
-        g.update(path.xs[i], path.ys[i], path.zs[i], 0.0, float(i))
+        g.update(path.xs[i], path.ys[i], path.zs[i], float(i))
     reached = g.segment
     assert reached >= lap2 - 1
     for k in range(20):
-        g.update(path.xs[lap2], path.ys[lap2], path.zs[lap2], 0.0, 100.0 + k)
+        g.update(path.xs[lap2], path.ys[lap2], path.zs[lap2], 100.0 + k)
         assert g.segment >= reached
     assert g.mode is Mode.RUNNING
 
@@ -258,11 +258,11 @@ def test_cutting_a_corner_moves_on_to_the_next_segment() -> None:
     g.set_plan(p, 0.0)
     body = path.body_start
     for i in range(body + 1):
-        g.update(path.xs[i], path.ys[i], path.zs[i], 0.0, float(i))
+        g.update(path.xs[i], path.ys[i], path.zs[i], float(i))
     # halfway along the first side of the pattern
     mid_x = (path.xs[body] + path.xs[body + 1]) / 2
     mid_y = (path.ys[body] + path.ys[body + 1]) / 2
-    g.update(mid_x, mid_y, 2.0, 0.0, 10.0)
+    g.update(mid_x, mid_y, 2.0, 10.0)
     corner = body + 1
     assert g.segment == body
     # inside the corner, nearer the next side than the current one
@@ -271,7 +271,7 @@ def test_cutting_a_corner_moves_on_to_the_next_segment() -> None:
     px, py = path.xs[corner - 1], path.ys[corner - 1]
     x = cx + 0.3 * (nx - cx) / math.hypot(nx - cx, ny - cy) + 0.1 * (px - cx)
     y = cy + 0.3 * (ny - cy) / math.hypot(nx - cx, ny - cy) + 0.1 * (py - cy)
-    g.update(x, y, 2.0, 0.0, 50.0)
+    g.update(x, y, 2.0, 50.0)
     assert g.segment == corner
     assert g.cross_track_m == pytest.approx(0.2)
 
@@ -297,7 +297,6 @@ def test_hover_returns_within_capture_and_holds_heading_against_a_current() -> N
     sim = _sim(cfg)
     _send(sim, "hover", duration=600, depth=2, heading=90)
     gcfg = sim.guidance.config
-    hold_x = hold_y = 0.0
     max_dist = 0.0
     approaches = 0
     last_approach_s = 0.0  # the turn to the commanded heading counts as an approach
@@ -368,15 +367,15 @@ def test_surface_rises_then_floats_with_vertical_thrusters_off() -> None:
 def test_guidance_config_is_used() -> None:
     g = Guidance(GuidanceConfig(capture_m=2.0, settle_m=0.5))
     g.hold_here(0.0, 0.0, 1.0, 90.0)
-    ref = g.update(1.5, 0.0, 1.0, 0.0, 0.0)  # inside 2 m capture: hold the heading
+    ref = g.update(1.5, 0.0, 1.0, 0.0)  # inside 2 m capture: hold the heading
     assert ref.speed_mps == 0.0
     assert ref.course_rad == pytest.approx(math.pi / 2)
-    ref = g.update(3.0, 0.0, 1.0, 0.0, 1.0)  # beyond capture: face the point and approach
+    ref = g.update(3.0, 0.0, 1.0, 1.0)  # beyond capture: face the point and approach
     assert ref.speed_mps > 0.0
     assert ref.course_rad == pytest.approx(math.pi)
-    ref = g.update(1.0, 0.0, 1.0, 0.0, 2.0)  # hysteresis: still approaching until settle
+    ref = g.update(1.0, 0.0, 1.0, 2.0)  # hysteresis: still approaching until settle
     assert ref.speed_mps > 0.0
-    ref = g.update(0.4, 0.0, 1.0, 0.0, 3.0)
+    ref = g.update(0.4, 0.0, 1.0, 3.0)
     assert ref.speed_mps == 0.0
     assert ref.depth_m == 1.0
     assert g.mode is Mode.IDLE

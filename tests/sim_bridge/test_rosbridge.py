@@ -29,6 +29,7 @@ from sim_bridge.rosbridge import (
     BinaryMessage,
     BridgeError,
     CallService,
+    ClientProtocol,
     ClientSession,
     ClientStatus,
     InvalidData,
@@ -46,8 +47,11 @@ from sim_bridge.rosbridge import (
     Unsubscribe,
     UnsupportedOp,
     canonical_type,
+    decode_json_string,
+    decode_server_message,
     decode_uint8_data,
     decode_uint8_multiarray,
+    json_string_msg,
     parse_message,
     pose_stamped_msg,
     publish_message,
@@ -61,8 +65,7 @@ from sim_bridge.rosbridge import (
     uint8_multiarray_msg,
 )
 
-#: The 13 bytes of the worked example in docs/protocol.md (square, 0.5 m/s, 2 m, 12.5 m, cw).
-EXAMPLE = bytes.fromhex("aaaa7c13214730000008915600")
+from .helpers import EXAMPLE
 
 
 def send(session: ClientSession, message: dict[str, Any]) -> Outcome:
@@ -407,6 +410,7 @@ def test_builders() -> None:
     failed = service_response("/nope", "no such service", False)
     assert failed["values"] == "no such service" and failed["result"] is False
     assert "id" not in failed
+    assert json_string_msg({"seq": 1, "ber": math.nan}) == {"data": '{"seq":1,"ber":null}'}
 
 
 def test_to_json_takes_numpy_values() -> None:
@@ -743,3 +747,107 @@ def test_session_never_raises_and_only_passes_bytes(messages: list[dict[str, Any
             assert out.frame == decode_uint8_data(message["msg"]["data"])
         for reply in out.replies:
             assert json.loads(to_json(reply)) == reply
+
+
+# ------------------------------------------------------------------------------------------
+# Client side: what the transmitter and the console's link send and read
+# ------------------------------------------------------------------------------------------
+
+
+def test_client_protocol_messages_are_roslibpys() -> None:
+    client = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[POSE_TOPIC, MISSION_TOPIC])
+    opening = [json.loads(text) for text in client.open_messages()]
+    assert opening == [
+        {
+            "op": "advertise",
+            "id": "advertise:/nemesys/frame:1",
+            "type": "std_msgs/UInt8MultiArray",
+            "topic": "/nemesys/frame",
+            "latch": False,
+            "queue_size": 100,
+        },
+        {
+            "op": "subscribe",
+            "id": "subscribe:/nemesys/pose:2",
+            "type": "geometry_msgs/PoseStamped",
+            "topic": "/nemesys/pose",
+            "compression": "none",
+            "throttle_rate": 0,
+            "queue_length": 0,
+        },
+        {
+            "op": "subscribe",
+            "id": "subscribe:/nemesys/mission:3",
+            "type": "std_msgs/String",
+            "topic": "/nemesys/mission",
+            "compression": "none",
+            "throttle_rate": 0,
+            "queue_length": 0,
+        },
+    ]
+    assert json.loads(client.publish(FRAME_TOPIC, {"data": [1, 2]})) == {
+        "op": "publish",
+        "id": "publish:/nemesys/frame:4",
+        "topic": "/nemesys/frame",
+        "msg": {"data": [1, 2]},
+        "latch": False,
+    }
+    assert json.loads(client.publish(FRAME_TOPIC, {"data": []}))["id"] == "publish:/nemesys/frame:5"
+    # Every connection opens with the same ids, and closes with them.
+    assert [json.loads(text) for text in client.open_messages()] == opening
+    assert [json.loads(text) for text in client.close_messages()] == [
+        {"op": "unsubscribe", "id": "subscribe:/nemesys/pose:2", "topic": "/nemesys/pose"},
+        {"op": "unsubscribe", "id": "subscribe:/nemesys/mission:3", "topic": "/nemesys/mission"},
+        {"op": "unadvertise", "id": "advertise:/nemesys/frame:1", "topic": "/nemesys/frame"},
+    ]
+    with pytest.raises(KeyError, match="/camera"):
+        ClientProtocol(advertise=[], subscribe=["/camera"])
+
+
+def test_the_server_session_takes_what_the_client_protocol_sends() -> None:
+    client = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[MISSION_TOPIC])
+    session = ClientSession(status_level="warning")
+    for text in client.open_messages():
+        assert session.receive_text(text) == Outcome(parse_message(text))
+    assert dict(session.advertised) == {FRAME_TOPIC: UINT8_MULTIARRAY_TYPE}
+    assert session.subscriptions == {MISSION_TOPIC: frozenset({"subscribe:/nemesys/mission:2"})}
+    assert session.receive_text(client.publish(FRAME_TOPIC, {"data": list(EXAMPLE)})).frame == (
+        EXAMPLE
+    )
+    for text in client.close_messages():
+        out = session.receive_text(text)
+        assert not out.dropped and out.notice is None and out.replies == ()
+    assert session.subscriptions == {} and dict(session.advertised) == {}
+
+
+def test_decode_server_message() -> None:
+    ack = publish_message(MISSION_TOPIC, json_string_msg({"seq": 4}))
+    assert decode_server_message(to_json(ack)) == ack
+    assert decode_server_message('{"op": "status", "level": "error"}')["op"] == "status"
+    with pytest.raises(BinaryMessage, match="a binary message of 3 bytes"):
+        decode_server_message(b"abc")
+    with pytest.raises(MalformedMessage, match="a message that is not JSON: 'nope'"):
+        decode_server_message("nope")
+    with pytest.raises(MalformedMessage, match="not a JSON object"):
+        decode_server_message("[1]")
+    with pytest.raises(MalformedMessage) as long:
+        decode_server_message("x" * 500)
+    assert len(long.value.reason) < 120
+
+
+def test_decode_json_string() -> None:
+    assert decode_json_string(json_string_msg({"seq": 1, "outcome": "accepted"})) == {
+        "seq": 1,
+        "outcome": "accepted",
+    }
+    assert decode_json_string({"data": {"seq": 2}}) == {"seq": 2}  # already decoded
+    for msg, words in [
+        ({"data": "{broken"}, "data is not JSON"),
+        ({"data": "[1]"}, "no JSON object"),
+        ({"data": 42}, "no JSON object"),
+        ({}, "no JSON object"),
+        ([1], "no JSON object"),
+    ]:
+        with pytest.raises(InvalidData) as caught:
+            decode_json_string(msg)
+        assert words in caught.value.reason

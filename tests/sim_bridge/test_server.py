@@ -17,7 +17,7 @@ import os
 import socket
 import threading
 import time
-from collections.abc import AsyncIterator, Callable, Coroutine, Iterator
+from collections.abc import AsyncIterator, Callable, Coroutine
 from typing import Any, TypeVar, cast
 
 import pytest
@@ -36,10 +36,10 @@ from sim_bridge.rosbridge import (
 )
 from sim_bridge.server import BridgeServer, _Client
 
+from .helpers import EXAMPLE, Inbox, LoopThread, ros_client
+
 T = TypeVar("T")
 
-#: The 13 bytes of the worked example in docs/protocol.md.
-EXAMPLE = bytes.fromhex("aaaa7c13214730000008915600")
 LOGGER = "sim_bridge.server"
 
 
@@ -234,20 +234,17 @@ class ThreadedServer:
     """A BridgeServer on its own event loop thread, for blocking clients such as roslibpy."""
 
     def __init__(self, vehicle: FakeVehicle, **options: Any) -> None:
-        self.loop = asyncio.new_event_loop()
-        self.thread = threading.Thread(target=self.loop.run_forever, daemon=True)
+        self._loop = LoopThread()
         self.server = BridgeServer(vehicle, host="127.0.0.1", port=0, **options)
 
     def __enter__(self) -> ThreadedServer:
-        self.thread.start()
-        asyncio.run_coroutine_threadsafe(self.server.start(), self.loop).result(5)
+        self._loop.start()
+        self._loop.run(self.server.start())
         return self
 
     def __exit__(self, *exc: object) -> None:
-        asyncio.run_coroutine_threadsafe(self.server.stop(), self.loop).result(5)
-        self.loop.call_soon_threadsafe(self.loop.stop)
-        self.thread.join(5)
-        self.loop.close()
+        self._loop.run(self.server.stop())
+        self._loop.stop()
 
     @property
     def port(self) -> int:
@@ -257,40 +254,7 @@ class ThreadedServer:
         async def count() -> int:
             return self.server.client_count
 
-        return asyncio.run_coroutine_threadsafe(count(), self.loop).result(5)
-
-
-@contextlib.contextmanager
-def ros_client(port: int) -> Iterator[Any]:
-    """A connected roslibpy client (asyncio transport: the twisted reactor cannot restart)."""
-    ros = roslibpy.Ros("127.0.0.1", port, transport="asyncio")
-    ros.run(timeout=3)
-    try:
-        yield ros
-    finally:
-        ros.close()
-
-
-class Inbox:
-    """Thread-safe list of messages a roslibpy callback received."""
-
-    def __init__(self) -> None:
-        self._items: list[dict[str, Any]] = []
-        self._cond = threading.Condition()
-
-    def __call__(self, message: dict[str, Any]) -> None:
-        with self._cond:
-            self._items.append(dict(message))
-            self._cond.notify_all()
-
-    def wait(self, count: int = 1, timeout: float = 1.5) -> list[dict[str, Any]]:
-        with self._cond:
-            self._cond.wait_for(lambda: len(self._items) >= count, timeout)
-            return list(self._items)
-
-    def items(self) -> list[dict[str, Any]]:
-        with self._cond:
-            return list(self._items)
+        return self._loop.run(count())
 
 
 # ------------------------------------------------------------------------------------------

@@ -23,7 +23,11 @@ from websockets.asyncio.client import connect
 
 from codec import encode_frame
 from sim_bridge.rosbridge import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC, STATUS_TOPIC
-from tests.sim_bridge.test_server import Inbox, ros_client
+
+from .helpers import Inbox, ros_client
+
+#: ``nemesys`` as a subprocess: this interpreter running ``backend.cli``.
+NEMESYS = [sys.executable, "-m", "backend.cli"]
 
 CIRCLE = encode_frame("circle", speed=0.18, depth=2.5, radius=4, direction="cw").frame
 SQUARE = encode_frame("square", speed=0.18, depth=2, side_span=6, direction="ccw").frame
@@ -33,19 +37,7 @@ SQUARE = encode_frame("square", speed=0.18, depth=2, side_span=6, direction="ccw
 def sim_port() -> Iterator[int]:
     """`nemesys sim` on a free loopback port, ten times faster than real time."""
     proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "backend.cli",
-            "sim",
-            "--port",
-            "0",
-            "--time-scale",
-            "10",
-            "--seed",
-            "5",
-            "--quiet",
-        ],
+        [*NEMESYS, "sim", "--port", "0", "--time-scale", "10", "--seed", "5", "--quiet"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -170,49 +162,24 @@ def test_faults_leave_the_server_up_and_the_vehicle_on_its_pattern(sim_port: int
     assert status["pattern"] == "square" and status["mode"] == "running"
 
 
-def test_nemesys_send_prints_the_vehicles_acknowledgement(sim_port: int) -> None:
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "backend.cli",
-            "send",
-            "--to",
-            f"ws://127.0.0.1:{sim_port}",
-            "hover",
-            "duration=60",
-            "depth=1.5",
-            "heading=90",
-            "--json",
-        ],
+def _send(port: int, *command: str) -> subprocess.CompletedProcess[str]:
+    """``nemesys send --to ws://127.0.0.1:port COMMAND...``."""
+    return subprocess.run(
+        [*NEMESYS, "send", "--to", f"ws://127.0.0.1:{port}", *command],
         capture_output=True,
         text=True,
         timeout=30,
         check=False,
     )
+
+
+def test_nemesys_send_prints_the_vehicles_acknowledgement(sim_port: int) -> None:
+    done = _send(sim_port, "hover", "duration=60", "depth=1.5", "heading=90", "--json")
     assert done.returncode == 0, done.stderr
     result = json.loads(done.stdout)
     ack = result["ack"]
     assert ack["outcome"] == "accepted" and ack["command"]["pattern"] == "hover"
-    done = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "backend.cli",
-            "send",
-            "--to",
-            f"ws://127.0.0.1:{sim_port}",
-            "straight",
-            "speed=2.5",
-            "depth=1",
-            "duration=10",
-            "heading=0",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=30,
-        check=False,
-    )
+    done = _send(sim_port, "straight", "speed=2.5", "depth=1", "duration=10", "heading=0")
     assert done.returncode == 1
     assert "limit_violation" in done.stdout + done.stderr
     assert _status(sim_port)["pattern"] == "hover"

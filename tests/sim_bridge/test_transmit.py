@@ -34,6 +34,7 @@ from sim_bridge.transmit import (
 )
 
 from .fake_rosbridge import FakeRosbridge, ack_for, mission
+from .helpers import free_port
 
 FRAMES = [
     encode_frame("circle", speed=0.5, depth=2, radius=5, direction="cw").frame,
@@ -71,14 +72,6 @@ def pty_pair() -> Iterator[tuple[int, str]]:
     finally:
         os.close(master)
         os.close(slave)
-
-
-def free_port() -> int:
-    """A 127.0.0.1 port nothing listens on (bound, then released)."""
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port: int = s.getsockname()[1]
-    return port
 
 
 # --- serial and TCP -----------------------------------------------------------------------
