@@ -56,6 +56,8 @@ from codec import (
     SYNC_WORD,
     BCHCode,
     CommandDictionary,
+    binomial_cdf,
+    frame_success_probability,
 )
 from codec import batch as codec_batch
 
@@ -203,16 +205,6 @@ TEST: Final = BerConfig(
 # --- analytic -----------------------------------------------------------------------------
 
 
-def binomial_cdf(n: int, k: int, p: float) -> float:
-    """P(Binomial(n, p) <= k)."""
-    if k < 0:
-        return 0.0
-    if k >= n:
-        return 1.0
-    q = 1.0 - p
-    return math.fsum(math.comb(n, i) * p**i * q ** (n - i) for i in range(k + 1))
-
-
 def code_length(t: int) -> int:
     """n of ``BCHCode(t)`` over GF(2^8) with k = 56: 56 + 8t (checked against the codec)."""
     return K + M_FIELD * t
@@ -234,8 +226,9 @@ def analytic_sync(ber: float, tolerance: int = DEFAULT_SYNC_TOLERANCE) -> float:
 
 
 def analytic_frame_success(t: int, ber: float) -> float:
-    """Exact success probability of the simulated frame: sync term times codeword term."""
-    return analytic_sync(ber) * analytic_success(t, ber)
+    """Exact success probability of the simulated frame: sync term times codeword term
+    (:func:`codec.frame_success_probability`, the one place it is computed)."""
+    return frame_success_probability(ber, codeword_bits=code_length(t), t=t)
 
 
 def wilson(successes: int, trials: int, z: float = Z95) -> tuple[float, float]:

@@ -355,6 +355,12 @@ def cmd_analyze(args: argparse.Namespace, out: TextIO) -> int:
         )
         out.write(ber.format_report(report))
         return EXIT_OK
+    if args.target == "delivery":
+        from analysis import delivery
+
+        if args.trials is not None and args.trials < 1:
+            raise UsageError(f"--trials must be at least 1, got {args.trials}")
+        return delivery.main(out, args.trials or delivery.DEFAULT_TRIALS, args.seed)
     raise UsageError(f"unknown analysis {args.target!r}")
 
 
@@ -476,9 +482,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="reproduce a figure of the paper by simulation (CSV + PNG)",
         description="ber: decoding success vs bit error rate for T = 1..4 (Monte Carlo through "
         "the real frame and decoder, against the analytic curve), coding efficiency, and the "
-        "rate of wrong commands accepted with and without the CRC-4.",
+        "rate of wrong commands accepted with and without the CRC-4. delivery: one command "
+        "sent r = 1..3 times through the training channel, against 1 - (1 - P1)^r.",
     )
-    p.add_argument("target", choices=["ber"], help="what to analyze")
+    p.add_argument("target", choices=["ber", "delivery"], help="what to analyze")
+    p.add_argument("--trials", type=int, default=None, help="delivery: commands per BER")
     p.add_argument("--quick", action="store_true", help="fewer frames (under a minute)")
     p.add_argument(
         "--out",

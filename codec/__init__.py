@@ -13,6 +13,13 @@ Typical use::
 """
 
 from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
+from codec._delivery import (
+    MAX_COPIES,
+    binomial_cdf,
+    copies_for,
+    delivery_probability,
+    frame_success_probability,
+)
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
@@ -91,6 +98,7 @@ __all__ = [
     "FRAME_BITS",
     "FRAME_BYTES",
     "GUARD_BITS",
+    "MAX_COPIES",
     "MESSAGE_BITS",
     "PARITY_BITS",
     "PATTERNS",
@@ -125,14 +133,18 @@ __all__ = [
     "Snap",
     "TableDecoder",
     "airtime_s",
+    "binomial_cdf",
     "command_of_message",
+    "copies_for",
     "crc4",
     "decode_codeword",
     "decode_frame",
+    "delivery_probability",
     "describe_dictionary",
     "describe_pattern",
     "encode_frame",
     "frame_of",
+    "frame_success_probability",
     "make_command",
     "markdown_tables",
     "message_of",
