@@ -14,10 +14,8 @@ Builders make the outgoing messages: :func:`publish_message` around :func:`strin
 :func:`json_string_msg`, :func:`pose_stamped_msg` and :func:`uint8_multiarray_msg`,
 serialized by :func:`to_json`.
 
-The client side is here too, for the station's transmitter (:mod:`sim_bridge.transmit`) and
-the console's link (:mod:`backend.link`): :class:`ClientProtocol` makes the messages a client
-sends (as roslibpy makes them), :func:`decode_server_message` and :func:`decode_json_string`
-read what the server sends back.
+The client side (what the station's transmitter and the console's link send, and how they read
+the answers) is :mod:`sim_bridge.rosbridge_client`.
 
 Topics (see ``docs/bridge.md``):
 
@@ -37,10 +35,9 @@ from __future__ import annotations
 
 import base64
 import binascii
-import itertools
 import json
 import math
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Final, TypeAlias
@@ -892,115 +889,3 @@ def _service_arg(args: Mapping[str, Any] | tuple[Any, ...], name: str) -> str | 
     """A string service argument, by name (object args) or first position (list args)."""
     value = args.get(name) if isinstance(args, Mapping) else (args[0] if args else None)
     return value if isinstance(value, str) else None
-
-
-# ---------------------------------------------------------------------------------------------
-# Client side: what a client sends, and what it makes of what the server sends
-# ---------------------------------------------------------------------------------------------
-
-
-class ClientProtocol:
-    """The messages a rosbridge client sends, shaped and numbered as roslibpy does (sans-IO).
-
-    ``advertise`` are the topics the client publishes on, ``subscribe`` those it listens to,
-    each with its type from :data:`TOPIC_TYPES`. Each advertisement and subscription gets its
-    id once, so every connection opens (:meth:`open_messages`) and closes
-    (:meth:`close_messages`) with the same messages; each :meth:`publish` gets a new id.
-    """
-
-    def __init__(self, advertise: Iterable[str], subscribe: Iterable[str]) -> None:
-        self._count = itertools.count(1)
-        self._advertised = {
-            topic: (TOPIC_TYPES[topic], self._id("advertise", topic)) for topic in advertise
-        }
-        self._subscribed = {
-            topic: (TOPIC_TYPES[topic], self._id("subscribe", topic)) for topic in subscribe
-        }
-
-    def _id(self, op: str, topic: str) -> str:
-        return f"{op}:{topic}:{next(self._count)}"
-
-    def open_messages(self) -> tuple[str, ...]:
-        """Every advertisement, then every subscription."""
-        advertise = (
-            {
-                "op": "advertise",
-                "id": op_id,
-                "type": type_name,
-                "topic": topic,
-                "latch": False,
-                "queue_size": 100,
-            }
-            for topic, (type_name, op_id) in self._advertised.items()
-        )
-        subscribe = (
-            {
-                "op": "subscribe",
-                "id": op_id,
-                "type": type_name,
-                "topic": topic,
-                "compression": "none",
-                "throttle_rate": 0,
-                "queue_length": 0,
-            }
-            for topic, (type_name, op_id) in self._subscribed.items()
-        )
-        return tuple(to_json(message) for message in (*advertise, *subscribe))
-
-    def close_messages(self) -> tuple[str, ...]:
-        """Every unsubscribe, then every unadvertise, with the ids they were opened with."""
-        unsubscribe = (
-            {"op": "unsubscribe", "id": op_id, "topic": topic}
-            for topic, (_, op_id) in self._subscribed.items()
-        )
-        unadvertise = (
-            {"op": "unadvertise", "id": op_id, "topic": topic}
-            for topic, (_, op_id) in self._advertised.items()
-        )
-        return tuple(to_json(message) for message in (*unsubscribe, *unadvertise))
-
-    def publish(self, topic: str, msg: Mapping[str, Any]) -> str:
-        """A client -> server ``publish`` of ``msg`` on ``topic``."""
-        return to_json(
-            {
-                "op": "publish",
-                "id": self._id("publish", topic),
-                "topic": topic,
-                "msg": dict(msg),
-                "latch": False,
-            }
-        )
-
-
-def decode_server_message(data: str | bytes) -> JsonObject:
-    """One message a rosbridge server sent: a JSON object (its ``op`` is not checked).
-
-    Raises :class:`BinaryMessage` for a binary frame and :class:`MalformedMessage` for text
-    that is not a JSON object; the reason quotes at most 80 characters of it.
-    """
-    if isinstance(data, bytes):
-        raise BinaryMessage(f"a binary message of {len(data)} bytes")
-    try:
-        message = json.loads(data)
-    except (ValueError, RecursionError):
-        raise MalformedMessage(f"a message that is not JSON: {data!r:.80}") from None
-    if not isinstance(message, dict):
-        raise MalformedMessage(f"a message that is not a JSON object: {data!r:.80}")
-    return message
-
-
-def decode_json_string(msg: object) -> JsonObject:
-    """The JSON object a ``std_msgs/String`` message carries in ``data`` (the inverse of
-    :func:`json_string_msg`); ``data`` already decoded to an object is taken as it is.
-
-    Raises :class:`InvalidData` when there is no JSON object.
-    """
-    data = msg.get("data") if isinstance(msg, Mapping) else None
-    if isinstance(data, str):
-        try:
-            data = json.loads(data)
-        except (ValueError, RecursionError):
-            raise InvalidData(f"data is not JSON: {data!r:.80}") from None
-    if not isinstance(data, dict):
-        raise InvalidData(f"no JSON object in the data of {msg!r:.80}")
-    return data

@@ -85,11 +85,9 @@ from sim_bridge.rosbridge import (
     MISSION_TOPIC,
     BinaryMessage,
     BridgeError,
-    ClientProtocol,
     InvalidData,
-    decode_json_string,
-    decode_server_message,
 )
+from sim_bridge.rosbridge_client import ClientProtocol, decode_json_string, decode_server_message
 
 logger = logging.getLogger(__name__)
 logger.addHandler(logging.NullHandler())  # a library: the application configures output

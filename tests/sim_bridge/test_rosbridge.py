@@ -29,7 +29,6 @@ from sim_bridge.rosbridge import (
     BinaryMessage,
     BridgeError,
     CallService,
-    ClientProtocol,
     ClientSession,
     ClientStatus,
     InvalidData,
@@ -47,8 +46,6 @@ from sim_bridge.rosbridge import (
     Unsubscribe,
     UnsupportedOp,
     canonical_type,
-    decode_json_string,
-    decode_server_message,
     decode_uint8_data,
     decode_uint8_multiarray,
     json_string_msg,
@@ -64,6 +61,7 @@ from sim_bridge.rosbridge import (
     to_json,
     uint8_multiarray_msg,
 )
+from sim_bridge.rosbridge_client import ClientProtocol, decode_json_string, decode_server_message
 
 from .helpers import EXAMPLE
 
