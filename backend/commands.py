@@ -1,14 +1,25 @@
-"""Command lifecycle: queued -> transmitted -> acknowledged | rejected | timed_out | failed.
+"""Command delivery: copies spaced in time, one rule for superseding, acknowledgements and
+timeouts. The states and their transitions are the table in :mod:`backend.lifecycle`.
 
-Every command is written to the mission log (state ``queued``) before anything is transmitted,
-and every change of state is written before it is announced. Acknowledgements from the vehicle
-are matched to the command they answer by the received frame (exact, then within the BCH
-correction radius, then the oldest awaiting one: :func:`sim_bridge.transmit.ack_match`).
+Every command is written to the mission log (``queued``) before anything is transmitted, and
+every change is written before it is announced. A command goes out as ``copies`` frames spaced
+``copy_interval_s`` apart (time diversity against bursts):
 
-Surface (the abort) is never rate limited and is sent again every ``surface_repeat_s`` until
-the vehicle acknowledges it. The console keeps a mirror of the vehicle's plan: on every
-accepted acknowledgement it replans from the state the vehicle reports it planned from, so its
-previews join from exactly the plan the vehicle flies.
+* on a **one-way** link (no acknowledgements) the number of copies is chosen from the link's
+  bit-error rate to reach ``delivery_target`` (:func:`codec.copies_for`), and the command ends
+  ``sent`` once they are out;
+* on a **two-way** link one copy by default; it ends ``acknowledged`` / ``rejected`` by the
+  vehicle's acknowledgement (matched by frame: :func:`sim_bridge.transmit.ack_match`), or
+  ``timed_out`` ``ack_timeout_s`` after its last copy.
+
+**Superseding, the one rule.** A newer command, a Surface or a retry replaces every command
+whose copies are still going out: they end ``superseded``, naming the newer record, and none of
+their frames leaves after the newer one's first (frames leave one at a time, under one lock,
+and a replaced command's turn is skipped). A Surface pressed while another is on its way joins
+it (one record, more copies). Surface repeats every ``surface_repeat_s``: until acknowledged on
+a two-way link; on a one-way link :data:`MIN_SURFACE_COPIES` times or more, enough for
+:data:`SURFACE_DELIVERY_TARGET`, then it ends ``sent``. A training reset and shutdown stop
+every repetition (``interrupted``).
 """
 
 from __future__ import annotations
@@ -19,17 +30,29 @@ import logging
 import time
 from collections import OrderedDict, deque
 from collections.abc import Callable
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, Final
 
+from backend.health import FrameLedger, Outcome
+from backend.lifecycle import ON_ITS_WAY, RETRYABLE, Event, IllegalTransition, advance
 from backend.link import Link
+from backend.mirror import VehicleMirror
 from backend.store import MissionLog, now_iso
 from backend.telemetry import TelemetryHub
-from codec import Encoded, decode_frame, encode_frame
-from planner import Plan, PlanError, VehicleState, plan
+from codec import Encoded, RejectReason, copies_for, delivery_probability, encode_frame
+from planner import Plan
 from sim_bridge.agent import command_json
 from sim_bridge.transmit import ack_match
 
 logger = logging.getLogger("backend.commands")
+
+#: A Surface on a one-way link goes out at least this many times...
+MIN_SURFACE_COPIES: Final = 3
+#: ... and enough times for this delivery probability at the link's bit-error rate.
+SURFACE_DELIVERY_TARGET: Final = 0.999999
+#: Rejections that mean the channel damaged the copy (the station sends only valid frames):
+#: while copies remain, the command waits for the next one.
+DAMAGE_REASONS: Final = frozenset(r.value for r in RejectReason)
 
 
 class RateLimited(Exception):
@@ -47,8 +70,30 @@ class NotRetryable(Exception):
     """The command cannot be retried in its state."""
 
 
+@dataclass(eq=False)
+class Delivery:
+    """One attempt at getting a record to the vehicle: its copies, spaced in time."""
+
+    command_id: int
+    enc: Encoded
+    kind: str
+    two_way: bool
+    #: Copies planned in this attempt; ``None``: until acknowledged (two-way Surface).
+    copies: int | None
+    interval_s: float
+    ber: float
+    loss: float
+    tried: int = 0  # copies handed to the link in this attempt, failed ones too
+    last_failure: str | None = None
+    wake: asyncio.Event = field(default_factory=asyncio.Event)
+    task: asyncio.Task[None] | None = None
+
+    def more(self) -> bool:
+        return self.copies is None or self.tried < self.copies
+
+
 class CommandManager:
-    """Owns transmissions, acknowledgements, timeouts and the vehicle's plan mirror."""
+    """Owns transmissions, acknowledgements, timeouts, and the vehicle's mirror."""
 
     def __init__(
         self,
@@ -61,6 +106,9 @@ class CommandManager:
         ack_timeout_s: float,
         surface_repeat_s: float,
         max_sends_per_minute: int,
+        copy_interval_s: float = 1.0,
+        delivery_target: float = 0.999,
+        link_ber: Callable[[], tuple[float, float]] = lambda: (1e-3, 0.0),
         link_delay_s: Callable[[], float] = lambda: 0.0,
         airtime_s: float = 100 / 36000,
         target: str | None = None,
@@ -75,45 +123,75 @@ class CommandManager:
         self.ack_timeout_s = ack_timeout_s
         self.surface_repeat_s = surface_repeat_s
         self.max_sends_per_minute = max_sends_per_minute
+        self.copy_interval_s = copy_interval_s
+        self.delivery_target = delivery_target
+        #: (bit-error rate, whole-frame loss) the copies are chosen from.
+        self.link_ber = link_ber
         self._link_delay_s = link_delay_s
         self.airtime_s = airtime_s
         self._sends: deque[float] = deque()
+        self._live: dict[int, Delivery] = {}  # copies still going out
         self._awaiting: OrderedDict[int, Encoded] = OrderedDict()  # id -> frame, oldest first
         self._timeouts: dict[int, asyncio.TimerHandle] = {}
-        self._surface_task: asyncio.Task[None] | None = None
-        self._tasks: set[asyncio.Task[Any]] = set()
-        self.mirror: Plan | None = None  # the vehicle's plan, as replayed here
-        self.vehicle_active: dict[str, Any] | None = None  # the vehicle's echoed command
+        self._tx_lock = asyncio.Lock()
+        self.ledger = FrameLedger()
+        self.last_ack_s: float | None = None  # monotonic arrival of the last acknowledgement
         self.last_sent: dict[str, Any] | None = None
-        #: The newest command (by id) the vehicle accepted from this console: its record.
-        self._accepted: dict[str, Any] | None = None
-        self.on_plan: Callable[[Plan], None] = lambda _p: None
+        self.vehicle = VehicleMirror(hub, dive)
+
+    # --- the vehicle mirror, as the console reads it ---------------------------------------
+
+    @property
+    def mirror(self) -> Plan | None:
+        return self.vehicle.plan
+
+    @property
+    def vehicle_active(self) -> dict[str, Any] | None:
+        return self.vehicle.active
+
+    @property
+    def echo_mismatch(self) -> bool:
+        return self.vehicle.echo_mismatch
+
+    # --- how many copies -------------------------------------------------------------------
+
+    def copies_now(self) -> int:
+        """Copies a command gets on this link now (one on a two-way link)."""
+        if self.link.acknowledges:
+            return 1
+        ber, loss = self.link_ber()
+        return copies_for(ber, self.delivery_target, loss=loss)
+
+    def surface_copies_now(self) -> int | None:
+        """Copies a Surface gets now; ``None``: until acknowledged (two-way link)."""
+        if self.link.acknowledges:
+            return None
+        ber, loss = self.link_ber()
+        return copies_for(ber, SURFACE_DELIVERY_TARGET, loss=loss, minimum=MIN_SURFACE_COPIES)
+
+    # --- stopping ---------------------------------------------------------------------------
 
     async def close(self) -> None:
-        for handle in self._timeouts.values():
-            handle.cancel()
-        tasks = list(self._tasks)
-        if self._surface_task is not None:
-            tasks.append(self._surface_task)
-        for task in tasks:
-            task.cancel()
+        """Shutdown: every repetition stops; what was on its way is ``interrupted``."""
+        tasks = [d.task for d in self._live.values() if d.task is not None]
+        self._stop_all("the console was shut down")
         for task in tasks:
             with contextlib.suppress(asyncio.CancelledError):
                 await task
 
     def reset_vehicle(self) -> None:
-        """The vehicle started afresh (training reset): forget its plan and echoes."""
-        self.mirror = None
-        self.vehicle_active = None
-        self._accepted = None
-        for handle in self._timeouts.values():
-            handle.cancel()
-        self._timeouts.clear()
-        for cid in list(self._awaiting):
-            self._update(cid, state="timed_out", reason="the vehicle was reset")
-        self._awaiting.clear()
+        """The vehicle started afresh (training reset): every repetition stops, what was on
+        its way is ``interrupted``, the mirror and the frame counts start again."""
+        self._stop_all("the training vehicle was reset (a new dive)")
+        self.vehicle.reset()
+        self.ledger.reset()
+        self.last_ack_s = None
 
-    # --- sending -------------------------------------------------------------------------
+    def _stop_all(self, why: str) -> None:
+        for cid in [*self._live, *(c for c in self._awaiting if c not in self._live)]:
+            self._end(cid, Event.INTERRUPTED, "sent", reason=why)
+
+    # --- sending ----------------------------------------------------------------------------
 
     def _check_rate(self) -> None:
         now = time.monotonic()
@@ -121,17 +199,28 @@ class CommandManager:
             self._sends.popleft()
         if len(self._sends) >= self.max_sends_per_minute:
             raise RateLimited(60.0 - (now - self._sends[0]), self.max_sends_per_minute)
+        self._sends.append(now)
 
-    async def submit(self, enc: Encoded, kind: str = "command") -> dict[str, Any]:
-        """Log the command (queued) with the values asked for (``enc.snaps``), then transmit
-        it in the background; returns the record.
+    async def submit(
+        self, enc: Encoded, kind: str = "command", copies: int | None = None
+    ) -> dict[str, Any]:
+        """Log the command (queued) with the values asked for (``enc.snaps``), then deliver it
+        in the background, replacing whatever is still being repeated; returns the record.
+        ``copies``: the operator's count (1..20), else chosen from the link.
 
         Raises:
             RateLimited: too many transmissions in the last minute (never for surface).
         """
-        if kind != "surface":
+        if kind == "surface":
+            joined = self._join_surface()
+            if joined is not None:
+                return joined
+        else:
             self._check_rate()
-            self._sends.append(time.monotonic())
+        two_way = self.link.acknowledges
+        if copies is None:
+            copies = self.surface_copies_now() if kind == "surface" else self.copies_now()
+        ber, _loss = self.link_ber()
         record = self.log.insert_command(
             self._dive(),
             {
@@ -142,59 +231,136 @@ class CommandManager:
                 "requested": {s.field: s.requested for s in enc.snaps},
                 "bits": enc.frame.bits,
                 "hex": enc.frame.hex,
+                "copies": copies,
+                "ber": ber,
+                "two_way": two_way,
             },
         )
         self._announce(record)
-        if kind == "surface":
-            if self._surface_task is not None:
-                self._surface_task.cancel()
-            self._surface_task = asyncio.create_task(self._surface_loop(record["id"], enc))
-        else:
-            self._spawn(self._transmit(record["id"], enc))
+        self._begin(record["id"], enc, kind, copies)
         return record
 
     async def surface(self) -> dict[str, Any]:
         return await self.submit(encode_frame("surface", {}), kind="surface")
 
-    def retry(self, command_id: int) -> dict[str, Any]:
+    def _join_surface(self) -> dict[str, Any] | None:
+        """A Surface pressed while another is on its way: the same record, sent again now,
+        with its full count of copies to go."""
+        pending = [d for d in self._live.values() if d.kind == "surface"]
+        if not pending:
+            return None
+        d = pending[-1]
+        record = self.log.command(d.command_id)
+        assert record is not None
+        if d.copies is not None:
+            more = d.tried + (self.surface_copies_now() or MIN_SURFACE_COPIES) - d.copies
+            d.copies += more
+            record = self._update(d.command_id, copies=(record["copies"] or 0) + more)
+        d.wake.set()
+        return record
+
+    async def retry(self, command_id: int, copies: int | None = None) -> dict[str, Any]:
+        """A new attempt of a retryable record, under the same supersede rule.
+
+        Raises:
+            KeyError: no such command. NotRetryable: not in a retryable state.
+            RateLimited: too many transmissions (never for surface).
+        """
         record = self.log.command(command_id)
         if record is None:
             raise KeyError(command_id)
-        if record["state"] not in ("timed_out", "failed", "rejected"):
+        if record["state"] not in RETRYABLE:
             raise NotRetryable(
-                f"command {command_id} is {record['state']}; only timed_out, failed or "
-                "rejected commands can be retried"
+                f"command {command_id} is {record['state']}; only "
+                f"{', '.join(sorted(RETRYABLE))} commands can be retried"
             )
-        self._check_rate()
-        self._sends.append(time.monotonic())
+        kind = record["kind"]
+        if kind != "surface":
+            self._check_rate()
+        if copies is None:
+            copies = self.surface_copies_now() if kind == "surface" else self.copies_now()
+        ber, _loss = self.link_ber()
+        planned = None if copies is None else (record["copies"] or 0) + copies
+        record = self._update(
+            command_id,
+            state=advance(record["state"], Event.RETRY),
+            reason=None,
+            superseded_by=None,
+            copies=planned,
+            ber=ber,
+            two_way=self.link.acknowledges,
+        )
         enc = encode_frame(record["pattern"], record["params"])
-        self._spawn(self._transmit(command_id, enc))
+        self._begin(command_id, enc, kind, copies)
         return record
 
-    def _spawn(self, coro: Any) -> None:
-        task = asyncio.create_task(coro)
-        self._tasks.add(task)
-        task.add_done_callback(self._tasks.discard)
-
-    async def _transmit(self, command_id: int, enc: Encoded) -> None:
-        record = self.log.command(command_id)
-        attempts = (record or {}).get("attempts", 0) + 1
-        reason = await self.link.transmit(enc.frame)
-        if reason is not None:
-            self._update(command_id, state="failed", attempts=attempts, reason=reason)
-            return
-        self.last_sent = {"id": command_id, **command_json(enc.command)}
-        now = self.log.command(command_id)
-        if now is not None and now["state"] == "acknowledged":
-            # an earlier attempt was acknowledged while this one was on its way (a Surface
-            # repeat): count the attempt, keep the acknowledgement
-            self._update(command_id, attempts=attempts)
-            return
-        self._update(
-            command_id, state="transmitted", attempts=attempts, sent_at=now_iso(), reason=None
+    def _begin(self, command_id: int, enc: Encoded, kind: str, copies: int | None) -> None:
+        for other in [c for c in self._live if c != command_id]:
+            self._end(
+                other,
+                Event.SUPERSEDED,
+                "sent",
+                reason=f"superseded by command {command_id}",
+                superseded_by=command_id,
+            )
+        # a record awaiting its acknowledgement from an earlier attempt starts afresh
+        self._awaiting.pop(command_id, None)
+        ber, loss = self.link_ber()
+        d = Delivery(
+            command_id,
+            enc,
+            kind,
+            self.link.acknowledges,
+            copies,
+            self.surface_repeat_s if kind == "surface" else self.copy_interval_s,
+            ber,
+            loss,
         )
-        if not self.link.acknowledges:
-            return
+        self._live[command_id] = d
+        d.task = asyncio.create_task(self._deliver(d), name=f"command {command_id}")
+
+    async def _deliver(self, d: Delivery) -> None:
+        while d.more():
+            # shielded: a copy handed to the link is written down even if this is cancelled
+            await asyncio.shield(self._send_copy(d))
+            if self._live.get(d.command_id) is not d or not d.more():
+                break
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(d.wake.wait(), d.interval_s)
+            d.wake.clear()
+        if self._live.get(d.command_id) is d:
+            self._copies_done(d)
+
+    async def _send_copy(self, d: Delivery) -> None:
+        async with self._tx_lock:  # frames leave one at a time, in the order of the rule
+            if self._live.get(d.command_id) is not d:
+                return  # replaced while waiting its turn: nothing goes out
+            d.tried += 1
+            reason = await self.link.transmit(d.enc.frame)
+            cid = d.command_id
+            record = self.log.command(cid)
+            assert record is not None
+            fields: dict[str, Any] = {"attempts": record["attempts"] + 1}
+            if reason is not None:
+                d.last_failure = reason
+                self._update(cid, **fields, reason=f"copy {d.tried} did not leave: {reason}")
+                return
+            live = self._live.get(cid) is d
+            sent = record["copies_sent"] + 1
+            fields.update(
+                copies_sent=sent,
+                p_delivered=delivery_probability(d.ber, sent, loss=d.loss),
+                sent_at=now_iso(),
+            )
+            if live and record["state"] in ON_ITS_WAY:
+                fields.update(state=advance(record["state"], Event.COPY_SENT), reason=None)
+            self.ledger.frame_out(cid, answer_expected=live and d.two_way)
+            self.last_sent = {"id": cid, **command_json(d.enc.command)}
+            self._update(cid, **fields)
+            if live and d.two_way:
+                self._await_ack(cid, d.enc)
+
+    def _await_ack(self, command_id: int, enc: Encoded) -> None:
         self._awaiting[command_id] = enc
         self._awaiting.move_to_end(command_id)
         old = self._timeouts.pop(command_id, None)
@@ -204,18 +370,51 @@ class CommandManager:
         loop = asyncio.get_running_loop()
         self._timeouts[command_id] = loop.call_later(wait, self._timed_out, command_id)
 
-    async def _surface_loop(self, command_id: int, enc: Encoded) -> None:
-        while True:
-            await self._transmit(command_id, enc)
-            await asyncio.sleep(self.surface_repeat_s)
-            record = self.log.command(command_id)
-            if record is None or record["state"] == "acknowledged":
-                return
+    def _copies_done(self, d: Delivery) -> None:
+        cid = d.command_id
+        del self._live[cid]
+        record = self.log.command(cid)
+        assert record is not None
+        if record["state"] == "queued":  # not one copy left in this attempt
+            self._end(cid, Event.NO_COPY_LEFT, "sent", reason=f"not sent: {d.last_failure}")
+        elif record["state"] == "transmitted" and not d.two_way:
+            self._end(cid, Event.COPIES_OUT, "sent")
+        # two-way: the acknowledgement or the timeout of the last copy ends it
 
     def _timed_out(self, command_id: int) -> None:
         self._timeouts.pop(command_id, None)
-        if self._awaiting.pop(command_id, None) is not None:
-            self._update(command_id, state="timed_out", reason="no acknowledgement in time")
+        if command_id in self._live:  # copies still going out (a Surface until acknowledged)
+            self.ledger.settle(command_id, "timed_out")
+            return
+        if command_id in self._awaiting:
+            wait = self.ack_timeout_s + self.airtime_s + self._link_delay_s()
+            self._end(
+                command_id,
+                Event.ACK_TIMEOUT,
+                "timed_out",
+                reason=f"no acknowledgement within {wait:.1f} s of the last copy: the frame "
+                "was lost or damaged, the vehicle is out of range, or it did not answer",
+            )
+
+    def _end(self, command_id: int, event: Event, outcome: Outcome, **fields: Any) -> None:
+        """The one way a record ends: its repetition stops, its timer goes, its frames are
+        settled in the ledger and its terminal state is written."""
+        d = self._live.pop(command_id, None)
+        if d is not None and d.task is not None and d.task is not asyncio.current_task():
+            d.task.cancel()
+        self._awaiting.pop(command_id, None)
+        handle = self._timeouts.pop(command_id, None)
+        if handle is not None:
+            handle.cancel()
+        self.ledger.settle(command_id, outcome)
+        record = self.log.command(command_id)
+        assert record is not None
+        try:
+            state = advance(record["state"], event)
+        except IllegalTransition as err:  # a bookkeeping bug: say so, keep the record
+            logger.error("command %s: %s", command_id, err)
+            return
+        self._update(command_id, state=state, **fields)
 
     def _update(self, command_id: int, **fields: Any) -> dict[str, Any]:
         record = self.log.update_command(command_id, **fields)
@@ -225,32 +424,38 @@ class CommandManager:
     def _announce(self, record: dict[str, Any]) -> None:
         self.hub.publish({"type": "command", "command": record})
 
-    # --- acknowledgements ----------------------------------------------------------------
+    # --- acknowledgements -------------------------------------------------------------------
 
     def on_mission(self, ack: dict[str, Any]) -> None:
         """An acknowledgement from the vehicle: settle the command it answers."""
-        self.vehicle_active = ack.get("active")
+        self.last_ack_s = time.monotonic()
         command_id = self._match(ack)
+        record = None
         if command_id is not None:
-            self._awaiting.pop(command_id, None)
-            handle = self._timeouts.pop(command_id, None)
-            if handle is not None:
-                handle.cancel()
             accepted = ack.get("outcome") == "accepted"
-            record = self._update(
-                command_id,
-                state="acknowledged" if accepted else "rejected",
-                acked_at=now_iso(),
-                ack=ack,
-                reason=None if accepted else f"{ack.get('reason')}: {ack.get('detail')}",
-            )
-            newest = self._accepted is None or command_id > self._accepted["id"]
-            if accepted and newest:
-                self._accepted = record
-        if ack.get("outcome") == "accepted" and not ack.get("duplicate") and ack.get("from"):
-            self._replay_plan(ack)
+            d = self._live.get(command_id)
+            damaged = not accepted and ack.get("reason") in DAMAGE_REASONS
+            if damaged and d is not None and d.more():
+                # the channel damaged this copy; the next one may get through
+                self.ledger.settle(command_id, "rejected")
+                self._update(
+                    command_id,
+                    ack=ack,
+                    reason=f"a copy arrived damaged ({ack.get('reason')}); more copies follow",
+                )
+            else:
+                self._end(
+                    command_id,
+                    Event.ACCEPTED if accepted else Event.REJECTED,
+                    "acknowledged" if accepted else "rejected",
+                    acked_at=now_iso(),
+                    ack=ack,
+                    reason=None if accepted else f"{ack.get('reason')}: {ack.get('detail')}",
+                )
+                record = self.log.command(command_id)
+        self.vehicle.on_ack(ack, record)
         self.hub.publish(
-            {"type": "vehicle", "active": self.vehicle_active, "echo_mismatch": self.echo_mismatch}
+            {"type": "vehicle", "active": self.vehicle.active, "echo_mismatch": self.echo_mismatch}
         )
 
     def _match(self, ack: dict[str, Any]) -> int | None:
@@ -263,33 +468,3 @@ class CommandManager:
             if best is None or rank < best[0]:
                 best = (rank, cid)
         return best[1] if best is not None else None
-
-    def _replay_plan(self, ack: dict[str, Any]) -> None:
-        try:
-            cmd = decode_frame(
-                encode_frame(ack["command"]["pattern"], ack["command"]["params"]).frame.bits
-            ).command
-            state = VehicleState(**ack["from"])
-            self.mirror = plan(cmd, state, self.mirror)
-        except (PlanError, KeyError, TypeError, ValueError) as err:
-            logger.warning("cannot mirror the vehicle's plan: %s", err)
-            return
-        self.on_plan(self.mirror)
-
-    @property
-    def echo_mismatch(self) -> bool:
-        """The vehicle's echo of its active command (the last acknowledgement's ``active``,
-        and the pattern in its status) differs from the last command it accepted from this
-        console (in this dive): retasked by someone else, restarted, or a console bug."""
-        last = self._accepted
-        if last is None or last["dive"] != self._dive():
-            return False
-        status = self.hub.status or {}
-        acked_t_s = (last.get("ack") or {}).get("t_s", 0.0)
-        # a status from before the acknowledgement still shows the old pattern: not a mismatch
-        if status.get("t_s", 0.0) > acked_t_s and status.get("pattern") != last["pattern"]:
-            return True
-        active = self.vehicle_active
-        if active is None:
-            return False
-        return (active.get("pattern"), active.get("params")) != (last["pattern"], last["params"])

@@ -11,15 +11,17 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections.abc import Coroutine
 from dataclasses import replace
 from typing import Any
 
 from backend.commands import CommandManager
+from backend.health import UNKNOWN_VALUES_RECENT_S, LinkHealth, assess
 from backend.link import Link, RosbridgeLink, open_link
 from backend.settings import Settings
 from backend.store import MissionLog
-from backend.telemetry import TelemetryHub, pose_from_message
+from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
 from codec import FRAME_BITS, Encoded, airtime_s, decode_frame, encode_frame, sections
 from planner import Limits, Plan, VehicleState, compare, estimate, plan, validate
 from sim_bridge.agent import command_json
@@ -29,6 +31,8 @@ logger = logging.getLogger("backend.console")
 
 #: Shortest time between two preview drawings in the 3D view (s).
 PREVIEW_DRAW_INTERVAL_S = 0.1
+#: How often the link's health is pushed to the page (s).
+HEALTH_PUSH_INTERVAL_S = 1.0
 #: Scenario presets offered in training mode.
 SCENARIO_PRESETS = ("wreck", "panel", "pod", "tank")
 
@@ -53,13 +57,17 @@ class Console:
         self._pending_preview: tuple[Any, ...] | None = None
         self._preview_ready = asyncio.Event()
         self._drawer: asyncio.Task[None] | None = None
+        self._health_task: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
+        #: Records an earlier run left on their way, made ``interrupted`` at this start.
+        self.recovered = 0
 
     # --- lifecycle -----------------------------------------------------------------------
 
     async def start(self, *, viewer: bool = True) -> None:
         s = self.settings
         self.log = MissionLog(s.db_path)
+        self.recovered = self.log.recover_interrupted()
         self.dive = self.log.new_dive(s.target)
         if s.training:
             from sim_bridge.server import BridgeServer
@@ -85,15 +93,19 @@ class Console:
             ack_timeout_s=s.ack_timeout_s,
             surface_repeat_s=s.surface_repeat_s,
             max_sends_per_minute=s.max_sends_per_minute,
+            copy_interval_s=s.copy_interval_s,
+            delivery_target=s.delivery_target,
+            link_ber=self._link_ber,
             link_delay_s=self._link_delay_s,
             airtime_s=airtime_s(s.bitrate_bps),
             target=s.target,
         )
         link.on_mission = self.commands.on_mission
-        self.commands.on_plan = self._show_active
+        self.commands.vehicle.on_plan = self._show_active
         await link.start()
         if isinstance(link, RosbridgeLink) and s.training:
             await link.wait_connected(5.0)
+        self._health_task = asyncio.create_task(self._push_health(), name="link health")
         if viewer:
             from backend.viewer import Viewer
 
@@ -101,7 +113,7 @@ class Console:
             self._drawer = asyncio.create_task(self._draw_loop(), name="preview drawing")
 
     async def stop(self) -> None:
-        for task in (self._runner_task, self._drawer):
+        for task in (self._runner_task, self._drawer, self._health_task):
             if task is not None:
                 task.cancel()
                 with contextlib.suppress(asyncio.CancelledError):
@@ -128,25 +140,28 @@ class Console:
     def _on_pose(self, msg: dict[str, Any]) -> None:
         pose = pose_from_message(msg)
         self.hub.set_pose(pose)
+        t_s, x, y, z = pose["t_s"], pose["x_m"], pose["y_m"], pose["z_m"]
+        heading, roll = pose["heading_deg"], pose["roll_deg"]
+        if t_s is None or x is None or y is None or z is None or heading is None:
+            return  # an unknown number: shown as unknown, counted in link health, not drawn
         if self.viewer is not None:
-            self.viewer.update_pose(
-                pose["t_s"],
-                pose["x_m"],
-                pose["y_m"],
-                pose["z_m"],
-                pose["roll_deg"],
-                pose["heading_deg"],
-            )
-        if self.log is not None and pose["t_s"] - self._last_track_s >= 1.0:
-            self._last_track_s = pose["t_s"]
-            self.log.add_track(
-                self.dive, pose["t_s"], pose["x_m"], pose["y_m"], pose["z_m"], pose["heading_deg"]
-            )
+            self.viewer.update_pose(t_s, x, y, z, roll or 0.0, heading)
+        if self.log is not None and t_s - self._last_track_s >= 1.0:
+            self._last_track_s = t_s
+            self.log.add_track(self.dive, t_s, x, y, z, heading)
 
     def _show_active(self, active: Plan) -> None:
         if self.viewer is not None:
             p = active.path
             self.viewer.show_active(p.xs, p.ys, p.zs, f"active: {active.pattern}")
+
+    def _link_ber(self) -> tuple[float, float]:
+        """(bit-error rate, whole-frame loss) the copies are chosen from: the emulated
+        channel's in training, the ``link_ber`` setting on a real link."""
+        if self.sim is None:
+            return self.settings.link_ber, 0.0
+        config = self.sim.channel.config
+        return float(config.ber), float(config.loss)
 
     def _link_delay_s(self) -> float:
         if self.sim is None:
@@ -158,24 +173,23 @@ class Console:
 
     def vehicle_state(self) -> VehicleState:
         """The vehicle as last reported (NED), for previews and joins."""
-        pose, status = self.hub.pose, self.hub.status or {}
-        if pose is None:
+        pose, status = self.hub.known_pose, self.hub.status or {}
+        if pose is None or not position_known(pose):
             if self.sim is not None:
                 c = self.sim.config
                 return VehicleState(c.start_x_m, c.start_y_m, c.start_z_m, c.start_heading_deg)
             return VehicleState(0.0, 0.0, 0.0)
         return VehicleState(
-            pose["x_m"],
-            pose["y_m"],
-            max(0.0, pose["z_m"]),
-            pose["heading_deg"],
-            float(status.get("speed_mps", 0.0)),
-            pose["t_s"],
+            pose["x_m"] or 0.0,
+            pose["y_m"] or 0.0,
+            max(0.0, pose["z_m"] or 0.0),
+            pose["heading_deg"] or 0.0,
+            number(status.get("speed_mps")) or 0.0,
+            pose["t_s"] or 0.0,
         )
 
     def vehicle(self) -> dict[str, Any]:
         cm = self.commands
-        link = self.link
         return {
             "pose": self.hub.pose,
             "status": self.hub.status,
@@ -183,12 +197,47 @@ class Console:
             "last_sent": cm.last_sent if cm else None,
             "echo_mismatch": cm.echo_mismatch if cm else False,
             "age_s": self.hub.age_s(),
-            "link": {
-                "target": self.settings.target,
-                "connected": link.connected if link else False,
-                "acknowledges": link.acknowledges if link else False,
-            },
+            "link": self.link_health().model_dump(),
         }
+
+    def link_health(self) -> LinkHealth:
+        """What the station knows of its link to the vehicle (not the page's websocket)."""
+        link, cm = self.link, self.commands
+        assert link is not None and cm is not None
+        totals = cm.ledger.totals()
+        telemetry_age_s = self.hub.age_s()
+        ack_age_s = None if cm.last_ack_s is None else time.monotonic() - cm.last_ack_s
+        level, problems = assess(
+            connected=link.connected,
+            connection_problem=link.connection_problem,
+            capability=link.capability,
+            capability_problems=link.capability_problems,
+            telemetry_age_s=telemetry_age_s,
+            recent=totals.recent,
+            unknown_recent=self.hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
+        )
+        return LinkHealth(
+            target=self.settings.target,
+            connected=link.connected,
+            capability=link.capability,
+            acknowledges=link.acknowledges,
+            telemetry=link.telemetry,
+            level=level,
+            problems=problems,
+            last_ack_age_s=ack_age_s,
+            last_telemetry_age_s=telemetry_age_s,
+            frames=totals,
+            unknown_values=self.hub.unknown_values,
+            ber=self._link_ber()[0],
+            copies=cm.copies_now(),
+            surface_copies=cm.surface_copies_now(),
+        )
+
+    async def _push_health(self) -> None:
+        while True:
+            await asyncio.sleep(HEALTH_PUSH_INTERVAL_S)
+            if self.hub.client_count:
+                self.hub.publish({"type": "link", "link": self.link_health().model_dump()})
 
     # --- authoring -----------------------------------------------------------------------
 
@@ -323,7 +372,7 @@ class Console:
             self.sim.reset()
         else:
             self.sim.reset(replace(self.sim.config, start_z_m=start_z_m))
-        self.hub.pose = None
+        self.hub.reset()
         self.dive = self.log.new_dive(self.settings.target)
         self._last_track_s = -1.0
         if self.commands is not None:

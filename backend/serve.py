@@ -60,6 +60,19 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         from backend.cli import UsageError
 
         raise UsageError(f"setting {where}: {first['msg']}") from None
+    from backend.store import MissionLog
+
+    # before the URL: what an earlier run left on its way is interrupted, not stuck
+    log = MissionLog(settings.db_path)
+    try:
+        recovered = log.recover_interrupted()
+    finally:
+        log.close()
+    if recovered:
+        out.write(
+            f"{recovered} command{'s' if recovered != 1 else ''} an earlier run left queued or "
+            "transmitted are now interrupted (retry them from the log)\n"
+        )
     url = f"http://{settings.host}:{settings.port}/?token={settings.token}"
     mode = "training (simulated vehicle)" if settings.training else f"vehicle at {settings.target}"
     out.write(

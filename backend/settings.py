@@ -46,8 +46,18 @@ class Settings(BaseSettings):
     bitrate_bps: Annotated[float, Field(gt=0, le=1e7)] = 36000.0
     #: Time allowed for an acknowledgement on top of airtime and the channel's delay (s).
     ack_timeout_s: Annotated[float, Field(gt=0, le=600)] = 5.0
-    #: Surface is sent again this often until acknowledged (s).
+    #: Surface is sent again this often (s): until acknowledged on a two-way link, a bounded
+    #: number of times on a one-way link.
     surface_repeat_s: Annotated[float, Field(gt=0, le=60)] = 2.0
+    #: Time between the copies of one command (s): longer than a burst of interference, so
+    #: the copies' errors are independent.
+    copy_interval_s: Annotated[float, Field(gt=0, le=60)] = 1.0
+    #: Bit-error rate of a real link, for choosing how many copies a command gets (training
+    #: takes it from the emulated channel).
+    link_ber: Annotated[float, Field(ge=0, lt=0.5)] = 1e-3
+    #: Probability that at least one copy of a command decodes, the number of copies is
+    #: chosen to reach (a Surface aims for at least 0.999999).
+    delivery_target: Annotated[float, Field(gt=0, lt=1)] = 0.999
     #: Transmissions allowed per minute (Surface is never limited).
     max_sends_per_minute: Annotated[int, Field(ge=1, le=600)] = 30
     max_depth_m: Annotated[float, Field(gt=0, le=100)] = 100.0

@@ -15,6 +15,8 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from backend.lifecycle import ON_ITS_WAY, TERMINAL, Event, State, advance
+
 SCHEMA = """
 CREATE TABLE IF NOT EXISTS dives (
     id INTEGER PRIMARY KEY,
@@ -40,7 +42,13 @@ CREATE TABLE IF NOT EXISTS commands (
     sent_at TEXT,
     acked_at TEXT,
     ack TEXT,
-    reason TEXT
+    reason TEXT,
+    copies INTEGER,
+    copies_sent INTEGER NOT NULL DEFAULT 0,
+    p_delivered REAL NOT NULL DEFAULT 0,
+    ber REAL,
+    two_way INTEGER,
+    superseded_by INTEGER
 );
 CREATE INDEX IF NOT EXISTS commands_dive ON commands(dive);
 CREATE TABLE IF NOT EXISTS track (
@@ -54,12 +62,38 @@ CREATE TABLE IF NOT EXISTS track (
 CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);
 """
 
+#: Columns added since the first release: (name, declaration), added to an older log at open.
+_ADDED_COLUMNS = (
+    ("copies", "INTEGER"),
+    ("copies_sent", "INTEGER NOT NULL DEFAULT 0"),
+    ("p_delivered", "REAL NOT NULL DEFAULT 0"),
+    ("ber", "REAL"),
+    ("two_way", "INTEGER"),
+    ("superseded_by", "INTEGER"),
+)
 #: Columns holding JSON text.
 _JSON = ("params", "requested", "ack")
+#: Columns holding booleans (SQLite integers).
+_BOOL = ("two_way",)
 #: Columns a command update may set.
-_UPDATABLE = frozenset({"state", "attempts", "sent_at", "acked_at", "ack", "reason"})
-STATES = ("queued", "transmitted", "acknowledged", "rejected", "timed_out", "failed")
-FINAL_STATES = frozenset({"acknowledged", "rejected", "timed_out", "failed"})
+_UPDATABLE = frozenset(
+    {
+        "state",
+        "attempts",
+        "sent_at",
+        "acked_at",
+        "ack",
+        "reason",
+        "copies",
+        "copies_sent",
+        "p_delivered",
+        "ber",
+        "two_way",
+        "superseded_by",
+    }
+)
+STATES = tuple(State)
+FINAL_STATES = frozenset(str(s) for s in TERMINAL)
 #: CSV columns taken from the acknowledgement (the rest are the record's own).
 CSV_ACK_COLUMNS = ("corrected_bits", "decode_latency_ms", "replan_latency_ms")
 #: The CSV export's columns, in order.
@@ -79,6 +113,10 @@ CSV_COLUMNS = (
     "sent_at",
     "acked_at",
     "reason",
+    "copies",
+    "copies_sent",
+    "p_delivered",
+    "superseded_by",
     *CSV_ACK_COLUMNS,
 )
 
@@ -102,7 +140,43 @@ class MissionLog:
         self._db.execute("PRAGMA synchronous=FULL")
         self._db.execute("PRAGMA foreign_keys=ON")
         self._db.executescript(SCHEMA)
+        self._migrate()
         self._track: list[tuple[int, float, float, float, float, float]] = []
+
+    def _migrate(self) -> None:
+        """Add the columns an older log lacks (values of old rows: the declared defaults)."""
+        have = {row["name"] for row in self._db.execute("PRAGMA table_info(commands)")}
+        for name, declaration in _ADDED_COLUMNS:
+            if name not in have:
+                self._db.execute(f"ALTER TABLE commands ADD COLUMN {name} {declaration}")
+
+    def recover_interrupted(self) -> int:
+        """Every command an earlier run left on its way (``queued`` or ``transmitted``) becomes
+        ``interrupted``, naming the last time the log was written. One transaction; returns
+        how many. Call before the console takes new commands."""
+        on_its_way = sorted(ON_ITS_WAY)
+        marks = ", ".join("?" * len(on_its_way))
+        target = advance(State.QUEUED, Event.INTERRUPTED)
+        with self._lock:
+            last = self._db.execute(
+                "SELECT MAX(t) FROM (SELECT MAX(updated_at) AS t FROM commands "
+                "UNION ALL SELECT MAX(started_at) FROM dives)"
+            ).fetchone()[0]
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                cur = self._db.execute(
+                    "UPDATE commands SET state = ?, updated_at = ?, "
+                    "reason = 'the console stopped while this command was ' || state || "
+                    "' (the log was last written at ' || ? || "
+                    "'); whether the vehicle received it is not known' "
+                    f"WHERE state IN ({marks})",
+                    (target, now_iso(), last or "an unknown time", *on_its_way),
+                )
+                self._db.execute("COMMIT")
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+        return cur.rowcount
 
     def close(self) -> None:
         with self._lock:
@@ -164,8 +238,11 @@ class MissionLog:
         unknown = set(fields) - _UPDATABLE
         if unknown:
             raise ValueError(f"cannot update {sorted(unknown)}; allowed: {sorted(_UPDATABLE)}")
-        if "state" in fields and fields["state"] not in STATES:
-            raise ValueError(f"unknown state {fields['state']!r}; allowed: {', '.join(STATES)}")
+        if "state" in fields:
+            if fields["state"] not in STATES:
+                allowed = ", ".join(STATES)
+                raise ValueError(f"unknown state {fields['state']!r}; allowed: {allowed}")
+            fields["state"] = str(fields["state"])
         fields["updated_at"] = now_iso()
         sets = ", ".join(f"{k} = ?" for k in fields)
         values = [json.dumps(v) if k in _JSON else v for k, v in fields.items()]
@@ -247,6 +324,9 @@ def _record(row: sqlite3.Row) -> dict[str, Any]:
     for col in _JSON:
         if out.get(col) is not None:
             out[col] = json.loads(out[col])
+    for col in _BOOL:
+        if out.get(col) is not None:
+            out[col] = bool(out[col])
     return out
 
 

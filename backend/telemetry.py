@@ -13,6 +13,7 @@ import contextlib
 import json
 import math
 import time
+from collections import deque
 from typing import Any, Protocol
 
 
@@ -20,29 +21,73 @@ class Sender(Protocol):
     async def send_text(self, data: str) -> None: ...
 
 
-def heading_roll_from_quaternion(q: dict[str, float]) -> tuple[float, float]:
-    """(heading_deg in [0, 360), roll_deg) from a NED body quaternion with pitch 0."""
-    x, y, z, w = q.get("x", 0.0), q.get("y", 0.0), q.get("z", 0.0), q.get("w", 1.0)
+#: Numbers of a pose, each ``None`` when the vehicle sent none (null, NaN, missing).
+POSE_KEYS = ("t_s", "x_m", "y_m", "z_m", "heading_deg", "roll_deg")
+#: Numbers of the vehicle's status the console reads.
+STATUS_NUMBERS = ("t_s", "depth_m", "heading_deg", "speed_mps", "battery_pct", "x_m", "y_m")
+
+Pose = dict[str, float | None]
+
+
+def number(value: object) -> float | None:
+    """A finite number, or ``None``: rosbridge_server sends NaN and infinity as ``null``, and
+    a field may be missing or of another type. Booleans are not numbers."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    out = float(value)
+    return out if math.isfinite(out) else None
+
+
+def _dict(value: object) -> dict[str, Any]:
+    return value if isinstance(value, dict) else {}
+
+
+def heading_roll_from_quaternion(q: dict[str, Any]) -> tuple[float | None, float | None]:
+    """(heading_deg in [0, 360), roll_deg) from a NED body quaternion with pitch 0; both
+    ``None`` when a component is not a number."""
+    x, y, z, w = (number(q.get(k)) for k in ("x", "y", "z", "w"))
+    if x is None or y is None or z is None or w is None:
+        return None, None
     yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
     roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
     return math.degrees(yaw) % 360.0, math.degrees(roll)
 
 
-def pose_from_message(msg: dict[str, Any]) -> dict[str, float]:
-    """A PoseStamped message (NED, ``map_ned``) as a flat pose dict."""
-    pose = msg.get("pose", {})
-    pos = pose.get("position", {})
-    heading, roll = heading_roll_from_quaternion(pose.get("orientation", {}))
-    stamp = msg.get("header", {}).get("stamp", {})
-    t_s = float(stamp.get("sec", 0)) + float(stamp.get("nanosec", 0)) * 1e-9
+def pose_from_message(msg: dict[str, Any]) -> Pose:
+    """A PoseStamped message (NED, ``map_ned``) as a flat pose dict; a number the vehicle
+    did not send (null, NaN, missing) is ``None``. ``t_s`` is the vehicle's ROS time."""
+    pose = _dict(msg.get("pose"))
+    pos = _dict(pose.get("position"))
+    heading, roll = heading_roll_from_quaternion(_dict(pose.get("orientation")))
+    stamp = _dict(_dict(msg.get("header")).get("stamp"))
+    sec, nanosec = number(stamp.get("sec")), number(stamp.get("nanosec"))
     return {
-        "t_s": t_s,
-        "x_m": float(pos.get("x", 0.0)),
-        "y_m": float(pos.get("y", 0.0)),
-        "z_m": float(pos.get("z", 0.0)),
+        "t_s": None if sec is None else sec + (nanosec or 0.0) * 1e-9,
+        "x_m": number(pos.get("x")),
+        "y_m": number(pos.get("y")),
+        "z_m": number(pos.get("z")),
         "heading_deg": heading,
         "roll_deg": roll,
     }
+
+
+def status_from_message(msg: dict[str, Any]) -> tuple[dict[str, Any], int]:
+    """The vehicle's status with every number it should hold (:data:`STATUS_NUMBERS`) made a
+    finite float or ``None``, and how many were unknown (null, NaN or missing)."""
+    status = dict(msg)
+    unknown = 0
+    for key in STATUS_NUMBERS:
+        status[key] = number(msg.get(key))
+        unknown += status[key] is None
+    return status, unknown
+
+
+def unknown_count(pose: Pose) -> int:
+    return sum(pose[k] is None for k in POSE_KEYS)
+
+
+def position_known(pose: Pose | None) -> bool:
+    return pose is not None and all(pose[k] is not None for k in ("x_m", "y_m", "z_m"))
 
 
 class _Client:
@@ -60,9 +105,15 @@ class TelemetryHub:
     def __init__(self, rate_hz: float = 10.0, max_events: int = 1000) -> None:
         self.period_s = 1.0 / rate_hz
         self.max_events = max_events
-        self.pose: dict[str, float] | None = None
+        self.pose: Pose | None = None
+        #: The last pose whose position was known (for previews and joins).
+        self.known_pose: Pose | None = None
         self.status: dict[str, Any] | None = None
-        self.last_message_s: float | None = None  # monotonic
+        self.last_message_s: float | None = None  # monotonic arrival time
+        #: Telemetry numbers that came unknown (null / NaN / missing) since the dive began,
+        #: and the arrival times of the recent ones.
+        self.unknown_values = 0
+        self._unknown_at: deque[tuple[float, int]] = deque(maxlen=1000)
         self._version = 0
         self._clients: set[_Client] = set()
 
@@ -76,13 +127,34 @@ class TelemetryHub:
             return None
         return time.monotonic() - self.last_message_s
 
-    def set_pose(self, pose: dict[str, float]) -> None:
+    def set_pose(self, pose: Pose) -> None:
         self.pose = pose
+        if position_known(pose):
+            self.known_pose = pose
+        self._count_unknown(unknown_count(pose))
         self._touch()
 
-    def set_status(self, status: dict[str, Any]) -> None:
-        self.status = status
+    def set_status(self, msg: dict[str, Any]) -> None:
+        """A status message as the vehicle sent it (numbers may be null)."""
+        self.status, unknown = status_from_message(msg)
+        self._count_unknown(unknown)
         self._touch()
+
+    def reset(self) -> None:
+        """A new dive: no pose, no counts."""
+        self.pose = self.known_pose = None
+        self.unknown_values = 0
+        self._unknown_at.clear()
+
+    def _count_unknown(self, n: int) -> None:
+        if n:
+            self.unknown_values += n
+            self._unknown_at.append((time.monotonic(), n))
+
+    def unknown_recent(self, window_s: float) -> int:
+        """Unknown telemetry numbers that arrived in the last ``window_s``."""
+        since = time.monotonic() - window_s
+        return sum(n for at, n in self._unknown_at if at >= since)
 
     def _touch(self) -> None:
         self.last_message_s = time.monotonic()

@@ -34,6 +34,18 @@ def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
         "dive": console.dive,
         "version": request.app.version,
         "limits": {"max_depth_m": s.max_depth_m, "max_speed_mps": s.max_speed_mps},
+        "link": _link_capability(console),
+    }
+
+
+def _link_capability(console: ConsoleDep) -> dict[str, Any]:
+    link = console.link
+    if link is None:
+        return {"capability": "unknown", "acknowledges": False, "telemetry": False}
+    return {
+        "capability": str(link.capability),
+        "acknowledges": link.acknowledges,
+        "telemetry": link.telemetry,
     }
 
 

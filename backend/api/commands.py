@@ -11,7 +11,7 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
 from backend.api.deps import ConsoleDep, OperatorDep
-from backend.api.models import SendIn
+from backend.api.models import RetryIn, SendIn
 from backend.commands import CommandManager, NotRetryable
 from backend.store import STATES, csv_rows
 
@@ -41,20 +41,25 @@ async def send(body: SendIn, console: ConsoleDep, _op: OperatorDep) -> dict[str,
                 "violations": soft,
             },
         )
-    return await _manager(console).submit(enc)
+    return await _manager(console).submit(enc, copies=body.copies)
 
 
 @router.post("/surface", status_code=status.HTTP_202_ACCEPTED)
 async def surface(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
-    """Abort: send surface now and again every few seconds until the vehicle acknowledges."""
+    """Abort: send surface now and again every ``surface_repeat_s``: until acknowledged on a
+    two-way link, a bounded number of times on a one-way link. It replaces any command still
+    being repeated; pressed while another Surface is on its way, it joins that one."""
     return await _manager(console).surface()
 
 
 @router.post("/commands/{command_id}/retry", status_code=status.HTTP_202_ACCEPTED)
-async def retry(command_id: int, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
-    """Send a timed-out, failed or rejected command's frame again."""
+async def retry(
+    command_id: int, console: ConsoleDep, _op: OperatorDep, body: RetryIn | None = None
+) -> dict[str, Any]:
+    """A new attempt of an interrupted, timed-out, failed, rejected or superseded command
+    (the same record); it replaces any command still being repeated."""
     try:
-        return _manager(console).retry(command_id)
+        return await _manager(console).retry(command_id, body.copies if body else None)
     except KeyError:
         raise HTTPException(404, f"no command {command_id}") from None
     except NotRetryable as err:

@@ -12,7 +12,7 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 from backend.api.deps import token_ok
 from backend.commands import RateLimited
 from backend.console import Console
-from codec import CodecError
+from codec import MAX_COPIES, CodecError
 from planner import PlanError
 
 router = APIRouter(tags=["live"])
@@ -84,13 +84,25 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
             pattern, params = msg.get("pattern"), msg.get("params", {})
             if not isinstance(pattern, str) or not isinstance(params, dict):
                 return {"type": "error", "detail": "send needs a pattern (str) and params (object)"}
+            copies = msg.get("copies")
+            if copies is not None and (
+                isinstance(copies, bool)
+                or not isinstance(copies, int)
+                or not 1 <= copies <= MAX_COPIES
+            ):
+                return {
+                    "type": "error",
+                    "detail": f"copies must be an integer from 1 to {MAX_COPIES}, "
+                    f"got {copies!r:.40}",
+                    "field": "copies",
+                }
             enc, doc = console.prepare(pattern, params)
             if doc["violations"]:
                 return {
                     "type": "error",
                     "detail": "; ".join(v["message"] for v in doc["violations"]),
                 }
-            record = await console.commands.submit(enc)
+            record = await console.commands.submit(enc, copies=copies)
     except (CodecError, PlanError) as err:
         return {"type": "error", "detail": str(err), "field": getattr(err, "field", None)}
     except RateLimited as err:

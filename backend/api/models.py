@@ -6,6 +6,8 @@ from typing import Annotated
 
 from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt, StrictStr
 
+from codec import MAX_COPIES
+
 ParamIn = StrictFloat | StrictInt | StrictStr
 
 
@@ -22,9 +24,27 @@ class CommandIn(Strict):
     )
 
 
+#: How many copies of a command the operator may ask for.
+CopiesIn = Annotated[
+    StrictInt | None,
+    Field(
+        ge=1,
+        le=MAX_COPIES,
+        description=f"copies of the frame, 1-{MAX_COPIES}, spaced copy_interval_s apart; "
+        "omitted: chosen from the link's bit-error rate to reach the delivery target "
+        "(one on a two-way link)",
+    ),
+]
+
+
 class SendIn(CommandIn):
     #: Send although overridable limits are exceeded (never the 100 m rating).
     override: bool = False
+    copies: CopiesIn = None
+
+
+class RetryIn(Strict):
+    copies: CopiesIn = None
 
 
 class DecodeIn(Strict):

@@ -21,6 +21,7 @@ from backend.scripts import (
     preview,
 )
 from backend.store import FINAL_STATES
+from backend.telemetry import number
 from codec import encode_frame
 
 router = APIRouter(prefix="/api/scripts", tags=["scripts"])
@@ -160,14 +161,15 @@ async def _loop(console: Console) -> None:
             record = console.log.command(command_id)
             if record is None:
                 continue
-            if record["state"] == "acknowledged":
+            # sent: a one-way link's end, all that can be known; the run goes on
+            if record["state"] in ("acknowledged", "sent"):
                 runner.mark_acknowledged(index)
-            elif record["state"] in FINAL_STATES:  # rejected, timed_out, failed
+            elif record["state"] in FINAL_STATES:  # rejected, timed_out, failed, ...
                 runner.mark_failed(
                     index, f"step {index + 1}: {record['state']}: {record['reason']}"
                 )
         status = console.hub.status or {}
-        now = float(status.get("t_s", 0.0))
+        now = number(status.get("t_s")) or 0.0
         for index in runner.poll(now, str(status.get("mode", "")), status.get("pattern")):
             await _send(console, runner, index)
         await asyncio.sleep(POLL_S)

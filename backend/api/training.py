@@ -67,8 +67,10 @@ def time_scale(body: TimeScaleIn, console: ConsoleDep, _op: OperatorDep) -> dict
 
 
 @router.post("/reset")
-def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
-    """The vehicle back to its start pose, a full battery and no command: a new dive."""
+async def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
+    """The vehicle back to its start pose, a full battery and no command: a new dive. Every
+    repetition stops; what was on its way ends ``interrupted``. (On the event loop: it stops
+    the delivery tasks.)"""
     _sim(console)
     return {"dive": console.reset_vehicle()}
 

@@ -17,7 +17,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from backend.store import csv_rows
-from codec import decode_frame, encode_frame
+from codec import decode_frame, delivery_probability, encode_frame
 
 from .conftest import (
     AUTH,
@@ -745,7 +745,15 @@ def test_vehicle_pose_status_and_echo(client: TestClient) -> None:
     assert {"t_s", "x_m", "y_m", "z_m", "heading_deg", "roll_deg"} <= set(pose)
     v = client.get("/api/vehicle").json()
     assert v["active"] is None and v["last_sent"] is None and v["echo_mismatch"] is False
-    assert v["link"] == {"target": "sim", "connected": True, "acknowledges": True}
+    link = v["link"]
+    assert (link["target"], link["connected"], link["capability"]) == (
+        "sim",
+        True,
+        "acks_and_telemetry",
+    )
+    assert link["acknowledges"] and link["telemetry"] and link["copies"] == 1
+    assert link["surface_copies"] is None  # until acknowledged
+    assert link["level"] == "green" and link["problems"] == [], link
     assert v["age_s"] is not None and 0 <= v["age_s"] < 5
     status = wait_until(lambda: client.get("/api/vehicle").json()["status"], what="status")
     assert {"mode", "depth_m", "battery_pct", "speed_mps"} <= set(status)
@@ -923,7 +931,7 @@ def test_training_unknown_scenario_is_404(client: TestClient) -> None:
     assert client.get("/api/session").json()["dive"] == 1  # nothing was reset
 
 
-def test_vehicle_mode_has_no_training_and_commands_end_transmitted(
+def test_vehicle_mode_has_no_training_and_commands_end_sent(
     make_client: MakeClient,
 ) -> None:
     client = make_client(target="loop://")
@@ -942,14 +950,24 @@ def test_vehicle_mode_has_no_training_and_commands_end_transmitted(
         assert "sim" in r.json()["detail"]
     cmd = send(client)
     assert cmd["target"] == "loop://"
-    rec = wait_state(client, cmd["id"], ("transmitted", "failed"))
-    assert rec["state"] == "transmitted" and rec["attempts"] == 1
-    time.sleep(0.3)
-    assert record(client, cmd["id"])["state"] == "transmitted"  # no acknowledgement channel
+    # a modem link has no acknowledgements: copies chosen from link_ber (1e-3 -> 1), then sent
+    assert cmd["copies"] == 1 and cmd["two_way"] is False
+    rec = wait_state(client, cmd["id"])
+    assert rec["state"] == "sent" and rec["attempts"] == 1 and rec["copies_sent"] == 1
+    assert rec["p_delivered"] == pytest.approx(delivery_probability(1e-3, 1))
     v = client.get("/api/vehicle").json()
     assert v["pose"] is None and v["status"] is None
-    assert v["link"] == {"target": "loop://", "connected": True, "acknowledges": False}
+    link = v["link"]
+    assert (link["target"], link["connected"], link["capability"]) == ("loop://", True, "none")
+    assert link["acknowledges"] is False and link["level"] == "amber"
+    assert "one-way" in link["problems"][0]
+    assert link["frames"]["dive"]["frames"] == 1 and link["frames"]["dive"]["sent"] == 1
     assert v["last_sent"]["id"] == cmd["id"]
+    assert client.get("/api/session").json()["link"] == {
+        "capability": "none",
+        "acknowledges": False,
+        "telemetry": False,
+    }
 
 
 # --- scripts ------------------------------------------------------------------------------
