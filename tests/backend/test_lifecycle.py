@@ -3,9 +3,12 @@
 from __future__ import annotations
 
 import itertools
+import re
+from pathlib import Path
 
 import pytest
 
+from backend.commands import MIN_SURFACE_COPIES, SURFACE_DELIVERY_TARGET
 from backend.lifecycle import (
     ON_ITS_WAY,
     RETRYABLE,
@@ -17,6 +20,7 @@ from backend.lifecycle import (
     advance,
 )
 from backend.store import FINAL_STATES, STATES
+from codec import copies_for, frame_success_probability
 
 #: Every legal (state, event) -> state, written out independently of the table.
 EXPECTED = {
@@ -70,3 +74,25 @@ def test_illegal_transition_names_the_allowed_states() -> None:
     with pytest.raises(IllegalTransition) as err:
         advance("sent", Event.RETRY)
     assert "sent" in str(err.value) and "superseded" in str(err.value)
+
+
+def test_docs_api_draws_every_transition() -> None:
+    """docs/api.md's table and mermaid diagram name exactly the table's transitions."""
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "api.md").read_text()
+    section = doc[doc.index("### The command lifecycle") : doc.index("### Link health")]
+    rows = re.findall(r"^\| (\w+) \| (\w+) \| (\w+) \| .+ \|$", section, re.M)
+    table = {(s, e): t for s, e, t in rows if (s, e) != ("from", "event")}
+    assert table == EXPECTED
+    arrows = re.findall(r"^    (\w+) --> (\w+): (\w+)", section, re.M)
+    assert {(s, e): t for s, t, e in arrows} == EXPECTED
+
+
+def test_docs_copies_table_is_the_arithmetic() -> None:
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "api.md").read_text()
+    rows = re.findall(r"^\| ([\d.e-]+) \| ([\d.]+) \| (\d+) \| (\d+) \|$", doc, re.M)
+    assert len(rows) == 3
+    for ber, p1, r, surface in rows:
+        b = float(ber)
+        assert float(p1) == pytest.approx(frame_success_probability(b), abs=6e-5)
+        assert int(r) == copies_for(b, 0.999)
+        assert int(surface) == copies_for(b, SURFACE_DELIVERY_TARGET, minimum=MIN_SURFACE_COPIES)
