@@ -28,68 +28,43 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections import OrderedDict, deque
+from collections import OrderedDict
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from typing import Any, Final
+from typing import Any
 
+from backend.delivery import (
+    DAMAGE_REASONS,
+    MIN_SURFACE_COPIES,
+    SURFACE_DELIVERY_TARGET,
+    Delivery,
+    RateLimited,
+    RateLimiter,
+    best_match,
+    planned_copies,
+)
 from backend.health import FrameLedger, Outcome
 from backend.lifecycle import ON_ITS_WAY, RETRYABLE, Event, IllegalTransition, advance
 from backend.link import Link
 from backend.mirror import VehicleMirror
 from backend.store import MissionLog, now_iso
 from backend.telemetry import TelemetryHub
-from codec import Encoded, RejectReason, copies_for, delivery_probability, encode_frame
+from codec import Encoded, delivery_probability, encode_frame
 from planner import Plan
 from sim_bridge.agent import command_json
-from sim_bridge.transmit import ack_match
 
 logger = logging.getLogger("backend.commands")
 
-#: A Surface on a one-way link goes out at least this many times...
-MIN_SURFACE_COPIES: Final = 3
-#: ... and enough times for this delivery probability at the link's bit-error rate.
-SURFACE_DELIVERY_TARGET: Final = 0.999999
-#: Rejections that mean the channel damaged the copy (the station sends only valid frames):
-#: while copies remain, the command waits for the next one.
-DAMAGE_REASONS: Final = frozenset(r.value for r in RejectReason)
-
-
-class RateLimited(Exception):
-    """Too many transmissions; ``retry_after_s`` until the next is allowed."""
-
-    def __init__(self, retry_after_s: float, limit: int) -> None:
-        super().__init__(
-            f"at most {limit} transmissions a minute; try again in {retry_after_s:.0f} s "
-            "(Surface is never limited)"
-        )
-        self.retry_after_s = retry_after_s
+__all__ = [
+    "MIN_SURFACE_COPIES",
+    "SURFACE_DELIVERY_TARGET",
+    "CommandManager",
+    "NotRetryable",
+    "RateLimited",
+]
 
 
 class NotRetryable(Exception):
     """The command cannot be retried in its state."""
-
-
-@dataclass(eq=False)
-class Delivery:
-    """One attempt at getting a record to the vehicle: its copies, spaced in time."""
-
-    command_id: int
-    enc: Encoded
-    kind: str
-    two_way: bool
-    #: Copies planned in this attempt; ``None``: until acknowledged (two-way Surface).
-    copies: int | None
-    interval_s: float
-    ber: float
-    loss: float
-    tried: int = 0  # copies handed to the link in this attempt, failed ones too
-    last_failure: str | None = None
-    wake: asyncio.Event = field(default_factory=asyncio.Event)
-    task: asyncio.Task[None] | None = None
-
-    def more(self) -> bool:
-        return self.copies is None or self.tried < self.copies
 
 
 class CommandManager:
@@ -122,14 +97,13 @@ class CommandManager:
         self.operator = operator
         self.ack_timeout_s = ack_timeout_s
         self.surface_repeat_s = surface_repeat_s
-        self.max_sends_per_minute = max_sends_per_minute
         self.copy_interval_s = copy_interval_s
         self.delivery_target = delivery_target
         #: (bit-error rate, whole-frame loss) the copies are chosen from.
         self.link_ber = link_ber
         self._link_delay_s = link_delay_s
         self.airtime_s = airtime_s
-        self._sends: deque[float] = deque()
+        self._rate = RateLimiter(max_sends_per_minute)
         self._live: dict[int, Delivery] = {}  # copies still going out
         self._awaiting: OrderedDict[int, Encoded] = OrderedDict()  # id -> frame, oldest first
         self._timeouts: dict[int, asyncio.TimerHandle] = {}
@@ -157,17 +131,17 @@ class CommandManager:
 
     def copies_now(self) -> int:
         """Copies a command gets on this link now (one on a two-way link)."""
-        if self.link.acknowledges:
-            return 1
-        ber, loss = self.link_ber()
-        return copies_for(ber, self.delivery_target, loss=loss)
+        copies = planned_copies(
+            "command", self.link.acknowledges, *self.link_ber(), self.delivery_target
+        )
+        assert copies is not None
+        return copies
 
     def surface_copies_now(self) -> int | None:
         """Copies a Surface gets now; ``None``: until acknowledged (two-way link)."""
-        if self.link.acknowledges:
-            return None
-        ber, loss = self.link_ber()
-        return copies_for(ber, SURFACE_DELIVERY_TARGET, loss=loss, minimum=MIN_SURFACE_COPIES)
+        return planned_copies(
+            "surface", self.link.acknowledges, *self.link_ber(), self.delivery_target
+        )
 
     # --- stopping ---------------------------------------------------------------------------
 
@@ -193,14 +167,6 @@ class CommandManager:
 
     # --- sending ----------------------------------------------------------------------------
 
-    def _check_rate(self) -> None:
-        now = time.monotonic()
-        while self._sends and now - self._sends[0] > 60.0:
-            self._sends.popleft()
-        if len(self._sends) >= self.max_sends_per_minute:
-            raise RateLimited(60.0 - (now - self._sends[0]), self.max_sends_per_minute)
-        self._sends.append(now)
-
     async def submit(
         self, enc: Encoded, kind: str = "command", copies: int | None = None
     ) -> dict[str, Any]:
@@ -216,7 +182,7 @@ class CommandManager:
             if joined is not None:
                 return joined
         else:
-            self._check_rate()
+            self._rate.take()
         two_way = self.link.acknowledges
         if copies is None:
             copies = self.surface_copies_now() if kind == "surface" else self.copies_now()
@@ -276,7 +242,7 @@ class CommandManager:
             )
         kind = record["kind"]
         if kind != "surface":
-            self._check_rate()
+            self._rate.take()
         if copies is None:
             copies = self.surface_copies_now() if kind == "surface" else self.copies_now()
         ber, _loss = self.link_ber()
@@ -429,7 +395,7 @@ class CommandManager:
     def on_mission(self, ack: dict[str, Any]) -> None:
         """An acknowledgement from the vehicle: settle the command it answers."""
         self.last_ack_s = time.monotonic()
-        command_id = self._match(ack)
+        command_id = best_match(self._awaiting, ack)
         record = None
         if command_id is not None:
             accepted = ack.get("outcome") == "accepted"
@@ -457,14 +423,3 @@ class CommandManager:
         self.hub.publish(
             {"type": "vehicle", "active": self.vehicle.active, "echo_mismatch": self.echo_mismatch}
         )
-
-    def _match(self, ack: dict[str, Any]) -> int | None:
-        if not self._awaiting:
-            return None
-        best: tuple[int, int] | None = None  # (rank, id): exact 0, near 1
-        for cid, enc in self._awaiting.items():
-            how = ack_match(enc.frame, ack)
-            rank = {"exact": 0, "near": 1}.get(how or "", 2)
-            if best is None or rank < best[0]:
-                best = (rank, cid)
-        return best[1] if best is not None else None
