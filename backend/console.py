@@ -22,7 +22,15 @@ from backend.link import Link, RosbridgeLink, open_link
 from backend.settings import Settings
 from backend.store import MissionLog
 from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
-from codec import FRAME_BITS, Encoded, airtime_s, decode_frame, encode_frame, sections
+from codec import (
+    FRAME_BITS,
+    Encoded,
+    airtime_s,
+    decode_frame,
+    delivery_probability,
+    encode_frame,
+    sections,
+)
 from planner import Limits, Plan, VehicleState, compare, estimate, plan, validate
 from sim_bridge.agent import command_json
 from sim_bridge.environment import SOC_LINEAR_PCT_PER_H
@@ -340,6 +348,13 @@ class Console:
                 "anchor_moved_m": d.anchor_moved_m,
             }
         doc["from"] = state.as_dict()
+        if self.commands is not None:
+            # what sending it now would do: copies chosen from the link, and their odds
+            ber, loss = self._link_ber()
+            copies = self.commands.copies_now()
+            doc["two_way"] = self.commands.link.acknowledges
+            doc["copies"] = copies
+            doc["p_delivered"] = delivery_probability(ber, copies, loss=loss)
         if show and self.viewer is not None:
             self._draw_later(
                 path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"

@@ -4,6 +4,7 @@ import { api, adoptUrlToken, setToken, hasToken } from "./api.js";
 import { initAuthoring, current } from "./authoring.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
 import { setDictionary } from "./form.js";
+import { renderLink, setSessionLink } from "./link.js";
 import { connectLive } from "./live.js";
 import { initLog, loadLog } from "./log.js";
 import { initScript, addStep } from "./script.js";
@@ -57,6 +58,7 @@ function renderSession(s) {
     auth.textContent = s && s.operator ? `operator ${s.operator}` : "operator";
     auth.className = "auth-ok";
   }
+  if (s && s.link) setSessionLink(s.link);
   $("token-form").hidden = token && !rejected;
   $("token-clear").hidden = !token;
   applyAuth(token && !rejected);
@@ -143,6 +145,7 @@ async function main() {
       refreshLog();
     },
     vehicle: renderEcho,
+    link: (m) => renderLink(m.link),
     open: () => {
       if (opened) {
         loadCommands();

@@ -2,6 +2,7 @@
 // checks; the backend draws the 3D preview in the viewer) and the confirmed send.
 
 import { api, ApiError } from "./api.js";
+import { initCopies, readCopies, copiesLine } from "./copies.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
 import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite } from "./ui.js";
 
@@ -37,6 +38,7 @@ export function initAuthoring({ onSent }) {
   $("confirm-cancel").addEventListener("click", () => $("confirm-dialog").close());
   $("confirm-send").addEventListener("click", confirmSend);
   $("confirm-override").addEventListener("change", updateConfirmButton);
+  initCopies();
   if (select.value) choosePattern(select.value);
 }
 
@@ -215,6 +217,7 @@ function renderConfirm(preview, command) {
     overrideBox.hidden = !violations.some((v) => v.overridable);
     body.dataset.hard = violations.some((v) => !v.overridable) ? "1" : "0";
   }
+  parts.push(copiesLine(preview));
   $("confirm-title").textContent = `Send ${command.pattern}?`;
   body.replaceChildren(...parts);
   updateConfirmButton();
@@ -237,12 +240,17 @@ function updateConfirmButton() {
 async function confirmSend() {
   const command = current();
   const button = $("confirm-send");
+  const { copies, error } = readCopies();
+  if (error) {
+    $("confirm-error").hidden = false;
+    $("confirm-error").textContent = error;
+    return;
+  }
   button.disabled = true;
+  const body = { pattern: command.pattern, params: command.params, override: $("confirm-override").checked };
+  if (copies !== null) body.copies = copies;
   try {
-    const record = await api("/api/commands", {
-      method: "POST",
-      body: { pattern: command.pattern, params: command.params, override: $("confirm-override").checked },
-    });
+    const record = await api("/api/commands", { method: "POST", body });
     $("confirm-dialog").close();
     notify(`${command.pattern} queued${record && record.id !== undefined ? ` (command ${record.id})` : ""}`);
     state.onSent(record);
@@ -254,6 +262,7 @@ async function confirmSend() {
     if (err.status === 422 && state.form) {
       state.form.setErrors(new Map(err.items.filter((i) => i.param).map((i) => [i.param, i.msg])));
     }
+    if (err.status === 422 && err.items.some((i) => i.param === "copies")) $("copies-input").setAttribute("aria-invalid", "true");
     if (err.status === 0) notifyError("send", err);
   } finally {
     updateConfirmButton();

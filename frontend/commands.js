@@ -1,21 +1,19 @@
-// The command lifecycle list, the SURFACE abort and the echo check.
+// The command lifecycle list (states, copies, delivery, Retry) and the echo check.
 
-import { api, ApiError } from "./api.js";
+import { api } from "./api.js";
+import { RETRYABLE, copiesText, stateText } from "./delivery.js";
 import { commandText } from "./form.js";
+import { initSurface, trackSurface, followSurface } from "./surface.js";
 import { $, el, num, clock, notify, notifyError, applyAuth } from "./ui.js";
 
 const MAX_ROWS = 200;
-const RETRYABLE = new Set(["timed_out", "failed", "rejected"]);
+// states in which the vehicle may be running the command (the echo check's "last sent")
+const WENT_OUT = new Set(["transmitted", "sent", "acknowledged"]);
 const commands = new Map(); // id -> record
-let surfaceId = null; // the surface command being repeated, until acknowledged
-let surfaceWaiting = false; // POST /api/surface sent, no record yet
-let surfaceClickedAt = 0;
 let lastSent = null;
-let sendSurfaceOverWs = null;
 
 export function initCommands({ wsSurface }) {
-  sendSurfaceOverWs = wsSurface;
-  $("surface-button").addEventListener("click", surface);
+  initSurface({ wsSurface, record: upsertCommand, find: (id) => commands.get(String(id)) || null });
 }
 
 export async function loadCommands() {
@@ -54,7 +52,7 @@ export function upsertCommand(record, { quiet = false } = {}) {
   }
   applyAuth(undefined, row);
   trackSurface(r);
-  if (r.kind !== "surface" && ["transmitted", "acknowledged"].includes(r.state)) {
+  if (r.kind !== "surface" && WENT_OUT.has(r.state)) {
     if (!lastSent || sortKey(r) >= sortKey(lastSent)) setLastSent(r);
   }
   if (!quiet && old && old.state !== r.state && r.state === "rejected") {
@@ -82,8 +80,17 @@ function detailText(r) {
     const flipped = a.channel_flipped_bits != null ? `; channel flipped ${a.channel_flipped_bits} bits` : "";
     return `${r.reason || a.reason || "no reason given"}${field}${a.detail ? `: ${a.detail}` : ""}${flipped}`;
   }
-  if (r.state === "timed_out") return "no acknowledgement (frame lost or out of range?)";
-  return "";
+  return stateText(r);
+}
+
+/** "2/3 copies" in the row's head, with the frames handed to the link on hover. */
+function copiesBadge(r, id) {
+  const text = copiesText(r);
+  if (!text) return r.attempts > 1 ? el("span", { class: "muted" }, `attempt ${r.attempts}`) : null;
+  const worth = r.copies !== 1 || r.copies_sent !== 1 || r.state === "transmitted";
+  if (!worth && !(r.attempts > 1)) return null;
+  const attempts = Number.isFinite(r.attempts) ? `${r.attempts} frame${r.attempts === 1 ? "" : "s"} handed to the link (failed ones included)` : "";
+  return el("span", { class: "muted cmd-copies", testid: `copies-${id}`, title: attempts }, text);
 }
 
 function renderRow(r) {
@@ -93,12 +100,12 @@ function renderRow(r) {
       el("span", { class: "cmd-time", title: r.created_at || "" }, clock(r.created_at)),
       el("strong", { class: "cmd-pattern" }, r.kind === "surface" ? "SURFACE" : r.pattern || "?"),
       el("span", { class: `state-badge st-${r.state}`, testid: `state-${id}` }, r.state || "?"),
-      r.attempts > 1 ? el("span", { class: "muted" }, `attempt ${r.attempts}`) : null),
+      copiesBadge(r, id)),
     el("div", { class: "cmd-params muted" }, commandText({ pattern: r.pattern, params: r.params }), r.kind === "script" ? " [script]" : ""),
   ];
   const detail = detailText(r);
   if (detail) children.push(el("div", { class: `cmd-detail st-${r.state}`, testid: `command-detail-${id}` }, detail));
-  if (RETRYABLE.has(r.state) && r.kind !== "surface") {
+  if (RETRYABLE.has(r.state)) {
     children.push(el("button", { type: "button", class: "small", testid: `retry-${id}`, dataset: { auth: "" }, onclick: () => retry(r.id) }, "Retry"));
   }
   return el("li", { class: `command st-${r.state}`, testid: `command-${id}`, dataset: { id } }, ...children);
@@ -107,59 +114,12 @@ function renderRow(r) {
 async function retry(id) {
   try {
     const r = await api(`/api/commands/${encodeURIComponent(id)}/retry`, { method: "POST" });
+    const old = commands.get(String(id));
+    if (r && r.id !== undefined && (r.kind === "surface" || (old && old.kind === "surface"))) followSurface(r.id);
     upsertCommand(r && r.id !== undefined ? r : { id, state: "queued" });
   } catch (err) {
     notifyError(`retry of command ${id}`, err);
   }
-}
-
-// ---- SURFACE ----
-
-async function surface() {
-  setSurfaceState("surfacing... repeating until acknowledged", "pending");
-  surfaceWaiting = true;
-  surfaceClickedAt = Date.now();
-  try {
-    const r = await api("/api/surface", { method: "POST" });
-    if (r && r.id !== undefined) {
-      surfaceId = r.id;
-      upsertCommand(r);
-    }
-  } catch (err) {
-    if (err instanceof ApiError && err.status === 0 && sendSurfaceOverWs && sendSurfaceOverWs()) {
-      notify("REST unreachable: SURFACE sent over the websocket", "warn");
-      return;
-    }
-    surfaceWaiting = false;
-    setSurfaceState(`SURFACE NOT SENT: ${err.message}`, "error");
-    notifyError("SURFACE failed", err);
-  }
-}
-
-function trackSurface(r) {
-  const isSurface = r.kind === "surface" || r.pattern === "surface";
-  if (!isSurface) return;
-  const created = Date.parse(r.created_at || "");
-  const recent = Number.isNaN(created) || created >= surfaceClickedAt - 60000;
-  if (surfaceId === null && surfaceWaiting && recent) surfaceId = r.id;
-  if (surfaceId === null || String(r.id) !== String(surfaceId)) return;
-  if (r.state === "acknowledged") {
-    surfaceWaiting = false;
-    surfaceId = null;
-    setSurfaceState("surface acknowledged", "done");
-    setTimeout(() => { if (surfaceId === null && !surfaceWaiting) setSurfaceState("", ""); }, 15000);
-  } else if (r.state === "failed" || r.state === "rejected") {
-    setSurfaceState(`surface ${r.state}: ${r.reason || ""} (still repeating? press again if needed)`, "error");
-  } else {
-    setSurfaceState("surfacing... repeating until acknowledged", "pending");
-  }
-}
-
-function setSurfaceState(text, kind) {
-  const box = $("surface-state");
-  box.textContent = text;
-  box.hidden = !text;
-  box.className = `surface-state ${kind}`;
 }
 
 // ---- echo check ----

@@ -1,4 +1,6 @@
-// The /ws websocket: telemetry, command and vehicle messages, reconnect with backoff.
+// The /ws websocket: telemetry, command, vehicle and link messages, reconnect with backoff.
+// Its state is the page's connection to the console ("console" in the header), not the
+// vehicle link (link.js).
 
 import { tokenValue } from "./api.js";
 import { $, notify } from "./ui.js";
@@ -6,7 +8,7 @@ import { $, notify } from "./ui.js";
 const MIN_DELAY_MS = 500;
 const MAX_DELAY_MS = 10000;
 
-/** handlers: {telemetry, command, vehicle, open, close}: each gets the parsed message. */
+/** handlers: {telemetry, command, vehicle, link, open, close}: each gets the parsed message. */
 export function connectLive(handlers) {
   let socket = null;
   let delay = MIN_DELAY_MS;
@@ -32,7 +34,7 @@ export function connectLive(handlers) {
     }
     socket.addEventListener("open", () => {
       delay = MIN_DELAY_MS;
-      setConn("live", "conn-on");
+      setConn("connected", "conn-on");
       const token = tokenValue();
       if (token) socket.send(JSON.stringify({ type: "auth", token }));
       call("open");
@@ -44,7 +46,7 @@ export function connectLive(handlers) {
       } catch {
         return;
       }
-      if (msg && msg.type === "error") notify(`live link: ${msg.detail || "error"}`, "warn");
+      if (msg && msg.type === "error") notify(`console connection: ${msg.detail || "error"}`, "warn");
       else if (msg && msg.type) call(msg.type, msg);
     });
     socket.addEventListener("close", () => {
@@ -59,10 +61,10 @@ export function connectLive(handlers) {
 
   function scheduleRetry() {
     let left = Math.round(delay / 1000);
-    setConn(`offline, retrying${left ? ` in ${left} s` : "…"}`, "conn-off");
+    setConn(`reconnecting${left ? ` in ${left} s` : "…"}`, "conn-off");
     countdown = setInterval(() => {
       left = Math.max(0, left - 1);
-      setConn(`offline, retrying${left ? ` in ${left} s` : "…"}`, "conn-off");
+      setConn(`reconnecting${left ? ` in ${left} s` : "…"}`, "conn-off");
     }, 1000);
     retryTimer = setTimeout(open, delay);
     delay = Math.min(MAX_DELAY_MS, delay * 2);

@@ -1,6 +1,7 @@
 // The mission log: filtered command table, exports, dives and their 3D replay.
 
 import { api } from "./api.js";
+import { copiesText, stateText } from "./delivery.js";
 import { dictionary, unitOf } from "./form.js";
 import { $, el, clock, withUnit, summarize, notify, notifyError, applyAuth, debounce } from "./ui.js";
 
@@ -65,7 +66,15 @@ function outcome(r) {
     const a = r.ack;
     return `corrected ${a.corrected_bits ?? "?"} bits${a.decode_latency_ms != null ? `, decode ${withUnit(a.decode_latency_ms, "ms")}` : ""}`;
   }
+  if (["sent", "superseded", "interrupted"].includes(r.state)) return stateText(r);
   return r.reason || "";
+}
+
+/** "2/3 copies (4 frames)": the copies, and the frames handed to the link when they differ. */
+function copiesCell(r) {
+  const copies = copiesText(r);
+  if (!copies) return r.attempts ?? "–";
+  return r.attempts != null && r.attempts !== r.copies_sent ? `${copies} (${r.attempts} frames)` : copies;
 }
 
 function renderRows() {
@@ -82,7 +91,7 @@ function renderRows() {
     el("td", {}, r.kind === "surface" ? "SURFACE" : r.pattern || "?"),
     el("td", {}, paramsText(r)),
     el("td", {}, el("span", { class: `state-badge st-${r.state}` }, r.state)),
-    el("td", {}, r.attempts ?? "–"),
+    el("td", {}, copiesCell(r)),
     el("td", {}, r.operator || "–"),
     el("td", {}, el("code", {}, r.hex || "–")),
     el("td", {}, outcome(r)))));

@@ -48,6 +48,7 @@ export function notifyError(prefix, err) {
 /** A number for people: at most `digits` decimals, trailing zeros dropped. */
 export function num(value, digits = 3) {
   if (value === null || value === undefined || value === "") return "–";
+  if (typeof value === "number" && !Number.isFinite(value)) return "unknown"; // NaN, never shown
   const n = Number(value);
   if (!Number.isFinite(n)) return String(value);
   return String(Number(n.toFixed(digits)));
@@ -143,6 +144,12 @@ export function applyAuth(canWriteNow = writable, root = document) {
     node.title = writable ? node.dataset.tip : READ_ONLY_TIP;
     node.classList.toggle("read-only", !writable);
   }
+}
+
+/** Change the hover text of an auth-gated control (shown while the page may write). */
+export function setTip(node, tip) {
+  node.dataset.tip = tip;
+  if (writable) node.title = tip;
 }
 
 /** Disable an auth-gated control for another reason (off = true) without losing the gating. */

@@ -247,6 +247,17 @@ def test_preview_path_estimate_and_start(client: TestClient) -> None:
     assert p["diff"] is None  # nothing active yet
     assert {"x_m", "y_m", "z_m", "heading_deg", "t_s"} <= set(p["from"])
     assert p["from"]["z_m"] == pytest.approx(2.0, abs=0.1)  # the simulator starts at 2 m
+    # what sending it would do: the training vehicle answers, one copy, at the channel's BER 0
+    assert (p["two_way"], p["copies"], p["p_delivered"]) == (True, 1, 1.0)
+
+
+def test_preview_copies_follow_the_training_channel(client: TestClient) -> None:
+    r = client.put("/api/training/channel", json={"ber": 0.02, "loss": 0.1}, headers=AUTH)
+    assert r.status_code == 200, r.text
+    p = preview(client, "circle", CIRCLE).json()
+    assert p["copies"] == 1  # two-way: one copy unless the operator asks
+    assert p["p_delivered"] == pytest.approx(delivery_probability(0.02, 1, loss=0.1))
+    assert client.get("/api/vehicle").json()["link"]["ber"] == 0.02
 
 
 def test_preview_estimate_has_the_documented_join_keys(client: TestClient) -> None:

@@ -74,9 +74,24 @@ class Console:
         r.raise_for_status()
         return r.json()
 
+    def put(self, path: str, body: Any) -> Any:
+        """PUT with the operator token (the training controls)."""
+        r = self.http.put(path, json=body, headers={"Authorization": f"Bearer {TOKEN}"})
+        r.raise_for_status()
+        return r.json()
+
 
 @pytest.fixture
-def console(tmp_path: Path) -> Iterator[Console]:
+def console_env() -> dict[str, str]:
+    """``NEMESYS_*`` settings added to the console's environment. A test changes them by
+    parametrizing this name, e.g. ``@pytest.mark.parametrize("console_env",
+    [{"NEMESYS_ACK_TIMEOUT_S": "1"}])`` (a shorter acknowledgement timeout) or
+    ``{"NEMESYS_TARGET": "loop://"}`` (vehicle mode on a one-way modem link)."""
+    return {}
+
+
+@pytest.fixture
+def console(tmp_path: Path, console_env: dict[str, str]) -> Iterator[Console]:
     """A fresh console per test (it starts in well under a second); stopped afterwards."""
     db = str(tmp_path / "log.sqlite3")
     with (
@@ -84,6 +99,7 @@ def console(tmp_path: Path) -> Iterator[Console]:
             tmp_path / "console.log",
             TOKEN,
             *("--db", db, "--time-scale", "10"),
+            env=console_env,
             timeout_s=START_TIMEOUT_S,
         ) as server,
         server.client() as http,

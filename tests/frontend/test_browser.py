@@ -13,6 +13,7 @@ import time
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
+import pytest
 from playwright.sync_api import Frame, Page, expect
 
 from tests.frontend.conftest import TOKEN, Console, Watched
@@ -363,4 +364,203 @@ def test_the_page_makes_no_external_requests(console: Console, watched: Watched)
     assert any(urlsplit(u).path == "/viewer/" for u in urls)
     assert any(urlsplit(u).path == "/api/commands" for u in urls)
     assert f"ws://127.0.0.1:{viewer_port}" in {u.rstrip("/") for u in sockets}
+    watched.assert_clean()
+
+
+# ---- the vehicle link and the delivery states ----------------------------------------------
+
+CIRCLE = {"speed": 0.3, "depth": 2, "radius": 4}
+#: A shorter acknowledgement timeout, so that a frame lost on the emulated channel times out
+#: in about a second of wall time.
+SHORT_ACK = {"NEMESYS_ACK_TIMEOUT_S": "1"}
+#: Vehicle mode on an ME modem link (pyserial's loop://): one-way, no telemetry.
+ONE_WAY = {"NEMESYS_TARGET": "loop://"}
+LEVEL = re.compile(r"\blevel-(green|amber|red)\b")
+
+
+def send_from_page(
+    page: Page, console: Console, pattern: str, params: dict[str, Any], copies: int | None = None
+) -> int:
+    """Author a command, send it through the confirm dialog, and return its new record's id."""
+    before = {r["id"] for r in commands(console)}
+    author(page, pattern, params)
+    page.get_by_test_id("copies-input").fill("" if copies is None else str(copies))
+    page.get_by_test_id("send-button").click()
+    page.get_by_test_id("confirm-send").click()
+    expect(page.get_by_test_id("confirm-dialog")).to_be_hidden()
+    deadline = time.monotonic() + 5.0
+    while True:
+        new = [r["id"] for r in commands(console) if r["id"] not in before]
+        if new:
+            return int(max(new))
+        assert time.monotonic() < deadline, f"no new {pattern} command was logged"
+        time.sleep(0.1)
+
+
+def header_labels(page: Page) -> list[str]:
+    return [t.strip() for t in page.locator(".header-facts dt").all_text_contents()]
+
+
+@pytest.mark.parametrize("console_env", [SHORT_ACK], ids=["ack-timeout-1s"])
+def test_link_indicator_is_green_with_acks_and_turns_red_on_timeouts(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    # the page's websocket to the console is "console", not "link"
+    assert "link" not in header_labels(page), header_labels(page)
+    expect(page.get_by_test_id("conn-label")).to_have_text("console")
+    expect(page.get_by_test_id("conn-state")).to_have_text("connected")
+
+    indicator = page.get_by_test_id("link-indicator")
+    expect(indicator).to_have_class(re.compile(r"\blevel-green\b"))
+    expect(indicator).to_contain_text("acks")
+    expect(indicator).to_have_attribute("title", re.compile(r"no problems"))
+    link = console.get("/api/vehicle")["link"]
+    assert link["capability"] == "acks_and_telemetry" and link["acknowledges"], link
+    expect(page.get_by_test_id("status-link")).to_contain_text("acks + telemetry")
+    surface = page.get_by_test_id("surface-button")
+    expect(surface).to_have_attribute("title", re.compile("repeated until acknowledged"))
+
+    # every frame is lost from now on: two commands time out
+    console.put("/api/training/channel", {"loss": 1.0})
+    for _ in range(2):
+        command_id = send_from_page(page, console, "circle", CIRCLE)
+        wait_text(page, f"state-{command_id}", "timed_out", 20_000)
+        row = page.get_by_test_id(f"command-{command_id}")
+        expect(row.get_by_test_id(f"command-detail-{command_id}")).to_contain_text(
+            "no acknowledgement"
+        )
+        expect(row.get_by_test_id(f"retry-{command_id}")).to_be_enabled()
+
+    expect(indicator).to_have_class(re.compile(r"\blevel-red\b"), timeout=10_000)
+    expect(indicator).to_have_attribute("title", re.compile(r"timed out"))
+    expect(indicator).to_contain_text("failing")  # in words too, not only in red
+    expect(page.get_by_test_id("status-link")).to_contain_text("timed out")
+    watched.assert_clean()
+
+
+def test_reset_while_a_command_is_transmitted_shows_it_interrupted_and_retryable(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    console.put("/api/training/channel", {"loss": 1.0})  # no acknowledgement comes back
+    command_id = send_from_page(page, console, "circle", CIRCLE)
+    wait_text(page, f"state-{command_id}", "transmitted")
+    page.get_by_test_id("training-reset").click()
+    wait_text(page, f"state-{command_id}", "interrupted")
+    record = console.get(f"/api/commands/{command_id}")
+    assert record["state"] == "interrupted" and record["reason"], record
+    row = page.get_by_test_id(f"command-{command_id}")
+    expect(row).to_have_class(re.compile(r"\bst-interrupted\b"))
+    expect(row.get_by_test_id(f"command-detail-{command_id}")).to_have_text(record["reason"])
+
+    # retried on a working channel, it is acknowledged
+    console.put("/api/training/channel", {"loss": 0.0})
+    before = {r["id"] for r in commands(console)}
+    row.get_by_test_id(f"retry-{command_id}").click()
+    deadline = time.monotonic() + ACK_MS / 1000
+    while True:
+        done = [r for r in commands(console) if r["state"] == "acknowledged"]
+        if done:
+            break
+        assert time.monotonic() < deadline, commands(console)
+        time.sleep(0.1)
+    retried = done[0]["id"]
+    assert retried == command_id or retried not in before
+    assert_acknowledged_row(page, retried)
+    watched.assert_clean()
+
+
+def test_a_newer_command_supersedes_one_whose_copies_are_still_going_out(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    # no acknowledgement comes back: the console keeps sending the first command's copies
+    console.put("/api/training/channel", {"loss": 1.0})
+    first = send_from_page(page, console, "circle", CIRCLE, copies=20)
+    wait_text(page, f"state-{first}", "transmitted")
+    expect(page.get_by_test_id(f"copies-{first}")).to_have_text(re.compile(r"^\d+/20 copies$"))
+    expect(page.get_by_test_id(f"command-detail-{first}")).to_contain_text(
+        "waiting for acknowledgement"
+    )
+
+    second = send_from_page(page, console, "circle", {**CIRCLE, "radius": 5})
+    wait_text(page, f"state-{first}", "superseded")
+    record = console.get(f"/api/commands/{first}")
+    assert record["superseded_by"] == second, record
+    k = record["copies_sent"]
+    row = page.get_by_test_id(f"command-{first}")
+    expect(row).to_have_class(re.compile(r"\bst-superseded\b"))
+    expect(row.get_by_test_id(f"command-detail-{first}")).to_have_text(
+        f"superseded by #{second} after {k} of 20 copies"
+    )
+    expect(row.get_by_test_id(f"copies-{first}")).to_have_text(f"{k}/20 copies")
+    expect(row.get_by_test_id(f"retry-{first}")).to_be_enabled()
+    page.get_by_test_id("log-filter-state").select_option("superseded")
+    expect(page.get_by_test_id(f"log-row-{first}")).to_contain_text(f"superseded by #{second}")
+    expect(page.get_by_test_id(f"log-row-{second}")).to_be_hidden()
+    watched.assert_clean()
+
+
+@pytest.mark.parametrize("console_env", [ONE_WAY], ids=["loop-modem"])
+def test_one_way_link_sends_copies_without_promising_acknowledgement(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    link = console.get("/api/vehicle")["link"]
+    assert link["capability"] == "none" and not link["acknowledges"], link
+    indicator = page.get_by_test_id("link-indicator")
+    expect(indicator).to_have_class(LEVEL)
+    expect(indicator).to_contain_text("one-way (no acks)")
+    assert indicator.get_attribute("title"), "the indicator's title lists problems or none"
+    surface = page.get_by_test_id("surface-button")
+    n_surface = link["surface_copies"]
+    assert isinstance(n_surface, int) and n_surface >= 1, link
+    n_text = f"{n_surface} cop{'y' if n_surface == 1 else 'ies'}"
+    tip = f"as {n_text} (this link gives no acknowledgement)"
+    expect(surface).to_have_attribute("title", re.compile(re.escape(tip)))
+    assert "until acknowledged" not in (surface.get_attribute("title") or "")
+    copies = page.get_by_test_id("copies-input")
+    expect(copies).to_have_attribute("placeholder", f"auto ({link['copies']})")
+
+    # an override outside 1-20 is refused in the page, before anything is sent
+    author(page, "circle", CIRCLE)
+    copies.fill("25")
+    page.get_by_test_id("send-button").click()
+    expect(page.get_by_test_id("confirm-copies")).to_contain_text("from 1 to 20")
+    page.get_by_test_id("confirm-send").click()
+    expect(page.get_by_test_id("confirm-error")).to_contain_text("copies")
+    page.get_by_test_id("confirm-cancel").click()
+    assert commands(console) == []
+
+    # three copies, chosen by the operator: all go out, nothing more can be known
+    author(page, "circle", CIRCLE)
+    copies.fill("3")
+    page.get_by_test_id("send-button").click()
+    expect(page.get_by_test_id("confirm-copies")).to_contain_text("copies: 3 (set by you")
+    expect(page.get_by_test_id("confirm-copies")).to_contain_text("no acknowledgement")
+    page.get_by_test_id("confirm-send").click()
+    command_id = wait_command(console, "circle")["id"]
+    wait_text(page, f"state-{command_id}", "sent")
+    record = console.get(f"/api/commands/{command_id}")
+    assert record["copies"] == 3 and record["copies_sent"] == 3 and not record["two_way"], record
+    sent = re.compile(
+        r"^sent 3 copies, p\(delivered\) (> )?[\d.]+ % at BER [\de.+-]+ "
+        r"\(no acknowledgement on this link\)$"
+    )
+    expect(page.get_by_test_id(f"command-detail-{command_id}")).to_have_text(sent)
+    expect(page.get_by_test_id(f"command-{command_id}")).to_have_class(re.compile(r"\bst-sent\b"))
+
+    # SURFACE: a number of copies, not "repeating until acknowledged"
+    surface.click()
+    surface_id = wait_command(console, "surface")["id"]
+    wait_text(page, f"state-{surface_id}", "sent")
+    banner = page.get_by_test_id("surface-state")
+    expect(banner).to_have_text(re.compile(rf"^surface sent: {n_text}, p\(delivered\) "))
+    assert "until acknowledged" not in (banner.text_content() or "")
+
+    # the mission log filters on the new state
+    page.get_by_test_id("log-filter-state").select_option("sent")
+    expect(page.get_by_test_id(f"log-row-{command_id}")).to_contain_text("sent 3 copies")
+    expect(page.get_by_test_id(f"log-row-{surface_id}")).to_be_visible()
     watched.assert_clean()

@@ -1,0 +1,175 @@
+// The vehicle link (not the page's websocket to the console): what it can do (acknowledgements,
+// telemetry) and how it is doing (green / amber / red with named problems). Shown in the header
+// indicator and the status panel's link row; other panels ask it whether acknowledgements come
+// and how many copies the console would choose.
+
+import { berText, age } from "./delivery.js";
+import { $, el, num, withUnit } from "./ui.js";
+
+const CAPABILITY = {
+  acks_and_telemetry: "acks + telemetry",
+  telemetry_only: "telemetry only, no acks",
+  none: "one-way (no acks)",
+  unknown: "unknown",
+};
+// colour is never the only cue: a glyph in the dot and a word in the text too
+const LEVEL = {
+  green: { glyph: "✓", word: "" },
+  amber: { glyph: "!", word: "degraded" },
+  red: { glyph: "✕", word: "failing" },
+  unknown: { glyph: "?", word: "" },
+};
+
+let vehicleLink = null; // GET /api/vehicle "link" or a websocket "link" message
+let sessionLink = null; // GET /api/session "link"
+let radio = null; // the simulator's own view of the channel (telemetry status.link)
+const listeners = new Set();
+
+/** fn() after every change of what the link can do (acknowledges, default copies). */
+export function onLinkChange(fn) {
+  listeners.add(fn);
+}
+
+function changed() {
+  for (const fn of listeners) {
+    try {
+      fn();
+    } catch (err) {
+      console.warn("link listener failed", err);
+    }
+  }
+}
+
+/** True / false when known, null when the console has not said yet. */
+export function linkAcknowledges() {
+  for (const l of [vehicleLink, sessionLink]) {
+    if (l && typeof l.acknowledges === "boolean" && l.capability !== "unknown") return l.acknowledges;
+  }
+  return null;
+}
+
+/** The copies the console would choose for a command now (null when unknown). */
+export function autoCopies() {
+  return vehicleLink && Number.isFinite(vehicleLink.copies) ? vehicleLink.copies : null;
+}
+
+/** The copies of a SURFACE on this link (null: repeated until acknowledged, or unknown). */
+export function autoSurfaceCopies() {
+  return vehicleLink && Number.isFinite(vehicleLink.surface_copies) ? vehicleLink.surface_copies : null;
+}
+
+/** The latest link object (read-only use). */
+export function currentLink() {
+  return vehicleLink;
+}
+
+function capabilityOf(l) {
+  if (!l) return "unknown";
+  if (l.capability) return l.capability;
+  if (l.acknowledges === true) return "acks_and_telemetry"; // an older console: guess from acks
+  return "unknown";
+}
+
+export function capabilityText(l) {
+  const cap = capabilityOf(l);
+  return CAPABILITY[cap] || cap.replaceAll("_", " ");
+}
+
+function levelOf(l) {
+  if (!l) return "unknown";
+  if (["green", "amber", "red"].includes(l.level)) return l.level;
+  if (l.connected === false) return "red";
+  return "unknown";
+}
+
+function problemsOf(l) {
+  const problems = l && Array.isArray(l.problems) ? l.problems.map(String) : [];
+  if (l && l.connected === false && !problems.length) problems.push("not connected to the vehicle");
+  return problems;
+}
+
+/** From GET /api/session: what the link can do, before the first vehicle state arrives. */
+export function setSessionLink(link) {
+  sessionLink = link && typeof link === "object" ? link : null;
+  if (!vehicleLink) renderIndicator(sessionLink);
+  changed();
+}
+
+/** From GET /api/vehicle or a websocket "link" message. */
+export function renderLink(link) {
+  if (!link || typeof link !== "object") return;
+  vehicleLink = link;
+  renderIndicator(link);
+  renderRow();
+  changed();
+}
+
+/** The simulator's channel facts from telemetry (status.link); null when absent. */
+export function setRadio(r) {
+  radio = r && typeof r === "object" ? r : null;
+  renderRow();
+}
+
+function renderIndicator(l) {
+  const node = $("link-indicator");
+  if (!node) return;
+  const level = l ? levelOf(l) : "unknown";
+  const problems = problemsOf(l);
+  const { glyph, word } = LEVEL[level];
+  const text = l ? `${capabilityText(l)}${word ? ` – ${word}` : ""}` : "waiting…";
+  const title = l ? (problems.length ? problems.join("\n") : "no problems") : "no vehicle link state yet";
+  const key = `${level}|${text}|${title}`;
+  if (node.dataset.key === key) return; // unchanged: a live region must not repeat itself every second
+  node.dataset.key = key;
+  node.className = `link-indicator level-${level}`;
+  node.title = title;
+  node.setAttribute("aria-label", `vehicle link: ${text}; ${title.replaceAll("\n", "; ")}`);
+  node.replaceChildren(
+    el("span", { class: "link-dot", "aria-hidden": "true" }, glyph),
+    el("span", { class: "link-text", testid: "link-text" }, text));
+}
+
+function framesText(f) {
+  if (!f || typeof f !== "object" || !f.frames) return "";
+  const parts = [];
+  if (f.acknowledged) parts.push(`${f.acknowledged} acked`);
+  if (f.sent) parts.push(`${f.sent} sent without ack`);
+  if (f.rejected) parts.push(`${f.rejected} rejected`);
+  if (f.timed_out) parts.push(`${f.timed_out} timed out`);
+  return `${f.frames} frame${f.frames === 1 ? "" : "s"}${parts.length ? `: ${parts.join(", ")}` : ""}`;
+}
+
+function radioText(r) {
+  if (!r) return [];
+  const parts = [];
+  if (r.in_range !== undefined) parts.push(r.in_range ? "in range" : "OUT OF RANGE");
+  if (r.distance_m != null) parts.push(`${num(r.distance_m, 1)} m of ${r.range_m == null ? "unlimited" : withUnit(r.range_m, "m", 0)} range`);
+  if (r.frames_in != null) parts.push(`frames in ${r.frames_in}, lost ${r.frames_lost ?? 0}`);
+  return parts;
+}
+
+function renderRow() {
+  const node = $("status-link");
+  if (!node) return;
+  const l = vehicleLink;
+  const facts = [];
+  if (l) {
+    facts.push(capabilityText(l));
+    if (l.connected !== undefined) facts.push(l.connected ? "connected" : "NOT CONNECTED");
+    const recent = framesText(l.frames && l.frames.recent);
+    if (recent) facts.push(`recent frames: ${recent}`);
+    if (l.acknowledges && l.last_ack_age_s !== undefined) facts.push(`last ack ${age(l.last_ack_age_s)}`);
+    if (l.telemetry && l.last_telemetry_age_s !== undefined) facts.push(`telemetry ${age(l.last_telemetry_age_s)}`);
+    if (l.ber != null) facts.push(`BER ${berText(l.ber)}`);
+    if (Number.isFinite(l.copies)) facts.push(`${l.copies} cop${l.copies === 1 ? "y" : "ies"} per command`);
+    if (l.unknown_values) facts.push(`${l.unknown_values} unknown telemetry values`);
+  }
+  facts.push(...radioText(radio));
+  const problems = problemsOf(l);
+  const level = l ? levelOf(l) : "unknown";
+  const bad = level === "red" || level === "amber" || (radio && radio.in_range === false);
+  node.className = bad ? "warn-text" : "";
+  node.replaceChildren(
+    el("span", { class: "link-facts" }, facts.join(" · ") || "–"),
+    ...problems.map((p) => el("span", { class: "link-problem", testid: "link-problem" }, p)));
+}
