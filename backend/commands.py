@@ -29,7 +29,7 @@ import contextlib
 import logging
 import time
 from collections import OrderedDict
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from backend.delivery import (
@@ -112,6 +112,7 @@ class CommandManager:
         self.last_ack_s: float | None = None  # monotonic arrival of the last acknowledgement
         self.last_sent: dict[str, Any] | None = None
         self.vehicle = VehicleMirror(hub, dive)
+        self._held: list[dict[str, Any]] | None = None  # announcements awaiting a commit
 
     # --- the vehicle mirror, as the console reads it ---------------------------------------
 
@@ -177,6 +178,9 @@ class CommandManager:
         Raises:
             RateLimited: too many transmissions in the last minute (never for surface).
         """
+        record_kind = kind
+        # a surface frame is a Surface however it was sent (button, /api/commands, a script)
+        kind = _delivery_kind(kind, enc.command.pattern.name)
         if kind == "surface":
             joined = self._join_surface()
             if joined is not None:
@@ -187,23 +191,24 @@ class CommandManager:
         if copies is None:
             copies = self.surface_copies_now() if kind == "surface" else self.copies_now()
         ber, _loss = self.link_ber()
-        record = self.log.insert_command(
-            self._dive(),
-            {
-                "operator": self.operator,
-                "target": self.target,
-                "kind": kind,
-                **command_json(enc.command),
-                "requested": {s.field: s.requested for s in enc.snaps},
-                "bits": enc.frame.bits,
-                "hex": enc.frame.hex,
-                "copies": copies,
-                "ber": ber,
-                "two_way": two_way,
-            },
-        )
-        self._announce(record)
-        self._begin(record["id"], enc, kind, copies)
+        with self._atomic():  # the new record and what it supersedes, or nothing
+            record = self.log.insert_command(
+                self._dive(),
+                {
+                    "operator": self.operator,
+                    "target": self.target,
+                    "kind": record_kind,
+                    **command_json(enc.command),
+                    "requested": {s.field: s.requested for s in enc.snaps},
+                    "bits": enc.frame.bits,
+                    "hex": enc.frame.hex,
+                    "copies": copies,
+                    "ber": ber,
+                    "two_way": two_way,
+                },
+            )
+            self._announce(record)
+            self._begin(record["id"], enc, kind, copies)
         return record
 
     async def surface(self) -> dict[str, Any]:
@@ -240,24 +245,26 @@ class CommandManager:
                 f"command {command_id} is {record['state']}; only "
                 f"{', '.join(sorted(RETRYABLE))} commands can be retried"
             )
-        kind = record["kind"]
+        kind = _delivery_kind(record["kind"], record["pattern"])
         if kind != "surface":
             self._rate.take()
         if copies is None:
             copies = self.surface_copies_now() if kind == "surface" else self.copies_now()
         ber, _loss = self.link_ber()
-        planned = None if copies is None else (record["copies"] or 0) + copies
-        record = self._update(
-            command_id,
-            state=advance(record["state"], Event.RETRY),
-            reason=None,
-            superseded_by=None,
-            copies=planned,
-            ber=ber,
-            two_way=self.link.acknowledges,
-        )
+        # planned: what went out before, and this attempt's copies
+        planned = None if copies is None else record["copies_sent"] + copies
         enc = encode_frame(record["pattern"], record["params"])
-        self._begin(command_id, enc, kind, copies)
+        with self._atomic():  # the new attempt and what it supersedes, or nothing
+            record = self._update(
+                command_id,
+                state=advance(record["state"], Event.RETRY),
+                reason=None,
+                superseded_by=None,
+                copies=planned,
+                ber=ber,
+                two_way=self.link.acknowledges,
+            )
+            self._begin(command_id, enc, kind, copies)
         return record
 
     def _begin(self, command_id: int, enc: Encoded, kind: str, copies: int | None) -> None:
@@ -388,7 +395,24 @@ class CommandManager:
         return record
 
     def _announce(self, record: dict[str, Any]) -> None:
-        self.hub.publish({"type": "command", "command": record})
+        if self._held is not None:
+            self._held.append(record)
+        else:
+            self.hub.publish({"type": "command", "command": record})
+
+    @contextlib.contextmanager
+    def _atomic(self) -> Iterator[None]:
+        """The log writes inside are committed together (a crash leaves all or none) and
+        announced after the commit."""
+        held: list[dict[str, Any]] = []
+        self._held = held
+        try:
+            with self.log.transaction():
+                yield
+        finally:
+            self._held = None
+        for record in held:
+            self._announce(record)
 
     # --- acknowledgements -------------------------------------------------------------------
 
@@ -423,3 +447,9 @@ class CommandManager:
         self.hub.publish(
             {"type": "vehicle", "active": self.vehicle.active, "echo_mismatch": self.echo_mismatch}
         )
+
+
+def _delivery_kind(kind: str, pattern: str) -> str:
+    """How a command is delivered: ``surface`` for every surface frame (never rate limited,
+    its own count of copies, joined by a later press), else its kind."""
+    return "surface" if pattern == "surface" else kind

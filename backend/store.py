@@ -7,10 +7,11 @@ Rows are only ever inserted or updated field by field, so no record is half writ
 
 from __future__ import annotations
 
+import contextlib
 import json
 import sqlite3
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Iterator, Mapping
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -133,7 +134,7 @@ class MissionLog:
         self.path = Path(path)
         if str(path) != ":memory:":
             self.path.parent.mkdir(parents=True, exist_ok=True)
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()  # re-entered by the writes of a transaction()
         self._db = sqlite3.connect(str(path), check_same_thread=False, isolation_level=None)
         self._db.row_factory = sqlite3.Row
         self._db.execute("PRAGMA journal_mode=WAL")
@@ -162,8 +163,7 @@ class MissionLog:
                 "SELECT MAX(t) FROM (SELECT MAX(updated_at) AS t FROM commands "
                 "UNION ALL SELECT MAX(started_at) FROM dives)"
             ).fetchone()[0]
-            self._db.execute("BEGIN IMMEDIATE")
-            try:
+            with self.transaction():
                 cur = self._db.execute(
                     "UPDATE commands SET state = ?, updated_at = ?, "
                     "reason = 'the console stopped while this command was ' || state || "
@@ -172,11 +172,23 @@ class MissionLog:
                     f"WHERE state IN ({marks})",
                     (target, now_iso(), last or "an unknown time", *on_its_way),
                 )
-                self._db.execute("COMMIT")
+        return cur.rowcount
+
+    @contextlib.contextmanager
+    def transaction(self) -> Iterator[None]:
+        """Every write inside is committed together, or none is (a crash or an exception in
+        between leaves the log as it was). Holds the log's lock throughout."""
+        with self._lock:
+            if self._db.in_transaction:  # nested: part of the outer one
+                yield
+                return
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                yield
             except BaseException:
                 self._db.execute("ROLLBACK")
                 raise
-        return cur.rowcount
+            self._db.execute("COMMIT")
 
     def close(self) -> None:
         with self._lock:

@@ -384,3 +384,25 @@ def test_in_memory_log(tmp_path: Path) -> None:
     finally:
         mem.close()
     assert not (Path.cwd() / ":memory:").exists()
+
+
+def test_a_transaction_writes_all_or_nothing(log: MissionLog, db: Path) -> None:
+    dive = log.new_dive("sim")
+    old = log.insert_command(dive, command_fields())
+    log.update_command(old["id"], state="transmitted")
+    with pytest.raises(RuntimeError), log.transaction():
+        log.insert_command(dive, command_fields("square", **SQUARE))
+        log.update_command(old["id"], state="superseded", superseded_by=old["id"] + 1)
+        raise RuntimeError("the process dies here")
+    assert [r["id"] for r in log.commands()] == [old["id"]]
+    assert log.command(old["id"])["state"] == "transmitted"  # type: ignore[index]
+    with log.transaction():
+        new = log.insert_command(dive, command_fields("square", **SQUARE))
+        with log.transaction():  # nested: part of the outer one
+            log.update_command(old["id"], state="superseded", superseded_by=new["id"])
+    other = MissionLog(db)  # another connection sees both, committed
+    try:
+        assert other.command(old["id"])["superseded_by"] == new["id"]  # type: ignore[index]
+        assert other.command(new["id"]) is not None
+    finally:
+        other.close()
