@@ -67,15 +67,19 @@ class Console:
         self._drawer: asyncio.Task[None] | None = None
         self._health_task: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
-        #: Records an earlier run left on their way, made ``interrupted`` at this start.
-        self.recovered = 0
 
     # --- lifecycle -----------------------------------------------------------------------
 
     async def start(self, *, viewer: bool = True) -> None:
         s = self.settings
         self.log = MissionLog(s.db_path)
-        self.recovered = self.log.recover_interrupted()
+        # ``nemesys console`` already did this before printing its URL; an app built otherwise
+        # (tests, an embedding program) gets it here, before any command is taken
+        recovered = self.log.recover_interrupted()
+        if recovered:
+            logger.warning(
+                "%d commands an earlier run left on their way are interrupted", recovered
+            )
         self.dive = self.log.new_dive(s.target)
         if s.training:
             from sim_bridge.server import BridgeServer

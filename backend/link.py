@@ -252,7 +252,7 @@ class RosbridgeLink(Link):
         self._set_capability(
             Capability.UNKNOWN,
             [
-                f"no answer from {TOPICS_SERVICE} in {self.rosapi_timeout_s:.0f} s (rosapi not "
+                f"no answer from {TOPICS_SERVICE} in {self.rosapi_timeout_s:g} s (rosapi not "
                 "running?): acknowledgements are not expected; commands are sent as repeated "
                 "copies"
             ],

@@ -69,9 +69,11 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     finally:
         log.close()
     if recovered:
+        one = recovered == 1
         out.write(
-            f"{recovered} command{'s' if recovered != 1 else ''} an earlier run left queued or "
-            "transmitted are now interrupted (retry them from the log)\n"
+            f"{recovered} command{'' if one else 's'} an earlier run left queued or transmitted "
+            f"{'is' if one else 'are'} now interrupted (retry {'it' if one else 'them'} from "
+            "the log)\n"
         )
     url = f"http://{settings.host}:{settings.port}/?token={settings.token}"
     mode = "training (simulated vehicle)" if settings.training else f"vehicle at {settings.target}"

@@ -10,9 +10,10 @@ from typing import Any
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect
 
 from backend.api.deps import token_ok
+from backend.api.models import check_copies
 from backend.commands import RateLimited
 from backend.console import Console
-from codec import MAX_COPIES, CodecError
+from codec import CodecError
 from planner import PlanError
 
 router = APIRouter(tags=["live"])
@@ -85,17 +86,10 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
             if not isinstance(pattern, str) or not isinstance(params, dict):
                 return {"type": "error", "detail": "send needs a pattern (str) and params (object)"}
             copies = msg.get("copies")
-            if copies is not None and (
-                isinstance(copies, bool)
-                or not isinstance(copies, int)
-                or not 1 <= copies <= MAX_COPIES
-            ):
-                return {
-                    "type": "error",
-                    "detail": f"copies must be an integer from 1 to {MAX_COPIES}, "
-                    f"got {copies!r:.40}",
-                    "field": "copies",
-                }
+            try:
+                check_copies(copies)
+            except ValueError as err:
+                return {"type": "error", "detail": str(err), "field": "copies"}
             enc, doc = console.prepare(pattern, params)
             if doc["violations"]:
                 return {

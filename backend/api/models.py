@@ -4,7 +4,15 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import BaseModel, ConfigDict, Field, StrictFloat, StrictInt, StrictStr
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    StrictFloat,
+    StrictInt,
+    StrictStr,
+)
 
 from codec import MAX_COPIES
 
@@ -24,9 +32,20 @@ class CommandIn(Strict):
     )
 
 
+def check_copies(value: object) -> object:
+    """The operator's ``copies``: an integer 1..MAX_COPIES or null; anything else is refused
+    with the range (REST and the websocket share this check)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= MAX_COPIES:
+        raise ValueError(f"copies must be an integer from 1 to {MAX_COPIES}, got {value!r:.40}")
+    return value
+
+
 #: How many copies of a command the operator may ask for.
 CopiesIn = Annotated[
     StrictInt | None,
+    BeforeValidator(check_copies),
     Field(
         ge=1,
         le=MAX_COPIES,
