@@ -322,14 +322,19 @@ def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
 
 
 #: The benchmarks: each is ``bench.<name>`` with ``run(out, quick=...)``, imported on use.
-BENCHMARKS = ("codec", "planner", "sim", "console", "reconfig")
+BENCHMARKS = ("codec", "planner", "sim", "console", "reconfig", "recovery")
 
 
 def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
     if args.target not in BENCHMARKS:
         raise UsageError(f"unknown benchmark {args.target!r}")
+    options = {k: v for k in ("kills", "seed") if (v := getattr(args, k, None)) is not None}
+    if options and args.target != "recovery":
+        raise UsageError("--kills and --seed are options of the recovery benchmark")
+    if options.get("kills", 1) < 1:
+        raise UsageError(f"--kills must be at least 1, got {options['kills']}")
     bench = importlib.import_module(f"bench.{args.target}")
-    status: int = bench.run(out, quick=args.quick)
+    status: int = bench.run(out, quick=args.quick, **options)
     return status
 
 
@@ -464,6 +469,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="run a benchmark and print its table")
     p.add_argument("target", choices=BENCHMARKS, help="what to benchmark")
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
+    p.add_argument("--kills", type=int, help="recovery: console kills (default 20)")
+    p.add_argument("--seed", type=int, help="recovery: random seed (default 0)")
 
     p = sub.add_parser(
         "results",
