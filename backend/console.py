@@ -67,6 +67,8 @@ class Console:
         self._drawer: asyncio.Task[None] | None = None
         self._health_task: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
+        #: The bit-error rate assumed of a real link (``link_ber``; the operator may change it).
+        self.assumed_ber = settings.link_ber
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -171,7 +173,7 @@ class Console:
         """(bit-error rate, whole-frame loss) the copies are chosen from: the emulated
         channel's in training, the ``link_ber`` setting on a real link."""
         if self.sim is None:
-            return self.settings.link_ber, 0.0
+            return self.assumed_ber, 0.0
         config = self.sim.channel.config
         return float(config.ber), float(config.loss)
 
@@ -244,6 +246,25 @@ class Console:
             copies=cm.copies_now(),
             surface_copies=cm.surface_copies_now(),
         )
+
+    def set_link(self, link_ber: float | None, delivery_target: float | None) -> LinkHealth:
+        """Change what the station assumes of its link (None: unchanged); later commands'
+        copies follow.
+
+        Raises:
+            ValueError: ``link_ber`` in training (the emulated channel's BER is used).
+        """
+        assert self.commands is not None
+        if link_ber is not None:
+            if self.sim is not None:
+                raise ValueError(
+                    "in training the copies follow the emulated channel's BER: set it with "
+                    "PUT /api/training/channel"
+                )
+            self.assumed_ber = link_ber
+        if delivery_target is not None:
+            self.commands.delivery_target = delivery_target
+        return self.link_health()
 
     async def _push_health(self) -> None:
         while True:

@@ -14,11 +14,51 @@ import secrets
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import Field, field_validator
+from pydantic import BeforeValidator, Field, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 #: The target meaning "the embedded simulator" (training mode).
 SIM_TARGET = "sim"
+
+
+def _number(value: object, *, text: bool) -> float | None:
+    """A number; from text too when ``text`` (environment variables, settings files);
+    ``None`` for anything else (booleans are not numbers)."""
+    if isinstance(value, str) and text:
+        try:
+            return float(value)
+        except ValueError:
+            return None
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    return float(value)
+
+
+def _checks(*, text: bool) -> tuple[BeforeValidator, BeforeValidator]:
+    def link_ber(value: object) -> float:
+        number = _number(value, text=text)
+        if number is None or not 0.0 <= number < 0.5:
+            raise ValueError(f"link_ber must be a number in [0, 0.5), got {value!r:.40}")
+        return number
+
+    def delivery_target(value: object) -> float:
+        number = _number(value, text=text)
+        if number is None or not 0.0 < number < 1.0:
+            raise ValueError(f"delivery_target must be a number in (0, 1), got {value!r:.40}")
+        return number
+
+    return BeforeValidator(link_ber), BeforeValidator(delivery_target)
+
+
+_TEXT_BER, _TEXT_TARGET = _checks(text=True)
+_JSON_BER, _JSON_TARGET = _checks(text=False)
+#: A link's bit-error rate, [0, 0.5), and a delivery probability to aim for, (0, 1): the
+#: message names the field and the interval; never clamped. As settings (text accepted) and
+#: as JSON request fields (numbers only).
+LinkBer = Annotated[float, _TEXT_BER, Field(ge=0, lt=0.5)]
+DeliveryTarget = Annotated[float, _TEXT_TARGET, Field(gt=0, lt=1)]
+LinkBerIn = Annotated[float, _JSON_BER, Field(ge=0, lt=0.5)]
+DeliveryTargetIn = Annotated[float, _JSON_TARGET, Field(gt=0, lt=1)]
 
 
 class Settings(BaseSettings):
@@ -54,10 +94,10 @@ class Settings(BaseSettings):
     copy_interval_s: Annotated[float, Field(gt=0, le=60)] = 1.0
     #: Bit-error rate of a real link, for choosing how many copies a command gets (training
     #: takes it from the emulated channel).
-    link_ber: Annotated[float, Field(ge=0, lt=0.5)] = 1e-3
+    link_ber: LinkBer = 1e-3
     #: Probability that at least one copy of a command decodes, the number of copies is
     #: chosen to reach (a Surface aims for at least 0.999999).
-    delivery_target: Annotated[float, Field(gt=0, lt=1)] = 0.999
+    delivery_target: DeliveryTarget = 0.999
     #: Transmissions allowed per minute (Surface is never limited).
     max_sends_per_minute: Annotated[int, Field(ge=1, le=600)] = 30
     max_depth_m: Annotated[float, Field(gt=0, le=100)] = 100.0

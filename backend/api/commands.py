@@ -11,8 +11,9 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
 from backend.api.deps import ConsoleDep, OperatorDep
-from backend.api.models import RetryIn, SendIn
+from backend.api.models import LinkIn, RetryIn, SendIn
 from backend.commands import CommandManager, NotRetryable
+from backend.health import LinkHealth
 from backend.store import STATES, csv_rows
 
 router = APIRouter(prefix="/api", tags=["commands"])
@@ -174,3 +175,14 @@ def replay(dive: int, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
 def vehicle(console: ConsoleDep) -> dict[str, Any]:
     """Pose, status, the vehicle's echoed active command vs the last sent, link state."""
     return console.vehicle()
+
+
+@router.put("/link")
+def set_link(body: LinkIn, console: ConsoleDep, _op: OperatorDep) -> LinkHealth:
+    """What the station assumes of its link: ``link_ber`` (a real link's bit-error rate,
+    [0, 0.5); 409 in training, where the emulated channel's is used) and ``delivery_target``
+    ((0, 1)). Later commands' copies follow; returns the link's health."""
+    try:
+        return console.set_link(body.link_ber, body.delivery_target)
+    except ValueError as err:
+        raise HTTPException(409, str(err)) from None

@@ -14,6 +14,7 @@ from pydantic import (
     StrictStr,
 )
 
+from backend.settings import DeliveryTargetIn, LinkBerIn
 from codec import MAX_COPIES
 
 ParamIn = StrictFloat | StrictInt | StrictStr
@@ -94,3 +95,12 @@ class CurrentIn(Strict):
 
 class TimeScaleIn(Strict):
     time_scale: Annotated[float, Field(ge=0, le=50)]
+
+
+class LinkIn(Strict):
+    """What the station assumes of its link; a field left out keeps its value."""
+
+    #: Bit-error rate of a real link, [0, 0.5) (training uses the emulated channel's).
+    link_ber: LinkBerIn | None = None
+    #: Delivery probability the number of copies is chosen to reach, (0, 1).
+    delivery_target: DeliveryTargetIn | None = None

@@ -17,7 +17,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from backend.store import csv_rows
-from codec import decode_frame, delivery_probability, encode_frame
+from codec import copies_for, decode_frame, delivery_probability, encode_frame
 
 from .conftest import (
     AUTH,
@@ -63,6 +63,7 @@ API_PATHS = {
     "/api/dives/{dive}",
     "/api/dives/{dive}/replay",
     "/api/vehicle",
+    "/api/link",
     "/api/training",
     "/api/training/channel",
     "/api/training/current",
@@ -1182,3 +1183,49 @@ def test_page_and_static_assets(client: TestClient) -> None:
     assert "/static/app.js" in page.text
     assert client.get("/static/app.js").status_code == 200
     assert client.get("/static/nope.js").status_code == 404
+
+
+# --- the link's assumptions ---------------------------------------------------------------
+
+
+def test_put_link_sets_the_assumed_ber_and_target(make_client: MakeClient) -> None:
+    client = make_client(target="loop://")
+    assert client.put("/api/link", json={"link_ber": 0.02}).status_code == 401
+    r = client.put("/api/link", json={"link_ber": 0.02, "delivery_target": 0.9999}, headers=AUTH)
+    assert r.status_code == 200, r.text
+    link = r.json()
+    assert link["ber"] == 0.02 and link["copies"] == copies_for(0.02, 0.9999) == 6
+    cmd = send(client)
+    assert cmd["copies"] == 6 and cmd["ber"] == 0.02
+    kept = client.put("/api/link", json={}, headers=AUTH).json()
+    assert kept["ber"] == 0.02 and kept["copies"] == 6  # a field left out keeps its value
+
+
+@pytest.mark.parametrize(
+    ("body", "field", "interval"),
+    [
+        ({"link_ber": 0.5}, "link_ber", "[0, 0.5)"),
+        ({"link_ber": -0.001}, "link_ber", "[0, 0.5)"),
+        ({"link_ber": "0.01"}, "link_ber", "[0, 0.5)"),
+        ({"link_ber": True}, "link_ber", "[0, 0.5)"),
+        ({"delivery_target": 1}, "delivery_target", "(0, 1)"),
+        ({"delivery_target": 0.0}, "delivery_target", "(0, 1)"),
+        ({"delivery_target": "high"}, "delivery_target", "(0, 1)"),
+    ],
+)
+def test_put_link_refuses_out_of_range_naming_field_and_range(
+    make_client: MakeClient, body: dict[str, Any], field: str, interval: str
+) -> None:
+    client = make_client(target="loop://")
+    r = client.put("/api/link", json=body, headers=AUTH)
+    assert r.status_code == 422, r.text
+    assert loc_of(r.json()) == ["body", field]
+    assert field in r.json()["detail"][0]["msg"] and interval in r.json()["detail"][0]["msg"]
+    assert client.get("/api/vehicle").json()["link"]["ber"] == 1e-3  # nothing changed
+
+
+def test_put_link_ber_in_training_is_409(client: TestClient) -> None:
+    r = client.put("/api/link", json={"link_ber": 0.01}, headers=AUTH)
+    assert r.status_code == 409 and "/api/training/channel" in r.json()["detail"]
+    r = client.put("/api/link", json={"delivery_target": 0.99}, headers=AUTH)
+    assert r.status_code == 200
