@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import random
 import re
-import socket
 import sqlite3
 import tempfile
 import threading
@@ -27,9 +26,9 @@ from typing import TextIO
 
 import httpx
 
+from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
 from bench._timing import table, verdict
-from codec import Accepted, FrameReceiver, frame_of
 
 LOOPBACK = "127.0.0.1"
 TOKEN = "recovery-bench-token-0123456789"
@@ -44,45 +43,6 @@ SENDERS = 2
 SENDS_PER_THREAD = 40
 MAX_KILL_DELAY_S = 0.6
 PRINTED = re.compile(r"^(\d+) commands? an earlier run left queued or transmitted", re.M)
-
-
-class Listener:
-    """A loopback TCP server: every connection's bytes go through a FrameReceiver."""
-
-    def __init__(self) -> None:
-        self.sock = socket.create_server((LOOPBACK, 0))
-        self.port: int = self.sock.getsockname()[1]
-        self.frames: list[str] = []  # hex of every accepted frame, in arrival order
-        self.rejected = 0
-        self._lock = threading.Lock()
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def _accept(self) -> None:
-        while True:
-            try:
-                conn, _ = self.sock.accept()
-            except OSError:
-                return  # closed
-            threading.Thread(target=self._read, args=(conn,), daemon=True).start()
-
-    def _read(self, conn: socket.socket) -> None:
-        receiver = FrameReceiver()
-        with conn:
-            while data := conn.recv(4096):
-                events = receiver.feed_bytes(data)
-                with self._lock:
-                    for ev in events:
-                        if isinstance(ev, Accepted):
-                            self.frames.append(frame_of(ev.decoded.command).hex)
-                        else:
-                            self.rejected += 1
-
-    def count(self) -> int:
-        with self._lock:
-            return len(self.frames)
-
-    def close(self) -> None:
-        self.sock.close()
 
 
 @dataclass
@@ -175,10 +135,10 @@ def kill_during_sends(console: ConsoleProcess, rng: random.Random) -> float:
     return delay
 
 
-def measure(kills: int, seed: int, workdir: Path) -> tuple[list[Cycle], Listener, float]:
+def measure(kills: int, seed: int, workdir: Path) -> tuple[list[Cycle], FrameGateway, float]:
     rng = random.Random(seed)
     db = workdir / "missions.sqlite3"
-    listener = Listener()
+    listener = FrameGateway()
     t0 = time.monotonic()
     cycles: list[Cycle] = []
     console: ConsoleProcess | None = None
@@ -210,7 +170,7 @@ def measure(kills: int, seed: int, workdir: Path) -> tuple[list[Cycle], Listener
     return cycles, listener, time.monotonic() - t0
 
 
-def format_report(cycles: list[Cycle], listener: Listener, db_total: int, wall_s: float) -> str:
+def format_report(cycles: list[Cycle], listener: FrameGateway, db_total: int, wall_s: float) -> str:
     headers = ["kill", "delay ms", "records", "on their way at kill", "interrupted", "printed"]
     headers += ["left non-terminal", "frames received"]
     rows = [
@@ -233,7 +193,7 @@ def format_report(cycles: list[Cycle], listener: Listener, db_total: int, wall_s
             "every kill" if consistent else "NO",
             verdict(consistent),
         ],
-        ["frames decoded / rejected", f"{len(listener.frames)} / {listener.rejected}", ""],
+        ["frames decoded / rejected", f"{listener.count()} / {len(listener.rejected)}", ""],
         ["wall time", f"{wall_s:.1f} s", ""],
     ]
     return "\n".join([table(headers, rows), "", table(["", "measured", ""], summary)])

@@ -7,12 +7,10 @@ from __future__ import annotations
 
 import contextlib
 import itertools
-import socket
 import threading
 import time
 from collections.abc import Iterator
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +21,8 @@ from pydantic import ValidationError
 from backend.app import create_app
 from backend.settings import Settings
 from backend.store import MissionLog
-from codec import FRAME_BITS, Accepted, FrameReceiver, Rejected, delivery_probability
+from bench._gateway import FrameGateway
+from codec import delivery_probability
 
 from .conftest import (
     AUTH,
@@ -38,104 +37,11 @@ from .conftest import (
 )
 
 HOVER: dict[str, Any] = {"duration": 60, "depth": 3, "heading": 90}
-_FRAME_MASK = (1 << FRAME_BITS) - 1
-
-
-@dataclass(frozen=True)
-class WireFrame:
-    """One frame the gateway decoded: when it arrived (monotonic), what it says, its bits."""
-
-    t: float
-    pattern: str
-    params: dict[str, Any]
-    hex: str
-
-
-class Wire:
-    """A TCP listener on 127.0.0.1 standing in for an ME modem gateway: accepts every
-    connection (the console may reconnect) and decodes the 13-byte frames it is sent."""
-
-    def __init__(self) -> None:
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self._listener.settimeout(0.05)
-        self.port: int = self._listener.getsockname()[1]
-        self._lock = threading.Lock()
-        self._frames: list[WireFrame] = []
-        self.rejected: list[str] = []
-        self.connections = 0
-        self._stop = threading.Event()
-        self._threads: list[threading.Thread] = []
-        self._accept_thread = threading.Thread(target=self._accept, daemon=True)
-        self._accept_thread.start()
-
-    @property
-    def target(self) -> str:
-        return f"tcp://127.0.0.1:{self.port}"
-
-    def _accept(self) -> None:
-        while not self._stop.is_set():
-            try:
-                conn, _ = self._listener.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            with self._lock:
-                self.connections += 1
-            thread = threading.Thread(target=self._serve, args=(conn,), daemon=True)
-            self._threads.append(thread)
-            thread.start()
-
-    def _serve(self, conn: socket.socket) -> None:
-        receiver = FrameReceiver()
-        stream = bytearray()  # everything this connection sent, to read each frame's bits
-        conn.settimeout(0.05)
-        with conn:
-            while not self._stop.is_set():
-                try:
-                    data = conn.recv(4096)
-                except TimeoutError:
-                    continue
-                except OSError:
-                    return
-                if not data:
-                    return
-                arrived = time.monotonic()
-                stream += data
-                for event in receiver.feed_bytes(data):
-                    if isinstance(event, Accepted):
-                        total = 8 * len(stream)
-                        value = int.from_bytes(stream, "big")
-                        bits = (value >> (total - event.offset - FRAME_BITS)) & _FRAME_MASK
-                        cmd = event.decoded.command
-                        frame = WireFrame(
-                            arrived, cmd.pattern.name, dict(cmd.params), f"{bits:025x}"
-                        )
-                        with self._lock:
-                            self._frames.append(frame)
-                    elif isinstance(event, Rejected):
-                        with self._lock:
-                            self.rejected.append(str(event.error))
-
-    def trace(self) -> list[WireFrame]:
-        """Every frame decoded so far, in arrival order."""
-        with self._lock:
-            return list(self._frames)
-
-    def count(self, hex_: str) -> int:
-        return sum(f.hex == hex_ for f in self.trace())
-
-    def close(self) -> None:
-        self._stop.set()
-        self._listener.close()
-        self._accept_thread.join(2)
-        for thread in self._threads:
-            thread.join(2)
 
 
 @pytest.fixture
-def wire() -> Iterator[Wire]:
-    w = Wire()
+def wire() -> Iterator[FrameGateway]:
+    w = FrameGateway()
     try:
         yield w
     finally:
@@ -144,7 +50,7 @@ def wire() -> Iterator[Wire]:
 
 
 def show_trace(
-    wire: Wire, records: dict[int, dict[str, Any]], title: str, out: Path | None = None
+    wire: FrameGateway, records: dict[int, dict[str, Any]], title: str, out: Path | None = None
 ) -> str:
     """The wire trace, times relative to the first frame, each frame named by its record;
     printed (visible with ``pytest -s``) and written best-effort to ``out``."""
@@ -170,7 +76,7 @@ def show_trace(
     return text
 
 
-def indices(wire: Wire, hex_: str) -> list[int]:
+def indices(wire: FrameGateway, hex_: str) -> list[int]:
     """Positions in the wire trace of the frames with these bits."""
     return [i for i, f in enumerate(wire.trace()) if f.hex == hex_]
 
@@ -194,7 +100,7 @@ def post_command(
     return out
 
 
-def wait_for_frames(wire: Wire, hex_: str, n: int) -> None:
+def wait_for_frames(wire: FrameGateway, hex_: str, n: int) -> None:
     wait_until(lambda: wire.count(hex_) >= n, what=f"{n} frames {hex_} on the wire")
 
 
@@ -204,7 +110,7 @@ def post_copies(client: TestClient, copies: object) -> Any:
     return client.post("/api/commands", json=body, headers=AUTH)
 
 
-def assert_silent(wire: Wire, seconds: float) -> None:
+def assert_silent(wire: FrameGateway, seconds: float) -> None:
     """No frame arrives for ``seconds`` (a bounded wait: a check for absence)."""
     before = len(wire.trace())
     time.sleep(seconds)
@@ -217,7 +123,7 @@ def assert_silent(wire: Wire, seconds: float) -> None:
 
 @pytest.mark.parametrize("before", [1, 2])
 def test_surface_then_hover_no_surface_frame_after_the_hover(
-    make_client: MakeClient, wire: Wire, tmp_path: Path, before: int
+    make_client: MakeClient, wire: FrameGateway, tmp_path: Path, before: int
 ) -> None:
     """The hover is sent after ``before`` surface frames are on the wire."""
     repeat_s = 0.3
@@ -251,7 +157,9 @@ def test_surface_then_hover_no_surface_frame_after_the_hover(
 # --- b. Surface alone -------------------------------------------------------------------
 
 
-def test_surface_alone_stops_after_its_bounded_repeats(make_client: MakeClient, wire: Wire) -> None:
+def test_surface_alone_stops_after_its_bounded_repeats(
+    make_client: MakeClient, wire: FrameGateway
+) -> None:
     repeat_s = 0.15
     client = make_client(target=wire.target, surface_repeat_s=repeat_s, link_ber=1e-3)
     surface = post_surface(client)
@@ -269,7 +177,7 @@ def test_surface_alone_stops_after_its_bounded_repeats(make_client: MakeClient, 
 
 
 def test_a_surface_frame_sent_as_a_command_is_delivered_as_a_surface(
-    make_client: MakeClient, wire: Wire
+    make_client: MakeClient, wire: FrameGateway
 ) -> None:
     """Whichever way a surface frame is sent, it gets a Surface's copies, and the button
     pressed meanwhile joins it."""
@@ -287,7 +195,7 @@ def test_a_surface_frame_sent_as_a_command_is_delivered_as_a_surface(
 
 
 def test_three_circles_surface_hover_in_order(
-    make_client: MakeClient, wire: Wire, tmp_path: Path
+    make_client: MakeClient, wire: FrameGateway, tmp_path: Path
 ) -> None:
     """The issue's scenario ("on the wire: three circles, then Surface, then a hover, then
     more surface frames after the hover"): each command is replaced after two of its copies;
@@ -336,7 +244,7 @@ def test_three_circles_surface_hover_in_order(
 
 
 def test_twenty_concurrent_surface_presses_are_one_record(
-    make_client: MakeClient, wire: Wire
+    make_client: MakeClient, wire: FrameGateway
 ) -> None:
     client = make_client(target=wire.target, surface_repeat_s=0.3)
     barrier = threading.Barrier(20)
@@ -366,7 +274,9 @@ def test_twenty_concurrent_surface_presses_are_one_record(
 # --- e. the operator's copies -----------------------------------------------------------
 
 
-def test_copies_override_goes_out_that_many_times(make_client: MakeClient, wire: Wire) -> None:
+def test_copies_override_goes_out_that_many_times(
+    make_client: MakeClient, wire: FrameGateway
+) -> None:
     ber = 1e-2
     client = make_client(target=wire.target, copy_interval_s=0.05, link_ber=ber)
     assert client.get("/api/vehicle").json()["link"]["copies"] == 3  # chosen at 1e-2
@@ -442,7 +352,7 @@ def test_link_settings_out_of_range_are_refused_not_clamped(
 
 
 def test_shutdown_during_repeats_interrupts_and_silences(
-    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, wire: Wire
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, wire: FrameGateway
 ) -> None:
     clear_nemesys_env(monkeypatch)
     db = tmp_path / "shutdown.sqlite3"
@@ -470,7 +380,7 @@ def test_shutdown_during_repeats_interrupts_and_silences(
 # --- g. link health of a one-way link ---------------------------------------------------
 
 
-def test_vehicle_link_of_a_tcp_modem(make_client: MakeClient, wire: Wire) -> None:
+def test_vehicle_link_of_a_tcp_modem(make_client: MakeClient, wire: FrameGateway) -> None:
     client = make_client(target=wire.target, copy_interval_s=0.05, surface_repeat_s=0.05)
     link = client.get("/api/vehicle").json()["link"]
     assert link["target"] == wire.target

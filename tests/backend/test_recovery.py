@@ -6,9 +6,7 @@ retried to ``sent``, its frames decoded on the loopback listener."""
 from __future__ import annotations
 
 import re
-import socket
 import sqlite3
-import threading
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -18,8 +16,9 @@ import pytest
 
 from backend.lifecycle import ON_ITS_WAY, State
 from backend.store import MissionLog
+from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
-from codec import Accepted, FrameReceiver, encode_frame, frame_of
+from codec import encode_frame
 
 from .conftest import CIRCLE, TOKEN, clear_nemesys_env, wait_until
 
@@ -204,54 +203,16 @@ def test_an_old_format_log_is_migrated_and_readable(tmp_path: Path) -> None:
 # --- (c) end to end: SIGKILL, restart, retry ---------------------------------------------
 
 
-class Listener:
-    """A loopback TCP server standing for an ME modem's gateway: every connection's bytes."""
-
-    def __init__(self) -> None:
-        self.sock = socket.create_server(("127.0.0.1", 0))
-        self.port: int = self.sock.getsockname()[1]
-        self.connections: list[bytearray] = []
-        self.closed = 0
-        self._lock = threading.Lock()
-        threading.Thread(target=self._accept, daemon=True).start()
-
-    def _accept(self) -> None:
-        while True:
-            try:
-                conn, _ = self.sock.accept()
-            except OSError:
-                return
-            with self._lock:
-                self.connections.append(buf := bytearray())
-            threading.Thread(target=self._read, args=(conn, buf), daemon=True).start()
-
-    def _read(self, conn: socket.socket, buf: bytearray) -> None:
-        with conn:
-            while data := conn.recv(4096):
-                with self._lock:
-                    buf += data
-        with self._lock:
-            self.closed += 1
-
-    def frames(self, connection: int) -> list[str]:
-        """The hex of every frame decoded on one connection, in order (none rejected)."""
-        with self._lock:
-            data = bytes(self.connections[connection])
-        events = FrameReceiver().feed_bytes(data)
-        assert all(isinstance(e, Accepted) for e in events), events
-        return [frame_of(e.decoded.command).hex for e in events if isinstance(e, Accepted)]
-
-
 @pytest.fixture
-def listener() -> Iterator[Listener]:
-    server = Listener()
+def listener() -> Iterator[FrameGateway]:
+    server = FrameGateway()
     yield server
-    server.sock.close()
+    server.close()
 
 
 @pytest.fixture
 def start_server(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, listener: Listener
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, listener: FrameGateway
 ) -> Iterator[Callable[[Path], ConsoleProcess]]:
     """``nemesys console`` on a one-way TCP link to ``listener``, copies 0.5 s apart."""
     clear_nemesys_env(monkeypatch)
@@ -281,7 +242,7 @@ def get(c: httpx.Client, command_id: int) -> dict[str, Any]:
 
 
 def test_a_killed_console_interrupts_and_retries_on_restart(
-    tmp_path: Path, start_server: Callable[[Path], ConsoleProcess], listener: Listener
+    tmp_path: Path, start_server: Callable[[Path], ConsoleProcess], listener: FrameGateway
 ) -> None:
     db = tmp_path / "missions.sqlite3"
     first = start_server(db)
@@ -338,7 +299,7 @@ def test_a_killed_console_interrupts_and_retries_on_restart(
     assert done["copies_sent"] == rec["copies_sent"] + 2
     assert done["reason"] is None and done["hex"] == cmd["hex"]
     # the listener got the retry's two copies on the restarted console's connection
-    assert len(listener.connections) == 2
+    assert listener.connections == 2 and not listener.rejected
     assert listener.frames(1) == [cmd["hex"]] * 2
 
 
