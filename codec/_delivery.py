@@ -20,9 +20,12 @@ choice of ``r``, the ``p_delivered`` of every record and the BER analysis all ca
 from __future__ import annotations
 
 import math
-from typing import Final
 
 from codec._frame import CODE, CODEWORD_BITS, DEFAULT_SYNC_TOLERANCE, SYNC_BITS
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:  # the onboard path imports no typing (tests/codec/test_imports.py)
+    from typing import Final
 
 #: Largest number of copies of one command (the operator's ``copies`` range is 1..20).
 MAX_COPIES: Final = 20
