@@ -243,6 +243,7 @@ class Console:
             frames=totals,
             unknown_values=self.hub.unknown_values,
             ber=self._link_ber()[0],
+            delivery_target=cm.delivery_target,
             copies=cm.copies_now(),
             surface_copies=cm.surface_copies_now(),
         )

@@ -65,6 +65,8 @@ class LinkHealth(BaseModel):
     unknown_values: int
     #: Bit-error rate the number of copies is chosen from.
     ber: float
+    #: Delivery probability the number of copies is chosen to reach.
+    delivery_target: float
     #: Copies a command gets now (chosen from ``ber`` and the delivery target).
     copies: int
     #: Copies a Surface gets now; null: repeated until acknowledged (two-way link).

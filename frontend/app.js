@@ -1,6 +1,7 @@
 // NemeSys Console page: wires the session, token, live link and the panels together.
 
 import { api, adoptUrlToken, setToken, hasToken } from "./api.js";
+import { initAssumptions, setAssumptionsMode } from "./assumptions.js";
 import { initAuthoring, current } from "./authoring.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
 import { setDictionary } from "./form.js";
@@ -59,6 +60,7 @@ function renderSession(s) {
     auth.className = "auth-ok";
   }
   if (s && s.link) setSessionLink(s.link);
+  setAssumptionsMode(mode);
   $("token-form").hidden = token && !rejected;
   $("token-clear").hidden = !token;
   applyAuth(token && !rejected);
@@ -133,6 +135,7 @@ async function main() {
   initToken();
   initCommands({ wsSurface: () => Boolean(live && live.send({ type: "surface" })) });
   initTraining();
+  initAssumptions();
   startAgeTicker();
   renderSession(null);
 

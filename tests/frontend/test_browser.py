@@ -14,7 +14,7 @@ from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 import pytest
-from playwright.sync_api import Frame, Page, expect
+from playwright.sync_api import Frame, Page, Route, expect
 
 from tests.frontend.conftest import TOKEN, Console, Watched
 
@@ -308,7 +308,7 @@ def test_surface_button_is_acknowledged_and_the_banner_clears(
 def test_without_token_the_page_is_read_only(console: Console, watched: Watched) -> None:
     page = open_page(watched, console, token=False)
     author(page, "circle", {"radius": 4})
-    for testid in ("send-button", "surface-button", "script-run", "training-reset"):
+    for testid in ("send-button", "surface-button", "script-run", "training-reset", "link-apply"):
         button = page.get_by_test_id(testid)
         expect(button).to_be_disabled()
         expect(button).to_have_attribute("title", "read-only: open the URL with the operator token")
@@ -563,4 +563,116 @@ def test_one_way_link_sends_copies_without_promising_acknowledgement(
     page.get_by_test_id("log-filter-state").select_option("sent")
     expect(page.get_by_test_id(f"log-row-{command_id}")).to_contain_text("sent 3 copies")
     expect(page.get_by_test_id(f"log-row-{surface_id}")).to_be_visible()
+    watched.assert_clean()
+
+
+# ---- the link assumptions form -------------------------------------------------------------
+
+
+def link_puts(w: Watched) -> int:
+    """How many PUT /api/link the page has made."""
+    return sum(1 for m, u in w.requests if m == "PUT" and urlsplit(u).path == "/api/link")
+
+
+def requests_settled(page: Page) -> None:
+    """Wait for one request of the page's own to come back: the page's request events are
+    delivered in order, so every request the page made before this one has been recorded."""
+    status = page.evaluate("() => fetch('/api/session').then((r) => r.status)")
+    assert status == 200, status
+
+
+@pytest.mark.parametrize("console_env", [ONE_WAY], ids=["loop-modem"])
+def test_link_assumptions_set_ber_and_target_and_refuse_out_of_range_values(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    assert console.get("/api/session")["mode"] != "training"
+    before = console.get("/api/vehicle")["link"]
+    ber = page.get_by_test_id("link-ber-input")
+    target = page.get_by_test_id("delivery-target-input")
+    apply = page.get_by_test_id("link-apply")
+    result = page.get_by_test_id("link-apply-result")
+    expect(ber).to_be_enabled()
+    expect(page.get_by_test_id("link-ber-note")).to_be_hidden()
+    expect(ber).not_to_have_attribute("placeholder", "")  # the assumed BER now
+    assert float(ber.get_attribute("placeholder") or "nan") == before["ber"], before
+    expect(target).to_have_attribute("placeholder", "0.999")
+    expect(apply).to_be_enabled()
+    expect(result).to_be_hidden()
+
+    ber.fill("0.02")
+    target.fill("0.9999")
+    apply.click()
+    expect(result).to_contain_text("copies per command now: 6")
+    link = console.get("/api/vehicle")["link"]
+    assert link["ber"] == 0.02 and link["copies"] == 6, link
+    surface = link["surface_copies"]
+    assert isinstance(surface, int), link  # one-way: a number of copies, not "until acked"
+    expect(result).to_have_text(f"copies per command now: 6 (surface: {surface})")
+    assert link_puts(watched) == 1
+    expect(target).to_have_attribute("placeholder", "0.9999")  # the target set
+    # the rest of the page follows the new link at once
+    expect(page.get_by_test_id("copies-input")).to_have_attribute("placeholder", "auto (6)")
+    expect(page.get_by_test_id("status-link")).to_contain_text("6 copies per command")
+
+    # out of range: refused in the page, naming the field and the interval; nothing is sent
+    ber.fill("0.7")
+    apply.click()
+    error = page.get_by_test_id("link-ber-error")
+    expect(error).to_be_visible()
+    expect(error).to_contain_text("link_ber")
+    expect(error).to_contain_text("[0, 0.5)")
+    expect(error).to_contain_text("0.7")  # the value typed, not a clamped one
+    expect(ber).to_have_attribute("aria-invalid", "true")
+    expect(ber).to_have_value("0.7")  # never clamped
+    ber.fill("0.01")  # a valid BER beside an invalid target: still nothing is sent
+    expect(error).to_be_hidden()
+    target.fill("1")
+    apply.click()
+    target_error = page.get_by_test_id("delivery-target-error")
+    expect(target_error).to_contain_text("delivery_target")
+    expect(target_error).to_contain_text("(0, 1)")
+    requests_settled(page)
+    assert link_puts(watched) == 1, watched.requests
+    assert console.get("/api/vehicle")["link"]["ber"] == 0.02
+    watched.assert_clean()
+
+
+def test_link_assumptions_in_training_leave_the_ber_to_the_channel(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    assert console.get("/api/session")["mode"] == "training"
+    ber = page.get_by_test_id("link-ber-input")
+    expect(ber).to_be_disabled()
+    expect(page.get_by_test_id("link-ber-note")).to_be_visible()
+    expect(page.get_by_test_id("link-ber-note")).to_have_text("training: set by the channel")
+
+    # the delivery target works in training too; acknowledged SURFACEs repeat until acked
+    page.get_by_test_id("delivery-target-input").fill("0.99")
+    page.get_by_test_id("link-apply").click()
+    result = page.get_by_test_id("link-apply-result")
+    link = console.get("/api/vehicle")["link"]
+    expect(result).to_have_text(
+        f"copies per command now: {link['copies']} (surface: until acknowledged)"
+    )
+    assert link["surface_copies"] is None, link
+
+    # a page that believes it is on a real vehicle sends link_ber anyway: the backend's 409
+    # is shown next to the field
+    def as_vehicle(route: Route) -> None:
+        response = route.fetch()
+        route.fulfill(response=response, json={**response.json(), "mode": "vehicle"})
+
+    page.route(re.compile(r"/api/session$"), as_vehicle)
+    page.reload()
+    expect(page.get_by_test_id("mode-badge")).to_have_text("VEHICLE")
+    expect(ber).to_be_enabled()
+    expect(page.get_by_test_id("link-apply")).to_be_enabled()
+    ber.fill("0.01")
+    page.get_by_test_id("link-apply").click()
+    error = page.get_by_test_id("link-ber-error")
+    expect(error).to_contain_text("in training the copies follow the emulated channel's BER")
+    expect(result).to_have_text("not applied")
+    assert console.get("/api/vehicle")["link"]["ber"] != 0.01
     watched.assert_clean()
