@@ -350,7 +350,11 @@ class ModemLink(Link):
     async def transmit(self, frame: Frame) -> str | None:
         async with self._lock:
             result = await self._tx.send_async(frame, wait_ack_s=0.0)
-        self.connection_problem = None if result.sent else f"the modem: {result.reason}"
+        self.connection_problem = (
+            None
+            if result.sent
+            else f"the last frame did not reach the modem at {self.target}: {result.reason}"
+        )
         return None if result.sent else (result.reason or "not sent")
 
 
