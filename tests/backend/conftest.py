@@ -17,6 +17,7 @@ from backend.app import create_app
 from backend.console import Console
 from backend.settings import Settings
 from backend.store import FINAL_STATES
+from codec import encode_frame
 
 TOKEN = "x" * 20
 WRONG_TOKEN = "y" * 20
@@ -147,3 +148,20 @@ def loc_of(response_json: Any) -> list[Any]:
     assert isinstance(detail, list) and detail, response_json
     loc: list[Any] = detail[0]["loc"]
     return loc
+
+
+def command_fields(pattern: str = "circle", **params: Any) -> dict[str, Any]:
+    """A command record's fields as the console writes them (for the log's own tests)."""
+    values = params if params or pattern != "circle" else CIRCLE
+    enc = encode_frame(pattern, values)
+    return {
+        "operator": "operator",
+        "target": "sim",
+        "kind": "command",
+        "pattern": enc.command.pattern.name,
+        "pattern_id": enc.command.pattern.id,
+        "params": dict(enc.command.params),
+        "requested": dict(values),
+        "bits": enc.frame.bits,
+        "hex": enc.frame.hex,
+    }

@@ -18,9 +18,8 @@ from backend.lifecycle import ON_ITS_WAY, State
 from backend.store import MissionLog
 from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
-from codec import encode_frame
 
-from .conftest import CIRCLE, TOKEN, clear_nemesys_env, wait_until
+from .conftest import CIRCLE, TOKEN, clear_nemesys_env, command_fields, wait_until
 
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 #: The line ``nemesys console`` prints when it recovered records (before its URL).
@@ -73,22 +72,6 @@ CREATE INDEX track_dive ON track(dive, t_s);
 NEW_COLUMNS = ("copies", "copies_sent", "p_delivered", "ber", "two_way", "superseded_by")
 
 
-def command_fields(radius: float = 5.0) -> dict[str, Any]:
-    values = {**CIRCLE, "radius": radius}
-    enc = encode_frame("circle", values)
-    return {
-        "operator": "operator",
-        "target": "tcp://127.0.0.1:9",
-        "kind": "command",
-        "pattern": enc.command.pattern.name,
-        "pattern_id": enc.command.pattern.id,
-        "params": dict(enc.command.params),
-        "requested": dict(values),
-        "bits": enc.frame.bits,
-        "hex": enc.frame.hex,
-    }
-
-
 # --- (a) the log's recovery --------------------------------------------------------------
 
 
@@ -98,7 +81,9 @@ def test_recovery_interrupts_exactly_what_was_on_its_way(tmp_path: Path) -> None
         dive = log.new_dive("tcp://127.0.0.1:9")
         ids: dict[State, int] = {}
         for i, state in enumerate(State):
-            rec = log.insert_command(dive, {**command_fields(3.0 + i), "copies": 3})
+            rec = log.insert_command(
+                dive, {**command_fields("circle", **{**CIRCLE, "radius": 3.0 + i}), "copies": 3}
+            )
             ids[state] = rec["id"]
             if state != State.QUEUED:
                 log.update_command(rec["id"], state=state, reason=f"was {state}", attempts=1)
@@ -193,7 +178,14 @@ def test_an_old_format_log_is_migrated_and_readable(tmp_path: Path) -> None:
         assert got is not None and got["state"] == "interrupted"
         assert "(the log was last written at 2024-05-01T10:02:01.000+00:00)" in got["reason"]
         # new records use the new columns
-        new = log.insert_command(1, {**command_fields(4.0), "copies": 5, "two_way": False})
+        new = log.insert_command(
+            1,
+            {
+                **command_fields("circle", **{**CIRCLE, "radius": 4.0}),
+                "copies": 5,
+                "two_way": False,
+            },
+        )
         assert new["copies"] == 5 and new["two_way"] is False and new["copies_sent"] == 0
     finally:
         log.close()

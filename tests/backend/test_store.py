@@ -15,9 +15,8 @@ from typing import Any
 import pytest
 
 from backend.store import FINAL_STATES, STATES, MissionLog, csv_rows, now_iso
-from codec import encode_frame
 
-from .conftest import SQUARE
+from .conftest import SQUARE, command_fields
 
 #: The export's columns, written out: the contract (not imported from the store).
 CSV_HEADER = [
@@ -44,25 +43,6 @@ CSV_HEADER = [
     "decode_latency_ms",
     "replan_latency_ms",
 ]
-
-
-CIRCLE: dict[str, Any] = {"speed": 0.18, "depth": 3, "radius": 5.1, "direction": "cw"}
-
-
-def command_fields(pattern: str = "circle", **params: Any) -> dict[str, Any]:
-    values = params if params or pattern != "circle" else CIRCLE
-    enc = encode_frame(pattern, values)
-    return {
-        "operator": "operator",
-        "target": "sim",
-        "kind": "command",
-        "pattern": enc.command.pattern.name,
-        "pattern_id": enc.command.pattern.id,
-        "params": dict(enc.command.params),
-        "requested": dict(values),
-        "bits": enc.frame.bits,
-        "hex": enc.frame.hex,
-    }
 
 
 ACK: dict[str, Any] = {
