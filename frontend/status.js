@@ -1,6 +1,6 @@
 // The vehicle status panel: latest telemetry wins; the age ticks locally between messages.
 
-import { renderLink, setRadio } from "./link.js";
+import { currentLink, renderLink, setRadio } from "./link.js";
 import { $, num, withUnit } from "./ui.js";
 
 const STALE_S = 5;
@@ -54,7 +54,9 @@ export function renderTelemetry(msg) {
 export function tickAge() {
   const stale = $("status-stale");
   if (!ageAt) {
-    set("status-age", "no data yet", "warn-text");
+    const link = currentLink();
+    const none = link && link.capability === "none"; // a modem: no telemetry will ever come
+    set("status-age", none ? "none on this link (one-way)" : "no data yet", none ? "" : "warn-text");
     stale.hidden = true;
     return;
   }

@@ -512,6 +512,8 @@ def test_one_way_link_sends_copies_without_promising_acknowledgement(
     indicator = page.get_by_test_id("link-indicator")
     expect(indicator).to_have_class(LEVEL)
     expect(indicator).to_contain_text("one-way (no acks)")
+    # a modem sends nothing back: no telemetry is not "no data yet", it is none to come
+    expect(page.locator("#status-age")).to_have_text("none on this link (one-way)")
     assert indicator.get_attribute("title"), "the indicator's title lists problems or none"
     surface = page.get_by_test_id("surface-button")
     n_surface = link["surface_copies"]
