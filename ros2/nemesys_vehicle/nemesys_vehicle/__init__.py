@@ -1,0 +1,1 @@
+"""NemeSys onboard node: the reference ROS 2 package (see README.md)."""
