@@ -19,6 +19,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
+from backend import contract_cli
 from codec import (
     DEFAULT_BITRATE_BPS,
     DICTIONARY,
@@ -390,6 +391,8 @@ COMMANDS: dict[str, Handler] = {
     "bench": cmd_bench,
     "results": cmd_results,
     "analyze": cmd_analyze,
+    "contract": contract_cli.cmd_contract,
+    "vehicle-check": contract_cli.cmd_vehicle_check,
 }
 
 
@@ -465,6 +468,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     sim_cli.add_parsers(sub)
     _serve().add_parser(sub)
+    contract_cli.add_parsers(sub)
 
     p = sub.add_parser("bench", help="run a benchmark and print its table")
     p.add_argument("target", choices=BENCHMARKS, help="what to benchmark")

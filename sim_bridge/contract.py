@@ -15,9 +15,19 @@ wording. The console accepts any vehicle with the same major number.
 
 from __future__ import annotations
 
+import copy
+import functools
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import Any, Final
+from typing import TYPE_CHECKING, Any, Final
+
+from codec import RejectReason, describe_dictionary
+from sim_bridge._schema import command_schema, problems, vehicle_state_schema
+from sim_bridge.agent import INVALID_PLAN, LIMIT_VIOLATION
+from sim_bridge.guidance import Mode
+
+if TYPE_CHECKING:
+    from jsonschema import Draft202012Validator
 
 #: The contract's version (see the module doc for the rule).
 CONTRACT_VERSION: Final = "1.0.0"
@@ -162,3 +172,239 @@ def topic(name: str) -> Topic:
         if t.name == name:
             return t
     raise KeyError(name)
+
+
+# --- the JSON payloads ----------------------------------------------------------------------
+
+#: The JSON Schema dialect of both schemas.
+SCHEMA_DIALECT: Final = "https://json-schema.org/draft/2020-12/schema"
+
+_NUMBER_OR_NULL: Final = {"type": ["number", "null"]}
+_COUNT_OR_NULL: Final = {"type": ["integer", "null"], "minimum": 0}
+
+#: The words of ``mode`` in the status (what guidance is doing).
+MODES: Final = tuple(m.value for m in Mode)
+
+#: Every ``reason`` a rejection may give: the codec's (the frame did not decode) and the
+#: agent's (it decoded but is no flyable plan within the vehicle's limits).
+REJECT_REASONS: Final = (*(r.value for r in RejectReason), INVALID_PLAN, LIMIT_VIOLATION)
+
+
+def _command_or_null(description: str) -> dict[str, Any]:
+    return {"anyOf": [{"$ref": "#/$defs/command"}, {"type": "null"}], "description": description}
+
+
+#: The acknowledgement: one JSON object per frame the onboard agent processed, as the ``data``
+#: of a ``std_msgs/String`` on ``/nemesys/mission``.
+ACK_SCHEMA: Final[dict[str, Any]] = {
+    "$schema": SCHEMA_DIALECT,
+    "$id": "urn:nemesys:vehicle-contract:1:ack",
+    "title": "NemeSys acknowledgement",
+    "description": "the onboard agent's verdict on one received frame",
+    "type": "object",
+    "required": [
+        "t_s",
+        "outcome",
+        "frame_hex",
+        "reason",
+        "detail",
+        "command",
+        "duplicate",
+        "active",
+        "from",
+    ],
+    "properties": {
+        "seq": {"type": "integer", "minimum": 1, "description": "frames processed, this one"},
+        "t_s": {**_NUMBER_OR_NULL, "description": "ROS time of the verdict (s)"},
+        "outcome": {"enum": ["accepted", "rejected"], "description": "the verdict"},
+        "frame_hex": {
+            "type": ["string", "null"],
+            "pattern": "^([0-9a-fA-F]{25}|[0-9a-fA-F]{26})$",
+            "description": "the 100 bits received, 25 hex digits (or the 13 packed bytes); "
+            "null when the message was not a frame",
+        },
+        "corrected_bits": {**_COUNT_OR_NULL, "description": "bits the BCH decoder corrected"},
+        "sync_errors": {**_COUNT_OR_NULL, "description": "preamble and delimiter bits wrong"},
+        "reason": {
+            "enum": [*REJECT_REASONS, None],
+            "description": "why it was rejected; null when accepted",
+        },
+        "detail": {"type": "string", "description": "the verdict in words"},
+        "field": {"type": ["string", "null"], "description": "the parameter at fault"},
+        "command": _command_or_null("the command decoded from the frame; null if none"),
+        "duplicate": {
+            "type": "boolean",
+            "description": "accepted and already the active command: not replanned",
+        },
+        "decode_latency_ms": {
+            **_NUMBER_OR_NULL,
+            "minimum": 0,
+            "description": "receipt to decoded and checked (ms)",
+        },
+        "replan_latency_ms": {
+            **_NUMBER_OR_NULL,
+            "minimum": 0,
+            "description": "decoded to the new plan's first setpoint (ms)",
+        },
+        "waypoints": {**_COUNT_OR_NULL, "description": "waypoints of the new plan"},
+        "active": _command_or_null("the command the vehicle runs after this frame; null: none"),
+        "from": {
+            "anyOf": [{"$ref": "#/$defs/vehicle_state"}, {"type": "null"}],
+            "description": "the state the new plan was made from; null unless it replanned",
+        },
+        "channel_flipped_bits": {
+            "type": "integer",
+            "minimum": 0,
+            "description": "the simulator only: bits its emulated channel flipped",
+        },
+    },
+    "allOf": [
+        {
+            "if": {"properties": {"outcome": {"const": "accepted"}}, "required": ["outcome"]},
+            "then": {
+                "properties": {"reason": {"const": None}, "command": {"$ref": "#/$defs/command"}}
+            },
+        },
+        {
+            "if": {"properties": {"outcome": {"const": "rejected"}}, "required": ["outcome"]},
+            "then": {
+                "properties": {
+                    "reason": {"enum": list(REJECT_REASONS)},
+                    "duplicate": {"const": False},
+                }
+            },
+        },
+    ],
+    "$defs": {"command": command_schema(), "vehicle_state": vehicle_state_schema()},
+}
+
+#: The status: one JSON object at >= 1 Hz, as the ``data`` of a ``std_msgs/String`` on
+#: ``/nemesys/status``. A number the vehicle does not know is ``null``, never left out.
+STATUS_SCHEMA: Final[dict[str, Any]] = {
+    "$schema": SCHEMA_DIALECT,
+    "$id": "urn:nemesys:vehicle-contract:1:status",
+    "title": "NemeSys status",
+    "description": "what the vehicle is doing; unknown numbers are null",
+    "type": "object",
+    "required": ["t_s", "depth_m", "heading_deg", "speed_mps", "battery_pct", "mode", "pattern"],
+    "properties": {
+        "t_s": {**_NUMBER_OR_NULL, "description": "ROS time (s)"},
+        "x_m": {**_NUMBER_OR_NULL, "description": "north (m); the pose is the position's source"},
+        "y_m": {**_NUMBER_OR_NULL, "description": "east (m); the pose is the position's source"},
+        "depth_m": {**_NUMBER_OR_NULL, "description": "the depth sensor's reading (m, down)"},
+        "heading_deg": {**_NUMBER_OR_NULL, "description": "degrees clockwise from north"},
+        "speed_mps": {**_NUMBER_OR_NULL, "description": "speed through the water (m/s)"},
+        "battery_pct": {
+            **_NUMBER_OR_NULL,
+            "minimum": 0,
+            "maximum": 100,
+            "description": "state of charge (%)",
+        },
+        "mode": {"enum": list(MODES), "description": "what guidance is doing"},
+        "pattern": {
+            "enum": [*(p["name"] for p in describe_dictionary()), None],
+            "description": "the active command's pattern; null: none",
+        },
+        "active": _command_or_null(
+            "the active command, as in an acknowledgement's 'active'; null: none. Optional "
+            "(1.0), but without it vehicle-check cannot probe the acknowledgement path"
+        ),
+        "link": {
+            "type": "object",
+            "description": "the simulator only: its emulated ME channel",
+            "properties": {
+                "frames_in": {"type": "integer", "minimum": 0},
+                "frames_lost": {"type": "integer", "minimum": 0},
+                "accepted": {"type": "integer", "minimum": 0},
+                "rejected": {"type": "integer", "minimum": 0},
+                "last_frame_t_s": _NUMBER_OR_NULL,
+                "distance_m": _NUMBER_OR_NULL,
+                "range_m": _NUMBER_OR_NULL,
+                "in_range": {"type": "boolean"},
+                "ber": _NUMBER_OR_NULL,
+            },
+        },
+    },
+    "$defs": {"command": command_schema()},
+}
+
+#: The schemas by name.
+SCHEMAS: Final = {"ack": ACK_SCHEMA, "status": STATUS_SCHEMA}
+
+
+def required_fields(schema: dict[str, Any]) -> list[str]:
+    """The top-level fields a message must hold."""
+    return list(schema["required"])
+
+
+@functools.cache
+def _validator(name: str) -> Draft202012Validator:
+    from jsonschema import Draft202012Validator  # on use: `nemesys contract` needs none of it
+
+    schema = SCHEMAS[name]
+    Draft202012Validator.check_schema(schema)
+    return Draft202012Validator(schema)
+
+
+def validate_ack(obj: object) -> list[str]:
+    """Problems of an acknowledgement under :data:`ACK_SCHEMA`, one line each naming the field
+    (empty: valid)."""
+    return problems(_validator("ack"), obj)
+
+
+def validate_status(obj: object) -> list[str]:
+    """Problems of a status under :data:`STATUS_SCHEMA`, one line each naming the field
+    (empty: valid)."""
+    return problems(_validator("status"), obj)
+
+
+# --- the contract as a whole ----------------------------------------------------------------
+
+#: How the version changes (the module doc says the same).
+VERSION_RULE: Final = (
+    "semantic versioning. A change a vehicle or console built for the old contract still "
+    "works with (a new optional field, a new optional topic) bumps the minor number; anything "
+    "else (a topic renamed or retyped, a required field added, removed or changed in meaning, "
+    "a QoS a peer of the old contract cannot match) bumps the major number; the patch number "
+    "is for wording. The console accepts any vehicle with the same major number."
+)
+
+#: What a NemeSys vehicle must do, beyond publishing and subscribing the topics.
+OBLIGATIONS: Final = (
+    f"Subscribe to {FRAME_TOPIC} (RELIABLE, TRANSIENT_LOCAL) and run every message through "
+    "the onboard agent: 13 bytes, 100 frame bits first bit most significant (docs/protocol.md); "
+    "frame sync, BCH and CRC-4 decoding, the dictionary's checks, then a plan within the "
+    "vehicle's limits.",
+    f"Acknowledge every message on {FRAME_TOPIC} exactly once on {MISSION_TOPIC}: one JSON "
+    "object (schema ack) as the data of a std_msgs/msg/String, accepted or rejected with the "
+    "reason. A rejected frame changes nothing.",
+    "A frame carrying the command the vehicle already runs is acknowledged accepted with "
+    "duplicate true and is not replanned: the console repeats commands (Surface until "
+    "acknowledged), and nemesys vehicle-check re-sends the active command to probe the "
+    "acknowledgement path.",
+    "The surface command (pattern 15) is executed whatever the limits, mode or battery; only a "
+    "new command after it moves the vehicle again.",
+    f"Publish the pose on {POSE_TOPIC} at 10 Hz or more: NED metres (x north, y east, z down) "
+    f"in frame {POSE_FRAME_ID!r}, the heading as a yaw quaternion, header.stamp in ROS time.",
+    f"Publish the status on {STATUS_TOPIC} at 1 Hz or more (schema status), with 'active' (the "
+    "active command, or null): without it the acknowledgement path cannot be probed.",
+    "A number the vehicle does not know is null (NaN and infinities become null through "
+    "rosbridge); a required field is never left out.",
+    "Run rosbridge_server with rosapi: the console lists the vehicle's topics through "
+    "/rosapi/topics, and a one-shot sender asks /rosapi/subscribers whether the frame topic "
+    "has its subscriber before publishing.",
+)
+
+
+def contract_json() -> dict[str, Any]:
+    """The whole contract as JSON (what ``nemesys contract`` prints): a fresh copy."""
+    return copy.deepcopy(
+        {
+            "version": CONTRACT_VERSION,
+            "version_rule": VERSION_RULE,
+            "topics": [t.as_json() for t in TOPICS],
+            "time_base": TIME_BASE,
+            "schemas": SCHEMAS,
+            "obligations": list(OBLIGATIONS),
+        }
+    )

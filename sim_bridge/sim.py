@@ -21,7 +21,7 @@ from typing import Any
 
 from codec import FRAME_BYTES
 from planner import Limits, VehicleState
-from sim_bridge.agent import OnboardAgent
+from sim_bridge.agent import OnboardAgent, command_json
 from sim_bridge.channel import ChannelConfig, Delivery, MEChannel
 from sim_bridge.control import Autopilot, AutopilotGains
 from sim_bridge.endpoint import Pose
@@ -202,6 +202,8 @@ class Simulation:
             "battery_pct": self.battery.soc_pct,
             "mode": self.mode.value,
             "pattern": active.pattern if active is not None else None,
+            # the active command as the acknowledgements echo it (the contract's status schema)
+            "active": command_json(active.command) if active is not None else None,
             "link": {
                 "frames_in": self.frames_in,
                 "frames_lost": self.frames_lost,

@@ -40,6 +40,18 @@ exact or near one follows within ``settle_s`` (0.5 s) of it, or before the timeo
 such acknowledgement is returned ("first": matched by order, e.g. the vehicle slipped bits and
 reports what it received). No acknowledgement within ``wait_ack_s`` of the publish: failed,
 reason "timeout" (``sent_t`` is set, the frame did go out).
+
+Rosbridge: waiting for the vehicle's subscriber
+-----------------------------------------------
+On a new connection the transmitter advertises ``/nemesys/frame`` and, before its first
+publish, waits until the vehicle subscribes to it (:mod:`sim_bridge.subscriber_wait`): a real
+rosbridge_server creates a new publisher for the advertisement, and a vehicle subscriber not
+yet matched to it would miss a frame published at once. It asks ``/rosapi/subscribers`` and
+publishes as soon as a subscriber is listed; if rosapi cannot tell, it publishes
+``subscriber_wait_s`` (1 s) after advertising; if rosapi says nobody subscribes for that long,
+it publishes anyway and the result's ``warning`` says the frame may be lost. Whatever the wait
+found is added to ``detail`` when no acknowledgement came back. A kept connection does not
+wait again.
 """
 
 from __future__ import annotations
@@ -88,6 +100,7 @@ from sim_bridge.rosbridge import (
     InvalidData,
 )
 from sim_bridge.rosbridge_client import ClientProtocol, decode_json_string, decode_server_message
+from sim_bridge.subscriber_wait import DEFAULT_SUBSCRIBER_WAIT_S, SubscriberWait
 
 logger = logging.getLogger(__name__)
 logger.addHandler(logging.NullHandler())  # a library: the application configures output
@@ -135,6 +148,8 @@ class SendResult:
     #: How ``ack`` was matched to the frame (see the module docstring).
     ack_match: AckMatch | None = None
     detail: str = ""
+    #: Something the caller should be told although the frame went out (e.g. no subscriber).
+    warning: str | None = None
 
     @property
     def sent(self) -> bool:
@@ -203,7 +218,13 @@ class Transmitter(abc.ABC):
     def __repr__(self) -> str:
         return f"{type(self).__name__}({self.target!r})"
 
-    def _failed(self, reason: str, detail: str, sent_t: float | None = None) -> SendResult:
+    def _failed(
+        self,
+        reason: str,
+        detail: str,
+        sent_t: float | None = None,
+        warning: str | None = None,
+    ) -> SendResult:
         # INFO: the caller gets the failure in the result and decides how loud to be
         logger.info("%s %s: %s (%s)", self.transport, self.target, reason, detail)
         return SendResult(
@@ -213,6 +234,7 @@ class Transmitter(abc.ABC):
             reason=reason,
             sent_t=sent_t,
             detail=detail,
+            warning=warning,
         )
 
 
@@ -432,8 +454,8 @@ def frame_msg(frame: Frame) -> dict[str, Any]:
     return {"data": list(frame.to_bytes())}
 
 
-def _mission_of(data: str | bytes) -> dict[str, Any] | None:
-    """The acknowledgement in one received message, or None (logged) if it holds none."""
+def _server_message(data: str | bytes) -> dict[str, Any] | None:
+    """One received message as an object, or None (logged) if it is not one, or a ``status``."""
     try:
         message = decode_server_message(data)
     except BinaryMessage as error:
@@ -442,11 +464,22 @@ def _mission_of(data: str | bytes) -> dict[str, Any] | None:
     except BridgeError as error:
         logger.warning("ignoring %s", error.reason)
         return None
-    op, topic = message.get("op"), message.get("topic")
-    if op == "status":
+    if message.get("op") == "status":
         level = logging.WARNING if message.get("level") in ("error", "warning") else logging.INFO
         logger.log(level, "rosbridge status: %s", message.get("msg", message))
         return None
+    return message
+
+
+def _mission_of(data: str | bytes) -> dict[str, Any] | None:
+    """The acknowledgement in one received message, or None (logged) if it holds none."""
+    message = _server_message(data)
+    return None if message is None else _mission_in(message)
+
+
+def _mission_in(message: dict[str, Any]) -> dict[str, Any] | None:
+    """The acknowledgement in a server message, or None (logged) if it holds none."""
+    op, topic = message.get("op"), message.get("topic")
     if op != "publish" or topic != MISSION_TOPIC:
         logger.debug("ignoring %s on %s", op, topic)
         return None
@@ -458,12 +491,14 @@ def _mission_of(data: str | bytes) -> dict[str, Any] | None:
 
 
 class _AsyncLink:
-    """An asyncio connection with a reader task that queues acknowledgements (None: closed)."""
+    """An asyncio connection with a reader task that queues acknowledgements (None: closed)
+    and service responses."""
 
     def __init__(self, conn: AsyncConnection) -> None:
         self.conn = conn
         self.loop = asyncio.get_running_loop()
         self.acks: asyncio.Queue[dict[str, Any] | None] = asyncio.Queue()
+        self.responses: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
         self.closed = False
         self.reader = asyncio.create_task(self._read())
 
@@ -476,8 +511,12 @@ class _AsyncLink:
     async def _read(self) -> None:
         try:
             async for data in self.conn:
-                ack = _mission_of(data)
-                if ack is not None:
+                message = _server_message(data)
+                if message is None:
+                    continue
+                if message.get("op") == "service_response":
+                    self.responses.put_nowait(message)
+                elif (ack := _mission_in(message)) is not None:
                     self.acks.put_nowait(ack)
         except ConnectionClosed:
             pass
@@ -493,6 +532,17 @@ class _AsyncLink:
                 self.closed = True
             else:
                 logger.debug("discarding earlier acknowledgement seq=%s", ack.get("seq"))
+
+
+def _log_wait(wait: SubscriberWait | None, url: str) -> None:
+    if wait is None:
+        return
+    if wait.present:
+        logger.info("%s: %s has subscribers %s", url, wait.topic, ", ".join(wait.subscribers or []))
+    elif wait.warning is not None:
+        logger.warning("%s: %s", url, wait.warning)
+    else:
+        logger.info("%s: %s", url, wait.note)
 
 
 class RosbridgeTransmitter(Transmitter):
@@ -514,11 +564,17 @@ class RosbridgeTransmitter(Transmitter):
         *,
         open_timeout_s: float = DEFAULT_OPEN_TIMEOUT_S,
         settle_s: float = ACK_SETTLE_S,
+        subscriber_wait_s: float = DEFAULT_SUBSCRIBER_WAIT_S,
     ) -> None:
         super().__init__(url)
         self.url = url
         self.open_timeout_s = open_timeout_s
         self.settle_s = settle_s
+        #: On a new connection, the most the first publish waits for the vehicle's subscriber
+        #: (0: not at all; see the module docstring).
+        self.subscriber_wait_s = subscriber_wait_s
+        #: What the wait on the newest connection found, until a send reports it.
+        self._wait: SubscriberWait | None = None
         self._protocol = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[MISSION_TOPIC])
         self._conn: SyncConnection | None = None
         self._lock = threading.Lock()
@@ -540,11 +596,34 @@ class RosbridgeTransmitter(Transmitter):
         try:
             for message in self._protocol.open_messages():
                 conn.send(message)
+            self._wait = self._await_subscriber(conn)
         except BaseException:
             conn.close()
             raise
         logger.info("connected to %s", self.url)
         return conn
+
+    def _new_wait(self) -> SubscriberWait | None:
+        if self.subscriber_wait_s <= 0:
+            return None
+        return SubscriberWait(self._protocol, FRAME_TOPIC, self.subscriber_wait_s, time.monotonic())
+
+    def _await_subscriber(self, conn: SyncConnection) -> SubscriberWait | None:
+        """Block until the frame topic has a subscriber or the bound (module docstring);
+        acknowledgements arriving meanwhile are old ones and are dropped."""
+        wait = self._new_wait()
+        while wait is not None and not wait.done(time.monotonic()):
+            if (ask := wait.ask(time.monotonic())) is not None:
+                conn.send(ask)
+            try:
+                data = conn.recv(timeout=wait.timeout_s(time.monotonic()))
+            except TimeoutError:
+                continue
+            message = _server_message(data)
+            if message is not None and not wait.offer(message, time.monotonic()):
+                logger.debug("while waiting for a subscriber, ignoring %s", message.get("op"))
+        _log_wait(wait, self.url)
+        return wait
 
     def _drain(self, conn: SyncConnection) -> None:
         while True:
@@ -606,6 +685,7 @@ class RosbridgeTransmitter(Transmitter):
         except (OSError, WebSocketException) as exc:
             self._drop()
             return self._failed(failure_reason(exc), f"{self.url}: {_message(exc)}")
+        wait, self._wait = self._wait, None
         sent_t = time.time()
         logger.info("published frame %s to %s", frame.hex, self.url)
         matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)  # expired at once if not waiting
@@ -623,29 +703,41 @@ class RosbridgeTransmitter(Transmitter):
             logger.info("connection to %s lost while waiting: %s", self.url, exc)
             self._drop()
             closed = True
-        return self._outcome(matcher, sent_t, wait_ack_s, closed)
+        return self._outcome(matcher, sent_t, wait_ack_s, closed, wait)
 
     def _outcome(
-        self, matcher: _AckMatcher, sent_t: float, wait_ack_s: float, closed: bool
+        self,
+        matcher: _AckMatcher,
+        sent_t: float,
+        wait_ack_s: float,
+        closed: bool,
+        wait: SubscriberWait | None = None,
     ) -> SendResult:
+        warning = wait.warning if wait is not None else None
+        note = f"; {wait.note}" if wait is not None and wait.note else ""
         if wait_ack_s <= 0:
             return SendResult(
                 ok=True,
                 transport=self.transport,
                 target=self.target,
                 sent_t=sent_t,
-                detail="published; not waiting for an acknowledgement",
+                detail=f"published; not waiting for an acknowledgement{note}",
+                warning=warning,
             )
         if matcher.ack is None:
             if closed:
                 return self._failed(
                     "connection closed",
                     f"{self.url} closed the connection after the frame was published, "
-                    "before an acknowledgement",
+                    f"before an acknowledgement{note}",
                     sent_t,
+                    warning,
                 )
             return self._failed(
-                "timeout", f"frame published, no acknowledgement within {wait_ack_s:g} s", sent_t
+                "timeout",
+                f"frame published, no acknowledgement within {wait_ack_s:g} s{note}",
+                sent_t,
+                warning,
             )
         detail = {
             "exact": "acknowledged",
@@ -661,6 +753,7 @@ class RosbridgeTransmitter(Transmitter):
             ack=matcher.ack,
             ack_match=matcher.match,
             detail=detail,
+            warning=warning,
         )
 
     def close(self) -> None:
@@ -707,7 +800,25 @@ class RosbridgeTransmitter(Transmitter):
             raise
         logger.info("connected to %s", self.url)
         self._link = _AsyncLink(conn)
+        self._wait = await self._async_await_subscriber(self._link)
         return self._link
+
+    async def _async_await_subscriber(self, link: _AsyncLink) -> SubscriberWait | None:
+        """:meth:`_await_subscriber` on the async connection."""
+        wait = self._new_wait()
+        while wait is not None and not wait.done(time.monotonic()):
+            if (ask := wait.ask(time.monotonic())) is not None:
+                await link.conn.send(ask)
+            try:
+                message = await asyncio.wait_for(
+                    link.responses.get(), wait.timeout_s(time.monotonic())
+                )
+            except TimeoutError:
+                continue
+            wait.offer(message, time.monotonic())
+        link.drain()
+        _log_wait(wait, self.url)
+        return wait
 
     async def _async_publish(self, frame: Frame) -> _AsyncLink:
         """As :meth:`_publish`, on the async connection."""
@@ -761,6 +872,7 @@ class RosbridgeTransmitter(Transmitter):
         except (OSError, WebSocketException) as exc:
             await self._async_drop()
             return self._failed(failure_reason(exc), f"{self.url}: {_message(exc)}")
+        wait, self._wait = self._wait, None
         sent_t = time.time()
         logger.info("published frame %s to %s", frame.hex, self.url)
         matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)  # expired at once if not waiting
@@ -777,7 +889,7 @@ class RosbridgeTransmitter(Transmitter):
                 break
             if matcher.offer(ack):
                 break
-        return self._outcome(matcher, sent_t, wait_ack_s, closed)
+        return self._outcome(matcher, sent_t, wait_ack_s, closed, wait)
 
     async def aclose(self) -> None:
         """Close both connections, unsubscribing and unadvertising first."""

@@ -10,6 +10,7 @@ import os
 import select
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -179,6 +180,49 @@ def test_send_without_waiting(capsys: pytest.CaptureFixture[str]) -> None:
     assert out.splitlines()[-1] == "         published; not waiting for an acknowledgement"
 
 
+def test_send_waits_for_the_vehicles_subscriber_then_publishes_at_once(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with FakeRosbridge(accept) as server:
+        start = time.monotonic()
+        status, _, err = run(["send", *CIRCLE, "--to", server.url, "--json"], capsys)
+        elapsed_s = time.monotonic() - start
+        ops = server.ops()
+    assert status == EXIT_OK and err == ""
+    assert ops.index("call_service") < ops.index("publish")  # asked rosapi first
+    assert elapsed_s < 1.0  # the subscriber was there: no waiting for the 1 s bound
+
+
+def test_send_without_a_subscriber_publishes_after_1_s_and_says_so(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with FakeRosbridge(respond=None, subscribers=[]) as server:
+        start = time.monotonic()
+        status, out, err = run(["send", *CIRCLE, "--to", server.url, "--timeout", "0.2"], capsys)
+        elapsed_s = time.monotonic() - start
+        assert server.published() == [SENT.frame.to_bytes()]
+    assert elapsed_s >= 1.0 + 0.2
+    assert status == EXIT_REJECTED
+    assert any(ln.startswith("sent     ") for ln in out.splitlines())
+    assert one_line(err) == (
+        "nemesys send: failed: timeout: frame published, no acknowledgement within 0.2 s; "
+        "no subscriber to /nemesys/frame after 1 s: the frame may be lost"
+    )
+
+
+def test_send_without_waiting_still_says_the_frame_may_be_lost(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    with FakeRosbridge(respond=None, subscribers=[]) as server:
+        status, out, err = run(
+            ["send", *CIRCLE, "--to", server.url, "--timeout", "0", "--json"], capsys
+        )
+    assert status == EXIT_OK and err == ""
+    doc = json.loads(out)
+    assert doc["warning"] == "no subscriber to /nemesys/frame after 1 s: the frame may be lost"
+    assert doc["detail"].endswith(doc["warning"])
+
+
 def test_send_refused_exits_1_naming_the_target(capsys: pytest.CaptureFixture[str]) -> None:
     url = f"ws://127.0.0.1:{free_port()}"
     status, out, err = run(["send", *CIRCLE, "--to", url], capsys)
@@ -199,6 +243,7 @@ def test_send_json(fake: FakeRosbridge, capsys: pytest.CaptureFixture[str]) -> N
     assert isinstance(doc["sent_t"], float)
     assert doc["ack_match"] == "exact" and doc["ack"]["frame_hex"] == SENT.frame.hex
     assert doc["ack"]["outcome"] == "accepted"
+    assert doc["warning"] is None
 
 
 def test_send_json_failure_still_prints_the_document(capsys: pytest.CaptureFixture[str]) -> None:

@@ -1,7 +1,8 @@
 """A small fake rosbridge endpoint for transmitter tests: a ``websockets`` server on
 127.0.0.1 (port 0) in its own thread and event loop. It records every message a client sends
 and answers each frame published on ``/nemesys/frame`` with whatever ``respond`` returns
-(complete rosbridge messages; :func:`mission` wraps an acknowledgement)."""
+(complete rosbridge messages; :func:`mission` wraps an acknowledgement). It answers
+``/rosapi/subscribers`` as rosapi does: by default the vehicle subscribes to the frame topic."""
 
 from __future__ import annotations
 
@@ -24,6 +25,10 @@ from .helpers import LoopThread
 
 #: Replies to one published frame: rosbridge messages (dicts) or raw text.
 Respond = Callable[[bytes], list[dict[str, Any] | str]]
+
+#: The vehicle's node, as rosapi lists the subscribers of ``/nemesys/frame``.
+VEHICLE_NODE = "/nemesys_vehicle"
+SUBSCRIBERS_SERVICE = "/rosapi/subscribers"
 
 
 def mission(ack: dict[str, Any]) -> dict[str, Any]:
@@ -62,10 +67,27 @@ def accept_all(data: bytes) -> list[dict[str, Any] | str]:
 class FakeRosbridge:
     """``with FakeRosbridge(respond) as fake: ... fake.url ... fake.received``."""
 
-    def __init__(self, respond: Respond | None = accept_all, *, close_after: int = 0) -> None:
+    def __init__(
+        self,
+        respond: Respond | None = accept_all,
+        *,
+        close_after: int = 0,
+        subscribers: list[str] | None = None,
+        rosapi: bool = True,
+        subscribers_service: bool = True,
+        subscribed_after: int = 0,
+    ) -> None:
         self.respond = respond
         #: Close the client's connection after this many frames (0: never).
         self.close_after = close_after
+        #: What ``/rosapi/subscribers`` lists for the frame topic (default: the vehicle);
+        #: ``[]``: nobody. With ``rosapi`` False no service call is answered; with
+        #: ``subscribers_service`` False it fails (result false), as a server without it does.
+        self.subscribers = [VEHICLE_NODE] if subscribers is None else subscribers
+        self.rosapi = rosapi
+        self.subscribers_service = subscribers_service
+        #: Answer "nobody" to this many questions on each connection before the list.
+        self.subscribed_after = subscribed_after
         self.received: list[dict[str, Any]] = []
         self.connections = 0
         self.frames = 0
@@ -110,9 +132,13 @@ class FakeRosbridge:
 
     async def _handler(self, ws: ServerConnection) -> None:
         self.connections += 1
+        asked = 0
         async for text in ws:
             message: dict[str, Any] = json.loads(text)
             self.received.append(message)
+            if message["op"] == "call_service" and self.rosapi:
+                asked += 1
+                await ws.send(json.dumps(self._service_answer(message, asked)))
             if not _is_frame(message):
                 continue
             self.frames += 1
@@ -121,6 +147,14 @@ class FakeRosbridge:
                 await ws.send(reply if isinstance(reply, str) else json.dumps(reply))
             if self.close_after and self.frames % self.close_after == 0:
                 await ws.close()
+
+    def _service_answer(self, request: dict[str, Any], asked: int) -> dict[str, Any]:
+        service = request.get("service")
+        answer = {"op": "service_response", "id": request.get("id"), "service": service}
+        if service != SUBSCRIBERS_SERVICE or not self.subscribers_service:
+            return {**answer, "values": f"Service {service} does not exist", "result": False}
+        subscribers = self.subscribers if asked > self.subscribed_after else []
+        return {**answer, "values": {"subscribers": subscribers}, "result": True}
 
 
 def _is_frame(message: Mapping[str, object]) -> bool:

@@ -28,6 +28,7 @@ STATUS_KEYS = {
     "battery_pct",
     "mode",
     "pattern",
+    "active",
     "link",
 }
 LINK_KEYS = {

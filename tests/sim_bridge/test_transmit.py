@@ -285,8 +285,8 @@ def test_rosbridge_exact_messages_and_exact_ack() -> None:
         tx = RosbridgeTransmitter(fake.url)
         result = tx.send(FRAME, wait_ack_s=2)
         tx.close()
-        wait_until(lambda: len(fake.received) == 5)
-    assert fake.received[:3] == [
+        wait_until(lambda: len(fake.received) == 6)
+    assert fake.received[:4] == [
         {
             "op": "advertise",
             "id": "advertise:/nemesys/frame:1",
@@ -305,6 +305,13 @@ def test_rosbridge_exact_messages_and_exact_ack() -> None:
             "queue_length": 0,
         },
         {
+            "op": "call_service",
+            # the publish message is made (id 3) before the connection opens and asks rosapi
+            "id": "call_service:/rosapi/subscribers:4",
+            "service": "/rosapi/subscribers",
+            "args": {"topic": "/nemesys/frame"},
+        },
+        {
             "op": "publish",
             "id": "publish:/nemesys/frame:3",
             "topic": "/nemesys/frame",
@@ -312,16 +319,17 @@ def test_rosbridge_exact_messages_and_exact_ack() -> None:
             "latch": False,
         },
     ]
-    assert fake.received[3:] == [
+    assert fake.received[4:] == [
         {"op": "unsubscribe", "id": "subscribe:/nemesys/mission:2", "topic": "/nemesys/mission"},
         {"op": "unadvertise", "id": "advertise:/nemesys/frame:1", "topic": "/nemesys/frame"},
     ]
-    data = fake.received[2]["msg"]["data"]
+    data = fake.received[3]["msg"]["data"]
     assert len(data) == 13 and all(isinstance(b, int) and 0 <= b <= 255 for b in data)
     assert result.ok and result.sent and result.reason is None
     assert result.transport == "rosbridge" and result.target == fake.url
     assert result.ack == ack_for(FRAME.to_bytes())
     assert result.ack_match == "exact" and result.accepted is True
+    assert result.warning is None and result.detail == "acknowledged"
     json.dumps(result.to_json())
 
 
@@ -487,6 +495,120 @@ def test_rosbridge_closed_while_waiting() -> None:
     assert not result.ok and result.reason == "connection closed" and result.sent
 
 
+# --- rosbridge: waiting for the vehicle's subscriber before the first publish ------------
+
+
+def _timed_send(
+    fake: FakeRosbridge, wait_ack_s: float = 2.0, subscriber_wait_s: float = 0.5
+) -> tuple[SendResult, float]:
+    with RosbridgeTransmitter(fake.url, subscriber_wait_s=subscriber_wait_s) as tx:
+        start = time.monotonic()
+        result = tx.send(FRAME, wait_ack_s=wait_ack_s)
+        return result, time.monotonic() - start
+
+
+def _asked_before_publishing(fake: FakeRosbridge) -> list[dict[str, Any]]:
+    ops = fake.ops()
+    asks = [m for m in fake.received[: ops.index("publish")] if m["op"] == "call_service"]
+    assert asks, ops
+    for ask in asks:
+        assert ask["service"] == "/rosapi/subscribers"
+        assert ask["args"] == {"topic": "/nemesys/frame"}
+    return asks
+
+
+def test_a_subscriber_present_publishes_at_once() -> None:
+    with FakeRosbridge() as fake:
+        result, elapsed_s = _timed_send(fake, subscriber_wait_s=5.0)
+        assert len(_asked_before_publishing(fake)) == 1
+    assert elapsed_s < 0.5  # one question, answered: no waiting for the bound
+    assert result.ok and result.ack_match == "exact" and result.warning is None
+
+
+def test_a_subscriber_that_appears_late_is_waited_for() -> None:
+    with FakeRosbridge(subscribed_after=2) as fake:
+        result, elapsed_s = _timed_send(fake, subscriber_wait_s=5.0)
+        assert len(_asked_before_publishing(fake)) == 3  # nobody, nobody, the vehicle
+    assert 0.15 <= elapsed_s < 1.5  # asked again every 0.1 s, not the 5 s bound
+    assert result.ok and result.warning is None
+
+
+def test_no_subscriber_ever_publishes_after_the_bound_with_a_warning() -> None:
+    with FakeRosbridge(respond=None, subscribers=[]) as fake:
+        result, elapsed_s = _timed_send(fake, wait_ack_s=0.2, subscriber_wait_s=0.5)
+        assert fake.published() == [FRAME.to_bytes()]  # published all the same
+        assert len(_asked_before_publishing(fake)) > 1
+    assert 0.5 + 0.2 <= elapsed_s < 2.0
+    warning = "no subscriber to /nemesys/frame after 0.5 s: the frame may be lost"
+    assert result.warning == warning and result.sent
+    assert result.reason == "timeout" and result.detail.endswith(f"; {warning}")
+
+
+def test_the_warning_stays_when_an_acknowledgement_comes_anyway() -> None:
+    with FakeRosbridge(subscribers=[]) as fake:
+        result, _ = _timed_send(fake, subscriber_wait_s=0.3)
+    assert result.ok and result.ack_match == "exact"
+    assert result.warning is not None and "may be lost" in result.warning
+    assert result.detail == "acknowledged"  # an acknowledgement proves it was not lost
+
+
+@pytest.mark.parametrize(
+    ("options", "why"),
+    [
+        ({"subscribers_service": False}, "/rosapi/subscribers failed: Service"),
+        ({"rosapi": False}, "no answer from /rosapi/subscribers"),
+    ],
+)
+def test_when_rosapi_cannot_tell_it_publishes_after_the_bound(
+    options: dict[str, Any], why: str
+) -> None:
+    with FakeRosbridge(respond=None, **options) as fake:
+        result, elapsed_s = _timed_send(fake, wait_ack_s=0, subscriber_wait_s=0.4)
+        wait_until(lambda: fake.published() == [FRAME.to_bytes()])
+        assert len(_asked_before_publishing(fake)) == 1  # not asked again
+    assert 0.4 <= elapsed_s < 1.5
+    assert result.ok and result.warning is None
+    assert why in result.detail and "published 0.4 s after advertising" in result.detail
+
+
+def test_a_kept_connection_does_not_wait_again() -> None:
+    with FakeRosbridge(subscribers=[]) as fake:
+        with RosbridgeTransmitter(fake.url, subscriber_wait_s=0.3) as tx:
+            first = tx.send(FRAMES[0], wait_ack_s=2)
+            start = time.monotonic()
+            second = tx.send(FRAMES[1], wait_ack_s=2)
+            assert time.monotonic() - start < 0.25
+        assert fake.ops().count("call_service") > 1
+        assert fake.ops().index("publish") > max(
+            i for i, op in enumerate(fake.ops()) if op == "call_service"
+        )
+    assert first.warning is not None and second.warning is None
+
+
+def test_no_wait_when_switched_off() -> None:
+    with FakeRosbridge() as fake:
+        result, _ = _timed_send(fake, subscriber_wait_s=0)
+        assert "call_service" not in fake.ops()
+    assert result.ok and result.warning is None
+
+
+def test_async_send_waits_for_the_subscriber_too() -> None:
+    async def go(url: str, bound_s: float) -> tuple[SendResult, float]:
+        async with RosbridgeTransmitter(url, subscriber_wait_s=bound_s) as tx:
+            start = time.monotonic()
+            result = await tx.send_async(FRAME, wait_ack_s=2)
+            return result, time.monotonic() - start
+
+    with FakeRosbridge() as fake:
+        present, fast_s = asyncio.run(go(fake.url, 5.0))
+        assert len(_asked_before_publishing(fake)) == 1
+    with FakeRosbridge(subscribers=[]) as fake:
+        absent, slow_s = asyncio.run(go(fake.url, 0.3))
+        assert len(_asked_before_publishing(fake)) > 1
+    assert fast_s < 0.5 and present.ok and present.warning is None
+    assert slow_s >= 0.3 and absent.ok and absent.warning is not None
+
+
 # --- rosbridge, asyncio -------------------------------------------------------------------
 
 
@@ -497,12 +619,13 @@ def test_rosbridge_async_send_same_messages_and_ack() -> None:
 
     with FakeRosbridge() as fake:
         results = asyncio.run(go(fake.url))
-        wait_until(lambda: len(fake.received) == 6)
+        wait_until(lambda: len(fake.received) == 7)
         assert fake.connections == 1
     assert fake.ops() == [
-        "advertise", "subscribe", "publish", "publish", "unsubscribe", "unadvertise",
+        "advertise", "subscribe", "call_service", "publish", "publish", "unsubscribe",
+        "unadvertise",
     ]  # fmt: skip
-    assert fake.received[2]["msg"] == {"data": list(FRAMES[0].to_bytes())}
+    assert fake.received[3]["msg"] == {"data": list(FRAMES[0].to_bytes())}
     assert [r.ack_match for r in results] == ["exact", "exact"]
     assert [r.ack["frame_hex"] for r in results if r.ack] == [FRAMES[0].hex, FRAMES[1].hex]
 
