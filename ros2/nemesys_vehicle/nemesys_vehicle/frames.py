@@ -1,0 +1,110 @@
+"""Frame conventions: ROS (REP-103) on one side, the NemeSys contract on the other.
+
+ROS odometry (``nav_msgs/msg/Odometry``) is ENU: world x east, y north, z up, with an FLU body
+(x forward, y left, z up), and yaw measured from east, counter-clockwise, about +z up. The
+contract (``sim_bridge.contract``: frame ``map_ned``) and the planner are NED: x north, y east,
+z down (depth), with an FRD body, and the heading measured from north, clockwise.
+
+Each direction is ONE function: :func:`enu_to_ned` and :func:`ned_to_enu` (position and
+heading together). The quaternion helpers read the yaw out of an orientation and build the
+yaw-only quaternion the contract publishes; :func:`quaternion_enu_to_ned` converts a full
+attitude (used to cross-check the yaw path in the tests). Angles in degrees.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from sim_bridge.rosbridge import quaternion_from_roll_yaw
+
+#: A quaternion ``(x, y, z, w)``.
+Quaternion = tuple[float, float, float, float]
+
+_HALF_SQRT2 = math.sqrt(0.5)
+#: ENU -> NED world axes: 180 degrees about (1, 1, 0) / sqrt(2) (swaps x and y, negates z).
+_Q_ENU_TO_NED: Quaternion = (_HALF_SQRT2, _HALF_SQRT2, 0.0, 0.0)
+#: FRD -> FLU body axes: 180 degrees about x (negates y and z).
+_Q_FRD_TO_FLU: Quaternion = (1.0, 0.0, 0.0, 0.0)
+
+
+class EnuPose(NamedTuple):
+    """A position and yaw in a ROS world frame (REP-103)."""
+
+    x_east_m: float
+    y_north_m: float
+    z_up_m: float
+    #: From east, counter-clockwise (about +z up), in [-180, 180).
+    yaw_deg: float
+
+
+class NedPose(NamedTuple):
+    """A position and heading in the contract's ``map_ned`` frame."""
+
+    x_north_m: float
+    y_east_m: float
+    #: Depth when the ENU origin is at the water surface.
+    z_down_m: float
+    #: From north, clockwise, in [0, 360).
+    heading_deg: float
+
+
+def enu_to_ned(pose: EnuPose) -> NedPose:
+    """ENU (x east, y north, z up, yaw from east CCW) -> NED (x north, y east, z down, heading
+    from north CW): ``heading_deg = (90 - yaw_deg) mod 360``."""
+    return NedPose(
+        pose.y_north_m + 0.0,
+        pose.x_east_m + 0.0,
+        -pose.z_up_m + 0.0,  # + 0.0: no -0.0 in the JSON
+        (90.0 - pose.yaw_deg) % 360.0,
+    )
+
+
+def ned_to_enu(pose: NedPose) -> EnuPose:
+    """The inverse of :func:`enu_to_ned`: ``yaw_deg = 90 - heading_deg``, wrapped to
+    [-180, 180)."""
+    return EnuPose(
+        pose.y_east_m + 0.0,
+        pose.x_north_m + 0.0,
+        -pose.z_down_m + 0.0,
+        (90.0 - pose.heading_deg + 180.0) % 360.0 - 180.0,
+    )
+
+
+def yaw_deg_of(q: Quaternion) -> float:
+    """The yaw (ZYX convention, about the frame's z axis) of an orientation, in [-180, 180].
+
+    Scale-invariant, so a quaternion that is not quite unit still gives the right angle. In an
+    ENU frame it is the ENU yaw; in a NED frame, the heading.
+    """
+    x, y, z, w = q
+    return math.degrees(math.atan2(2.0 * (w * z + x * y), w * w + x * x - y * y - z * z))
+
+
+def yaw_quaternion(yaw_deg: float) -> Quaternion:
+    """A rotation of ``yaw_deg`` about the frame's z axis (roll and pitch 0), ``w >= 0``.
+
+    In ``map_ned`` this is the contract's heading quaternion (the simulator's own builder).
+    """
+    return quaternion_from_roll_yaw(0.0, yaw_deg)
+
+
+def quaternion_product(a: Quaternion, b: Quaternion) -> Quaternion:
+    """Hamilton product ``a * b`` of ``(x, y, z, w)`` quaternions."""
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
+
+
+def quaternion_enu_to_ned(q: Quaternion) -> Quaternion:
+    """An ENU/FLU attitude (body FLU -> world ENU) as NED/FRD (body FRD -> world NED),
+    ``w >= 0``."""
+    out = quaternion_product(quaternion_product(_Q_ENU_TO_NED, q), _Q_FRD_TO_FLU)
+    sign = -1.0 if out[3] < 0.0 else 1.0
+    x, y, z, w = (sign * c + 0.0 for c in out)
+    return (x, y, z, w)

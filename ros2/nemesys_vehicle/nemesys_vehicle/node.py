@@ -1,0 +1,165 @@
+"""The rclpy node: wires topics, timers and parameters to :class:`VehicleCore`. No logic here.
+
+Every callback is one line handing a converted message (``nemesys_vehicle.convert``) and the
+node's ROS time to the core, or publishing what the core produced. Imports only where ROS 2 is
+installed; the tests check the core, and check statically that this file stays logic-free.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import rclpy
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Odometry as OdometryMsg
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from std_msgs.msg import String, UInt8MultiArray
+
+from nemesys_vehicle.config import VehicleConfig
+from nemesys_vehicle.convert import (
+    ODOMETRY_QOS,
+    SETPOINT_QOS,
+    config_from_parameters,
+    contract_qos,
+    fill_pose_stamped,
+    frame_data,
+    json_text,
+    odometry_from_msg,
+    ros_time_s,
+)
+from nemesys_vehicle.core import Sinks, VehicleCore
+from nemesys_vehicle.serial_input import SerialByteSource
+from sim_bridge.contract import (
+    FRAME_TOPIC,
+    MISSION_TOPIC,
+    POSE_TOPIC,
+    STATUS_TOPIC,
+    Durability,
+    QoS,
+    Reliability,
+)
+
+_RELIABILITY = {
+    Reliability.RELIABLE: ReliabilityPolicy.RELIABLE,
+    Reliability.BEST_EFFORT: ReliabilityPolicy.BEST_EFFORT,
+}
+_DURABILITY = {
+    Durability.VOLATILE: DurabilityPolicy.VOLATILE,
+    Durability.TRANSIENT_LOCAL: DurabilityPolicy.TRANSIENT_LOCAL,
+}
+
+
+def qos_profile(qos: QoS) -> Any:
+    """An rclpy QoSProfile of a contract QoS (history KEEP_LAST of its depth)."""
+    return QoSProfile(
+        history=HistoryPolicy.KEEP_LAST,
+        depth=qos.depth,
+        reliability=_RELIABILITY[qos.reliability],
+        durability=_DURABILITY[qos.durability],
+    )
+
+
+class VehicleNode(Node):  # type: ignore[misc]  # rclpy is untyped here (not installed)
+    """The NemeSys vehicle node (parameters: ``config/params.yaml``)."""
+
+    def __init__(self) -> None:
+        super().__init__("nemesys_vehicle")
+        self.declare_parameters("", VehicleConfig.parameter_defaults())
+        config = config_from_parameters(self.get_parameters(VehicleConfig.parameter_names()))
+        self._mission_pub = self.create_publisher(
+            String, MISSION_TOPIC, qos_profile(contract_qos(MISSION_TOPIC))
+        )
+        self._status_pub = self.create_publisher(
+            String, STATUS_TOPIC, qos_profile(contract_qos(STATUS_TOPIC))
+        )
+        self._pose_pub = self.create_publisher(
+            PoseStamped, POSE_TOPIC, qos_profile(contract_qos(POSE_TOPIC))
+        )
+        self._setpoint_pub = self.create_publisher(
+            PoseStamped, config.setpoint_topic, qos_profile(SETPOINT_QOS)
+        )
+        self.core = VehicleCore(
+            config,
+            Sinks(
+                ack=self._publish_ack,
+                status=self._publish_status,
+                pose=self._publish_pose,
+                setpoint=self._publish_setpoint,
+            ),
+        )
+        # opened on the first poll: never in topic mode
+        self._serial = SerialByteSource(
+            config.serial_url,
+            config.serial_baud,
+            log=self.get_logger().warning,
+            info=self.get_logger().info,
+        )
+        self.create_subscription(
+            OdometryMsg, config.odometry_topic, self._on_odometry, qos_profile(ODOMETRY_QOS)
+        )
+        if config.frame_input == "serial":
+            self.create_timer(config.serial_poll_period_s, self._on_serial_poll)
+        else:
+            self.create_subscription(
+                UInt8MultiArray, FRAME_TOPIC, self._on_frame, qos_profile(contract_qos(FRAME_TOPIC))
+            )
+        self.create_timer(config.status_period_s, self._on_status_timer)
+        self.create_timer(config.pose_period_s, self._on_pose_timer)
+        self.create_timer(config.guidance_period_s, self._on_guidance_timer)
+        self.get_logger().info(f"nemesys_vehicle: {config}")
+
+    def _now_s(self) -> float:
+        return ros_time_s(self.get_clock().now().nanoseconds)
+
+    # --- inputs --------------------------------------------------------------------------
+
+    def _on_frame(self, msg: Any) -> None:
+        self.core.on_frame(frame_data(msg), self._now_s())
+
+    def _on_serial_poll(self) -> None:
+        self.core.on_serial_bytes(self._serial.read_available(), self._now_s())
+
+    def _on_odometry(self, msg: Any) -> None:
+        self.core.on_odometry(odometry_from_msg(msg, self._now_s()))
+
+    def _on_status_timer(self) -> None:
+        self.core.tick_status(self._now_s())
+
+    def _on_pose_timer(self) -> None:
+        self.core.tick_pose(self._now_s())
+
+    def _on_guidance_timer(self) -> None:
+        self.core.tick_guidance(self._now_s())
+
+    # --- outputs -------------------------------------------------------------------------
+
+    def _publish_ack(self, ack: dict[str, Any]) -> None:
+        self._mission_pub.publish(String(data=json_text(ack)))
+
+    def _publish_status(self, status: dict[str, Any]) -> None:
+        self._status_pub.publish(String(data=json_text(status)))
+
+    def _publish_pose(self, pose: dict[str, Any]) -> None:
+        self._pose_pub.publish(fill_pose_stamped(PoseStamped(), pose))
+
+    def _publish_setpoint(self, setpoint: dict[str, Any]) -> None:
+        self._setpoint_pub.publish(fill_pose_stamped(PoseStamped(), setpoint))
+
+    def destroy_node(self) -> None:
+        self._serial.close()
+        super().destroy_node()
+
+
+def main(args: list[str] | None = None) -> None:
+    """``ros2 run nemesys_vehicle vehicle_node`` (console script ``vehicle_node``)."""
+    rclpy.init(args=args)
+    node = VehicleNode()
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        node.destroy_node()
+        rclpy.try_shutdown()

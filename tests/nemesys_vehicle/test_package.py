@@ -1,0 +1,202 @@
+"""The ament package around the node: files, parameters, conversions, configuration."""
+
+from __future__ import annotations
+
+import ast
+import json
+import math
+import re
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+import nemesys_vehicle
+from nemesys_vehicle.config import VehicleConfig
+from nemesys_vehicle.convert import (
+    config_from_parameters,
+    contract_qos,
+    fill_pose_stamped,
+    frame_data,
+    json_text,
+    odometry_from_msg,
+    ros_time_s,
+)
+from nemesys_vehicle.core import Odometry, Setpoint, pose_msg, setpoint_msg
+from nemesys_vehicle.frames import NedPose
+from planner import CircleFence
+from sim_bridge.contract import FRAME_TOPIC, Durability, Reliability
+
+from . import fake_rclpy
+
+PACKAGE = Path(nemesys_vehicle.__file__).parent.parent
+
+
+def _params_yaml() -> dict[str, Any]:
+    """The flat ``ros__parameters`` of config/params.yaml (scalars only, JSON-compatible)."""
+    text = (PACKAGE / "config" / "params.yaml").read_text(encoding="utf-8")
+    assert re.search(r"^/\*\*:\n  ros__parameters:\n", text, re.MULTILINE)
+    values: dict[str, Any] = {}
+    for line in text.splitlines():
+        m = re.fullmatch(r" {4}(\w+): (.+)", line)
+        if m:
+            values[m[1]] = json.loads(m[2])
+    return values
+
+
+# --- package files -------------------------------------------------------------------------
+
+
+def test_params_yaml_lists_every_parameter_with_its_default_and_type() -> None:
+    values = _params_yaml()
+    defaults = dict(VehicleConfig.parameter_defaults())
+    assert values == defaults
+    for name, value in values.items():
+        # ROS 2 types a parameter by its default: 2 and 2.0 are not the same
+        assert type(value) is type(defaults[name]), name
+
+
+def test_package_xml() -> None:
+    root = ET.parse(PACKAGE / "package.xml").getroot()
+    assert root.tag == "package"
+    assert root.get("format") == "3"
+    assert root.findtext("name") == "nemesys_vehicle"
+    deps = {e.text for e in root if e.tag in ("depend", "exec_depend")}
+    assert {
+        "rclpy",
+        "std_msgs",
+        "geometry_msgs",
+        "nav_msgs",
+        "launch",
+        "launch_ros",
+        "python3-serial",
+    } <= deps
+    assert root.findtext("export/build_type") == "ament_python"
+
+
+def test_setup_files_and_marker() -> None:
+    setup_py = (PACKAGE / "setup.py").read_text(encoding="utf-8")
+    ast.parse(setup_py)
+    assert '"vehicle_node = nemesys_vehicle.node:main"' in setup_py
+    assert "resource/{PACKAGE}" in setup_py
+    cfg = (PACKAGE / "setup.cfg").read_text(encoding="utf-8")
+    assert "script_dir=$base/lib/nemesys_vehicle" in cfg
+    assert "install_scripts=$base/lib/nemesys_vehicle" in cfg
+    assert (PACKAGE / "resource" / "nemesys_vehicle").is_file()
+    assert (PACKAGE / "README.md").is_file()
+
+
+def test_launch_file_starts_the_node_with_the_params_file() -> None:
+    text = (PACKAGE / "launch" / "vehicle.launch.py").read_text(encoding="utf-8")
+    tree = ast.parse(text)
+    names = {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
+    assert "generate_launch_description" in names
+    strings = {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)}
+    assert {"nemesys_vehicle", "vehicle_node", "params.yaml", "params_file"} <= strings
+
+
+# --- configuration -------------------------------------------------------------------------
+
+
+def test_config_builds_the_limits_and_guidance() -> None:
+    config = VehicleConfig(
+        max_depth_m=10.0,
+        max_speed_mps=0.5,
+        geofence_radius_m=30.0,
+        geofence_north_m=5.0,
+        geofence_east_m=-5.0,
+        lookahead_m=2.5,
+    )
+    limits = config.limits()
+    assert (limits.max_depth_m, limits.max_speed_mps) == (10.0, 0.5)
+    assert limits.geofence == CircleFence(30.0, (5.0, -5.0))
+    assert VehicleConfig().limits().geofence is None
+    assert config.guidance_config().lookahead_m == 2.5
+    assert config.status_period_s == 0.5
+    assert config.guidance_period_s == 0.1
+
+
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"frame_input": "udp"},
+        {"frame_input": "serial"},  # without a URL
+        {"setpoint_frame": "ecef"},
+        {"status_hz": 0.0},
+        {"pose_hz": math.nan},
+        {"serial_baud": 0},
+        {"max_depth_m": 500.0},  # beyond the rated depth
+        {"max_speed_mps": -1.0},
+        {"geofence_radius_m": -1.0},
+    ],
+    ids=str,
+)
+def test_config_refuses_bad_values(bad: dict[str, Any]) -> None:
+    with pytest.raises(ValueError):
+        VehicleConfig(**bad)
+
+
+def test_config_from_parameters() -> None:
+    params = [
+        SimpleNamespace(name="pose_hz", value=12.0),
+        SimpleNamespace(name="serial_baud", value=9600),
+    ]
+    config = config_from_parameters(params)
+    assert (config.pose_hz, config.serial_baud) == (12.0, 9600)
+    with pytest.raises(ValueError, match="unknown parameters"):
+        config_from_parameters([SimpleNamespace(name="max_depht_m", value=1.0)])
+
+
+# --- conversions to and from ROS message objects -------------------------------------------
+
+
+def test_odometry_from_msg() -> None:
+    msg: Any = fake_rclpy.OdometryMsg()
+    msg.header.frame_id = "map"
+    p, q = msg.pose.pose.position, msg.pose.pose.orientation
+    p.x, p.y, p.z = 1.0, 2.0, -3.0
+    q.z, q.w = math.sin(math.pi / 4), math.cos(math.pi / 4)
+    v = msg.twist.twist.linear
+    v.x, v.y, v.z = 0.3, 0.4, 0.0
+    odo = odometry_from_msg(msg, 12.5)
+    assert odo == Odometry(12.5, 1.0, 2.0, -3.0, 0.0, 0.0, q.z, q.w, odo.speed_mps, "map")
+    assert odo.speed_mps == pytest.approx(0.5)
+    ned = odo.ned()
+    assert ned[:3] == (2.0, 1.0, 3.0)
+    assert ned.heading_deg == pytest.approx(0.0, abs=1e-9)  # ENU yaw 90: facing north
+    msg.header.frame_id = ""
+    assert odometry_from_msg(msg, 0.0).frame_id == "odom"
+
+
+def test_fill_pose_stamped_casts_to_the_field_types() -> None:
+    msg: Any = fake_rclpy.PoseStamped()
+    pose = pose_msg(3.75, NedPose(1, 2, 3, 90))  # ints where ROS wants float64
+    assert fill_pose_stamped(msg, pose) is msg
+    assert (msg.header.stamp.sec, msg.header.stamp.nanosec) == (3, 750_000_000)
+    assert msg.header.frame_id == "map_ned"
+    position = msg.pose.position
+    assert (position.x, position.y, position.z) == (1.0, 2.0, 3.0)
+    assert all(type(getattr(position, a)) is float for a in "xyz")
+    assert msg.pose.orientation.z == pytest.approx(math.sqrt(0.5))
+
+
+def test_setpoint_frames() -> None:
+    # aiming 1 m north and 2 m east of the origin, 4 m deep, course 90 (east)
+    sp = Setpoint(5.0, 1.0, 2.0, 4.0, 90.0, 0.3, True, "running")
+    ned = setpoint_msg(sp, "ned", "odom")
+    assert ned["header"]["frame_id"] == "map_ned"
+    assert ned["pose"]["position"] == {"x": 1.0, "y": 2.0, "z": 4.0}
+    enu = setpoint_msg(sp, "enu", "world")
+    assert enu["header"]["frame_id"] == "world"
+    assert enu["pose"]["position"] == {"x": 2.0, "y": 1.0, "z": -4.0}
+    assert enu["pose"]["orientation"] == {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}  # ENU yaw 0
+
+
+def test_small_conversions() -> None:
+    assert frame_data(SimpleNamespace(data=[1, 2, 255])) == b"\x01\x02\xff"
+    assert ros_time_s(1_500_000_000) == 1.5
+    assert json.loads(json_text({"a": math.nan, "b": 1})) == {"a": None, "b": 1}
+    qos = contract_qos(FRAME_TOPIC)
+    assert (qos.reliability, qos.durability) == (Reliability.RELIABLE, Durability.TRANSIENT_LOCAL)
