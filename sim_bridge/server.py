@@ -1,62 +1,65 @@
 """The simulated vehicle's rosbridge v2 websocket server (``websockets`` asyncio API).
 
-:class:`BridgeServer` exposes any :class:`~sim_bridge.endpoint.VehicleEndpoint` the way a
-real ROS 2 vehicle running ``rosbridge_server`` would: clients (the console, observers,
-roslibpy, roslibjs) publish frames on ``/nemesys/frame`` and subscribe to
-``/nemesys/pose``, ``/nemesys/mission`` and ``/nemesys/status``. The protocol itself lives in
-:mod:`sim_bridge.rosbridge`; this module does the IO, the clock and the logging.
+:class:`BridgeServer` exposes any :class:`~sim_bridge.endpoint.VehicleEndpoint` the way a real
+ROS 2 vehicle running ``rosbridge_server`` and ``rosapi`` does (the NemeSys topics, and the
+server's own ``/rosout``, ``/client_count``, ``/connected_clients``). The protocol is
+:mod:`sim_bridge.rosbridge` (sans-IO); this module does the IO, the clocks and the logging.
 
-Timing: a tick task advances the endpoint by the elapsed wall time times ``time_scale``
-every ``tick_s`` (20 ms by default), publishes every acknowledgement from
-``take_missions()``, and publishes the pose at ``pose_hz`` and the status at ``status_hz``.
-All endpoint calls happen on the server's event loop, one at a time, so the endpoint needs
-no locking.
+A tick task advances the endpoint by the elapsed wall time times ``time_scale`` every
+``tick_s``, publishes every acknowledgement, the pose at ``pose_hz``, the status at
+``status_hz``, and what queued subscriptions release. Endpoint calls happen on the server's
+event loop, one at a time. Each connection has its own session and outbox
+(:mod:`sim_bridge.server_outbox`), so a slow client only slows itself.
 
-Clients: each connection has its own :class:`~sim_bridge.rosbridge.ClientSession`
-(subscriptions, advertisements, status level) and its own outbox drained by its own writer
-task. Mission acknowledgements, service responses and status messages are queued in order;
-pose and status keep only the newest message (latest wins), so a slow client gets fewer
-poses but never stale ones and never holds the others up. A client whose send stalls for
-more than ``send_timeout_s`` or whose queue overflows is disconnected.
-
-Faults: every dropped message is logged on the ``sim_bridge.server`` logger with the client
-and the reason, and answered with a rosbridge ``status`` message only if the client opted in
-with ``set_level`` (see :mod:`sim_bridge.rosbridge`). Messages above ``max_message_bytes``
-are dropped with the connection kept; messages above the hard limit (``hard_max_bytes``,
-4 x ``max_message_bytes`` by default) make the ``websockets`` library close that connection
-with code 1009. The endpoint never sees a malformed message, and the vehicle keeps flying
-whatever the clients do.
+As the ROS 2 server, nothing is sent back for a failed message: it is logged on
+``sim_bridge.server`` and published on ``/rosout`` (``rcl_interfaces/msg/Log``, node
+``rosbridge_websocket``). A message above ``hard_max_bytes`` (10 MiB, tornado's limit) closes
+that connection (1009). The endpoint never sees a malformed message.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import http
 import itertools
 import logging
-from collections import deque
+import time
 from collections.abc import Callable
 from typing import Any, Final
 
 from websockets.asyncio.server import Server, ServerConnection, serve
-from websockets.exceptions import ConnectionClosed, ConnectionClosedError
+from websockets.exceptions import ConnectionClosedError
 from websockets.frames import CloseCode
+from websockets.http11 import Request, Response
 
 from sim_bridge.endpoint import VehicleEndpoint
 from sim_bridge.rosbridge import (
+    BRIDGE_NODE,
+    CLIENT_COUNT_TOPIC,
+    CONNECTED_CLIENTS_TOPIC,
     DEFAULT_MAX_MESSAGE_BYTES,
-    FRAME_TOPIC,
     MISSION_TOPIC,
     POSE_TOPIC,
+    ROSOUT_TOPIC,
     STATUS_TOPIC,
+    BridgeError,
     ClientSession,
+    Graph,
     JsonObject,
+    LogLine,
     Outcome,
+    connected_clients_msg,
     json_string_msg,
+    log_msg,
     pose_stamped_msg,
-    publish_message,
-    to_json,
-    uint8_multiarray_msg,
+)
+from sim_bridge.server_outbox import (
+    DEFAULT_MAX_QUEUE,
+    DEFAULT_SEND_TIMEOUT_S,
+    ClientOutbox,
+    EndpointGuard,
+    peer_of,
 )
 
 logger = logging.getLogger("sim_bridge.server")
@@ -65,95 +68,22 @@ logger = logging.getLogger("sim_bridge.server")
 DEFAULT_TICK_S: Final = 0.02
 #: Longest simulated step taken in one tick, wall seconds (a stalled loop does not leap).
 MAX_TICK_STEP_S: Final = 0.5
-#: Default limit on one send to a client, seconds; a client that stalls longer is dropped.
-DEFAULT_SEND_TIMEOUT_S: Final = 5.0
-#: Default limit on a client's ordered queue (acks, replies), messages.
-DEFAULT_MAX_QUEUE: Final = 1000
-#: Default hard limit factor: ``hard_max_bytes = HARD_LIMIT_FACTOR * max_message_bytes``.
-HARD_LIMIT_FACTOR: Final = 4
-#: An endpoint failure is logged the first time and then once per this many in a row.
-_FAILURE_LOG_EVERY: Final = 250
-
-
-class _Client:
-    """One websocket connection: its rosbridge session and its outbox.
-
-    The outbox has an ordered queue (acknowledgements, service responses, status messages,
-    frame echoes) and a latest-value slot per streamed topic (pose, status). One writer task
-    drains it, so a slow client only slows itself.
-    """
-
-    def __init__(
-        self,
-        ws: ServerConnection,
-        session: ClientSession,
-        name: str,
-        send_timeout_s: float,
-        max_queue: int,
-    ) -> None:
-        self.ws = ws
-        self.session = session
-        self.name = name
-        self._send_timeout_s = send_timeout_s
-        self._max_queue = max_queue
-        self._queue: deque[str] = deque()
-        self._latest: dict[str, str] = {}
-        self._wake = asyncio.Event()
-        self._dropped = False
-
-    def enqueue(self, text: str) -> None:
-        """Queue a message that must not be skipped; drop the client if it cannot keep up."""
-        if self._dropped:
-            return
-        if len(self._queue) >= self._max_queue:
-            self.drop(f"{self._max_queue} messages queued, client not reading")
-            return
-        self._queue.append(text)
-        self._wake.set()
-
-    def offer_latest(self, topic: str, text: str) -> None:
-        """Offer the newest message of a streamed topic; replaces one not yet sent."""
-        if self._dropped:
-            return
-        self._latest[topic] = text
-        self._wake.set()
-
-    def drop(self, reason: str) -> None:
-        """Disconnect at once (no closing handshake: the client is not reading)."""
-        if self._dropped:
-            return
-        self._dropped = True
-        logger.warning("client %s: disconnected: %s", self.name, reason)
-        self.ws.transport.abort()
-
-    async def run_writer(self) -> None:
-        """Send the outbox in order, then the latest streamed messages, until closed."""
-        try:
-            while True:
-                await self._wake.wait()
-                self._wake.clear()
-                while self._queue or self._latest:
-                    if self._queue:
-                        text = self._queue.popleft()
-                    else:
-                        topic = next(iter(self._latest))
-                        text = self._latest.pop(topic)
-                    await asyncio.wait_for(self.ws.send(text), self._send_timeout_s)
-        except TimeoutError:
-            self.drop(f"a send took longer than {self._send_timeout_s:g} s")
-        except ConnectionClosed:
-            pass
+#: Topics streamed latest-wins to each client.
+_STREAMED: Final = frozenset({POSE_TOPIC, STATUS_TOPIC})
+_LEVELS: Final = {20: logging.INFO, 30: logging.WARNING, 40: logging.ERROR}
 
 
 class BridgeServer:
     """rosbridge v2 websocket server in front of a :class:`VehicleEndpoint`.
 
     ``time_scale`` multiplies wall time into simulated time (0 pauses the vehicle).
-    ``pose_hz`` and ``status_hz`` are wall-clock publication rates. ``max_message_bytes``
-    is the soft limit on one incoming message (UTF-8 bytes): larger messages are dropped
-    and logged, the connection stays up. ``hard_max_bytes`` (default 4 x the soft limit)
-    is the websocket limit: a larger message closes that connection (code 1009).
-    ``port=0`` picks a free port; read :attr:`port` after :meth:`start`.
+    ``pose_hz`` and ``status_hz`` are wall-clock publication rates. ``max_message_bytes`` is
+    the limit on one incoming message (UTF-8 bytes): a larger one is dropped and logged, the
+    connection stays up. ``hard_max_bytes`` (default: ``max_message_bytes``) is the websocket
+    limit: a larger message closes that connection (code 1009), as tornado does above 10 MiB.
+    ``url_path`` is the only path served (``"/"``, as the real server; others get 404);
+    ``None`` serves any path. ``port=0`` picks a free port; read :attr:`port` after
+    :meth:`start`.
     """
 
     def __init__(
@@ -170,6 +100,7 @@ class BridgeServer:
         tick_s: float = DEFAULT_TICK_S,
         send_timeout_s: float = DEFAULT_SEND_TIMEOUT_S,
         max_queue: int = DEFAULT_MAX_QUEUE,
+        url_path: str | None = "/",
     ) -> None:
         if not time_scale >= 0.0:
             raise ValueError("time_scale must be >= 0")
@@ -177,7 +108,7 @@ class BridgeServer:
             raise ValueError("pose_hz and status_hz must be > 0")
         if max_message_bytes <= 0:
             raise ValueError("max_message_bytes must be > 0")
-        hard = HARD_LIMIT_FACTOR * max_message_bytes if hard_max_bytes is None else hard_max_bytes
+        hard = max_message_bytes if hard_max_bytes is None else hard_max_bytes
         if hard < max_message_bytes:
             raise ValueError("hard_max_bytes must be >= max_message_bytes")
         if not (tick_s > 0.0 and send_timeout_s > 0.0 and max_queue > 0):
@@ -190,16 +121,20 @@ class BridgeServer:
         self._status_period_s = 1.0 / status_hz
         self.max_message_bytes = max_message_bytes
         self.hard_max_bytes = hard
+        self.url_path = url_path
         # Tick at least twice per pose period so the pose rate holds.
         self._tick_s = min(tick_s, self._pose_period_s / 2.0)
         self._send_timeout_s = send_timeout_s
         self._max_queue = max_queue
+        self.graph = Graph(clock=time.monotonic, ros_time=self._ros_time)
         self._server: Server | None = None
         self._tick_task: asyncio.Task[None] | None = None
-        self._clients: set[_Client] = set()
+        self._clients: set[ClientOutbox] = set()
         self._client_ids = itertools.count(1)
         self._stopped = asyncio.Event()
-        self._failures: dict[str, int] = {}
+        self._guard = EndpointGuard()
+        self._in_rosout = False
+        self._publish_clients()
 
     # -- lifecycle ---------------------------------------------------------------------------
 
@@ -227,6 +162,8 @@ class BridgeServer:
             self._requested_port,
             max_size=self.hard_max_bytes,
             close_timeout=2.0,
+            compression=None,  # tornado's default: no permessage-deflate
+            process_request=self._check_path,
         )
         self._tick_task = asyncio.create_task(self._tick_loop(), name="sim_bridge tick")
         logger.info(
@@ -268,17 +205,20 @@ class BridgeServer:
 
     # -- connections -------------------------------------------------------------------------
 
+    def _check_path(self, ws: ServerConnection, request: Request) -> Response | None:
+        path = request.path.split("?", 1)[0]
+        if self.url_path is None or path == self.url_path:
+            return None
+        return ws.respond(http.HTTPStatus.NOT_FOUND, "404: Not Found\n")
+
     async def _serve_client(self, ws: ServerConnection) -> None:
-        name = f"#{next(self._client_ids)} {_peer(ws)}"
-        client = _Client(
-            ws,
-            ClientSession(self.max_message_bytes),
-            name,
-            self._send_timeout_s,
-            self._max_queue,
-        )
+        name = f"#{next(self._client_ids)} {peer_of(ws)}"
+        session = ClientSession(self.max_message_bytes, self.graph)
+        client = ClientOutbox(ws, session, name, self._send_timeout_s, self._max_queue)
+        client.connected_at = self._ros_time()
         self._clients.add(client)
-        logger.info("client %s: connected (%d clients)", name, len(self._clients))
+        self._log_node(f"Client connected. {len(self._clients)} clients total.", client)
+        self._publish_clients()
         writer = asyncio.create_task(client.run_writer(), name=f"sim_bridge writer {name}")
         try:
             async for message in ws:
@@ -292,7 +232,7 @@ class BridgeServer:
             sent = exc.sent.code if exc.sent is not None else None
             if sent == CloseCode.MESSAGE_TOO_BIG:
                 logger.warning(
-                    "client %s: closed: message above the hard limit of %d bytes",
+                    "client %s: closed: message above the limit of %d bytes",
                     name,
                     self.hard_max_bytes,
                 )
@@ -302,46 +242,74 @@ class BridgeServer:
                 )
         finally:
             self._clients.discard(client)
+            session.close()
             writer.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await writer
-            logger.info("client %s: disconnected (%d clients)", name, len(self._clients))
+            self._log_node(f"Client disconnected. {len(self._clients)} clients total.", client)
+            self._publish_clients()
 
-    def _on_message(self, client: _Client, message: str | bytes) -> None:
+    def _on_message(self, client: ClientOutbox, message: str | bytes) -> None:
+        session = client.session
         if isinstance(message, str):
-            outcome = client.session.receive_text(message)
+            outcomes = session.receive(message)
         else:
-            outcome = client.session.receive_binary(message)
-        self._log_outcome(client, outcome)
-        for reply in outcome.replies:
-            client.enqueue(to_json(reply))
-        if outcome.frame is not None:
-            self._submit(client, outcome.frame)
+            outcomes = session.receive_binary(message)
+        for outcome in outcomes:
+            self._act(client, outcome)
 
-    def _log_outcome(self, client: _Client, outcome: Outcome) -> None:
-        if outcome.error is not None:
-            error = outcome.error
-            tag = f" (id {error.op_id!r})" if error.op_id is not None else ""
-            logger.warning(
-                "client %s: dropped message%s: %s: %s",
-                client.name,
-                tag,
-                type(error).__name__,
-                error.reason,
-            )
-        elif outcome.notice is not None:
-            logger.info("client %s: %s", client.name, outcome.notice)
-        elif outcome.request is not None:
+    def _act(self, client: ClientOutbox, outcome: Outcome) -> None:
+        self._log_lines(client, outcome.logs)
+        if outcome.request is not None and outcome.error is None:
             logger.debug("client %s: %r", client.name, outcome.request)
+        for reply in outcome.replies:
+            try:
+                client.enqueue(*client.session.encode(reply))
+            except BridgeError as error:
+                self._log_lines(client, [LogLine(40, f"{reply['op']}: {error.reason}")])
+        client.enqueue(*outcome.texts)
+        publication = outcome.publication
+        if publication is not None:
+            if publication.frame is not None:
+                self._submit(client, publication.frame)
+            self._publish(publication.topic, publication.msg)
+        if outcome.close:
+            client.drop("the real server drops a connection that sends non-UTF-8 binary")
 
-    def _submit(self, client: _Client, frame: bytes) -> None:
+    def _submit(self, client: ClientOutbox, frame: bytes) -> None:
         logger.info(
             "client %s: frame of %d bytes to the vehicle: %s", client.name, len(frame), frame.hex()
         )
         self._guard("endpoint.submit_frame", lambda: self._endpoint.submit_frame(frame))
-        self._broadcast(
-            FRAME_TOPIC, lambda: publish_message(FRAME_TOPIC, uint8_multiarray_msg(frame))
-        )
+
+    # -- logging: the Python log and /rosout -----------------------------------------------------
+
+    def _log_lines(self, client: ClientOutbox, lines: list[LogLine] | tuple[LogLine, ...]) -> None:
+        for line in lines:
+            tag = f"[id: {line.op_id}] " if line.op_id is not None else ""
+            logger.log(
+                _LEVELS.get(line.level, logging.INFO),
+                "client %s: %s%s",
+                client.name,
+                tag,
+                line.text,
+            )
+            self._rosout(line.level, f"[Client {client.session.client_id}] {tag}{line.text}")
+
+    def _log_node(self, text: str, client: ClientOutbox) -> None:
+        logger.info("client %s: %s", client.name, text)
+        self._rosout(20, text)
+
+    def _rosout(self, level: int, text: str) -> None:
+        """Publish a log line on /rosout, as the real node's logger does (INFO and up)."""
+        if self._in_rosout:
+            return
+        self._in_rosout = True
+        try:
+            msg = log_msg(self._ros_time(), level, BRIDGE_NODE.lstrip("/"), text)
+            self._publish(ROSOUT_TOPIC, msg)
+        finally:
+            self._in_rosout = False
 
     # -- clock and publishing ----------------------------------------------------------------
 
@@ -368,6 +336,9 @@ class BridgeServer:
             if now >= next_status:
                 next_status = _next_deadline(next_status, self._status_period_s, now)
                 self._guard("status publication", self._publish_status)
+            for client in list(self._clients):
+                client.enqueue(*client.session.poll())
+                self._log_lines(client, client.session.drain_logs())
 
     def tick(self, sim_dt_s: float) -> None:
         """Advance the vehicle by ``sim_dt_s`` simulated seconds and publish its acks."""
@@ -376,12 +347,11 @@ class BridgeServer:
         missions = self._guard("endpoint.take_missions", self._endpoint.take_missions)
         for mission in missions or ():
             try:
-                text = to_json(publish_message(MISSION_TOPIC, json_string_msg(mission)))
+                msg = json_string_msg(mission)
             except (TypeError, ValueError):
                 logger.exception("mission acknowledgement not serializable, dropped: %r", mission)
                 continue
-            for client in self._subscribers(MISSION_TOPIC):
-                client.enqueue(text)
+            self._publish(MISSION_TOPIC, msg)
 
     def _publish_pose(self) -> None:
         self._stream(POSE_TOPIC, "endpoint.pose", self._endpoint.pose, pose_stamped_msg)
@@ -392,54 +362,46 @@ class BridgeServer:
     def _stream(
         self, topic: str, what: str, read: Callable[[], Any], to_msg: Callable[[Any], JsonObject]
     ) -> None:
-        """Offer the newest value of a streamed topic to its subscribers (latest wins); the
-        endpoint is only read when someone listens."""
-        subscribers = self._subscribers(topic)
-        if not subscribers:
+        """Publish the newest value of a streamed topic; the endpoint is only read when
+        someone listens."""
+        if not self._subscribers(topic):
             return
         value = self._guard(what, read)
         if value is not None:
-            text = to_json(publish_message(topic, to_msg(value)))
-            for client in subscribers:
-                client.offer_latest(topic, text)
+            self._publish(topic, to_msg(value))
 
-    def _broadcast(self, topic: str, build: Callable[[], JsonObject]) -> None:
-        subscribers = self._subscribers(topic)
-        if subscribers:
-            text = to_json(build())
-            for client in subscribers:
-                client.enqueue(text)
+    def _publish(self, topic: str, msg: JsonObject) -> None:
+        """A message on ``topic`` (absolute name) to every client subscribed to it, through
+        each client's subscription (throttle, queue, fragments)."""
+        for client in self._subscribers(topic):
+            texts = client.session.deliver(topic, msg)
+            if topic in _STREAMED:
+                client.offer_latest(topic, *texts)
+            else:
+                client.enqueue(*texts)
+            self._log_lines(client, client.session.drain_logs())
 
-    def _subscribers(self, topic: str) -> list[_Client]:
+    def _publish_clients(self) -> None:
+        """/client_count and /connected_clients: latched, republished on every change."""
+        count = {"data": len(self._clients)}
+        clients = connected_clients_msg(
+            [(peer_of(c.ws).rsplit(":", 1)[0], c.connected_at) for c in self._clients]
+        )
+        for topic, msg in ((CLIENT_COUNT_TOPIC, count), (CONNECTED_CLIENTS_TOPIC, clients)):
+            self.graph.latched[topic] = msg
+            self._publish(topic, msg)
+
+    def _subscribers(self, topic: str) -> list[ClientOutbox]:
         return [client for client in self._clients if client.session.is_subscribed(topic)]
 
-    def _guard(self, what: str, call: Callable[[], Any]) -> Any:
-        """Run one step of the clock; a failure is logged (throttled) and gives ``None``.
-
-        The vehicle keeps flying: a failing endpoint call or publication skips only itself.
-        """
+    def _ros_time(self) -> float:
         try:
-            result = call()
+            return float(self._endpoint.t_s)
         except Exception:
-            count = self._failures.get(what, 0) + 1
-            self._failures[what] = count
-            if count % _FAILURE_LOG_EVERY == 1:
-                logger.exception("%s failed (%d in a row)", what, count)
-            return None
-        if self._failures.pop(what, None):
-            logger.info("%s works again", what)
-        return result
+            return 0.0
 
 
 def _next_deadline(deadline: float, period: float, now: float) -> float:
     """The next publication time: one period on, or one period from now if behind."""
     deadline += period
     return deadline if deadline > now else now + period
-
-
-def _peer(ws: ServerConnection) -> str:
-    try:
-        host, port = ws.remote_address[:2]
-    except (TypeError, ValueError):
-        return "?"
-    return f"{host}:{port}"

@@ -2,7 +2,9 @@
 
 roslibpy 2.1 (asyncio transport) is the independent third-party client for the round trips;
 raw ``websockets`` clients and raw sockets produce the faults. The vehicle is a fake
-:class:`~sim_bridge.endpoint.VehicleEndpoint` that records every frame it is handed.
+:class:`~sim_bridge.endpoint.VehicleEndpoint` that records every frame it is handed. As the
+ROS 2 rosbridge_server, the server sends nothing back for a fault: it logs it and publishes
+it on ``/rosout``. (Against `nemesys sim` itself: test_roslibpy_interop.py, test_roslibjs.py.)
 """
 
 from __future__ import annotations
@@ -23,7 +25,7 @@ from typing import Any, TypeVar, cast
 import pytest
 import roslibpy
 from websockets.asyncio.client import ClientConnection, connect
-from websockets.exceptions import ConnectionClosed, ConnectionClosedError
+from websockets.exceptions import ConnectionClosed, ConnectionClosedError, InvalidStatus
 
 from sim_bridge.endpoint import Pose
 from sim_bridge.rosbridge import (
@@ -34,7 +36,8 @@ from sim_bridge.rosbridge import (
     ClientSession,
     Outcome,
 )
-from sim_bridge.server import BridgeServer, _Client
+from sim_bridge.server import BridgeServer
+from sim_bridge.server_outbox import ClientOutbox
 
 from .helpers import EXAMPLE, Inbox, LoopThread, ros_client
 
@@ -186,12 +189,18 @@ def frame_publish(data: Any, op_id: str | None = None) -> dict[str, Any]:
     return message
 
 
-def dropped_logs(caplog: pytest.LogCaptureFixture) -> list[str]:
+def error_logs(caplog: pytest.LogCaptureFixture) -> list[str]:
+    """What the server logged as errors about clients' messages (as the real one does)."""
     return [
-        r.getMessage()
-        for r in caplog.records
-        if r.name == LOGGER and r.levelno == logging.WARNING and "dropped message" in r.getMessage()
+        r.getMessage() for r in caplog.records if r.name == LOGGER and r.levelno == logging.ERROR
     ]
+
+
+async def rosout(ws: ClientConnection, level: int = 40) -> dict[str, Any]:
+    """The next /rosout line of ``level`` this client receives (it must subscribe first)."""
+    message = await receive(ws, lambda m: topic("/rosout")(m) and m["msg"]["level"] == level)
+    log: dict[str, Any] = message["msg"]
+    return log
 
 
 async def raw_handshake(
@@ -312,8 +321,17 @@ def test_roslibpy_pose_stream_at_least_10_hz() -> None:
 def test_roslibpy_status_and_get_topics() -> None:
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle, status_hz=10.0) as bridge, ros_client(bridge.port) as ros:
-        assert ros.get_topics() == [FRAME_TOPIC, POSE_TOPIC, MISSION_TOPIC, STATUS_TOPIC]
-        assert ros.get_topic_type(POSE_TOPIC) == "geometry_msgs/PoseStamped"
+        assert ros.get_topics() == [
+            "/client_count",
+            "/connected_clients",
+            FRAME_TOPIC,
+            MISSION_TOPIC,
+            POSE_TOPIC,
+            STATUS_TOPIC,
+            "/parameter_events",
+            "/rosout",
+        ]
+        assert ros.get_topic_type(POSE_TOPIC) == "geometry_msgs/msg/PoseStamped"
         statuses = Inbox()
         status = roslibpy.Topic(ros, STATUS_TOPIC, "std_msgs/msg/String")
         status.subscribe(statuses)
@@ -324,13 +342,17 @@ def test_roslibpy_status_and_get_topics() -> None:
         status.unsubscribe()
 
 
-def test_roslibpy_bad_frame_is_dropped_and_the_client_sees_no_status(
+def test_roslibpy_bad_frame_is_dropped_and_nothing_comes_back(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
-    """Default status level 'none': roslibpy gets nothing it cannot handle; the server logs."""
+    """As the ROS 2 server: roslibpy gets nothing back (not even for set_level); the server
+    logs, and /rosout carries the errors to whoever subscribes."""
     caplog.set_level(logging.INFO)
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle) as bridge, ros_client(bridge.port) as ros:
+        logs = Inbox()
+        roslibpy.Topic(ros, "/rosout", "rcl_interfaces/msg/Log").subscribe(logs)
+        ros.set_status_level("error", "level-1")
         frames = roslibpy.Topic(ros, FRAME_TOPIC, "std_msgs/UInt8MultiArray")
         frames.publish(roslibpy.Message({"data": [1, 2, 300]}))
         frames.publish(roslibpy.Message({"data": "not base64!"}))
@@ -339,32 +361,15 @@ def test_roslibpy_bad_frame_is_dropped_and_the_client_sees_no_status(
         assert ros.get_topics()  # one more round trip, so anything sent back has arrived
         assert vehicle.received() == [EXAMPLE]
         assert bridge.clients() == 1
-    drops = dropped_logs(caplog)
+        errors = [m["msg"] for m in logs.wait(3) if m["level"] == 40]
+    assert any("Unknown operation: set_level" in m for m in errors)
+    assert any("data[2] = 300" in m for m in errors)
+    assert all(m.startswith("[Client ") for m in errors)
+    drops = error_logs(caplog)
     assert any("data[2] = 300" in m for m in drops)
     assert any("base64" in m for m in drops)
     roslibpy_errors = [r for r in caplog.records if r.name == "roslibpy" and r.levelno >= 40]
     assert roslibpy_errors == []
-
-
-def test_roslibpy_cannot_take_status_messages_so_they_are_opt_in(
-    caplog: pytest.LogCaptureFixture,
-) -> None:
-    """Why status is opt-in: roslibpy 2.1 logs an exception for every status it receives."""
-    vehicle = FakeVehicle()
-    with ThreadedServer(vehicle) as bridge, ros_client(bridge.port) as ros:
-        ros.set_status_level("error", "level-1")
-        frames = roslibpy.Topic(ros, FRAME_TOPIC, "std_msgs/UInt8MultiArray")
-        frames.publish(roslibpy.Message({"data": [999]}))
-        assert ros.get_topics()
-        deadline = time.monotonic() + 1.5
-        while time.monotonic() < deadline and not any(
-            r.name == "roslibpy" and r.exc_info for r in caplog.records
-        ):
-            time.sleep(0.01)
-        assert vehicle.received() == []
-    errors = [r for r in caplog.records if r.name == "roslibpy" and r.exc_info]
-    assert errors, "roslibpy now handles status: revisit DEFAULT_STATUS_LEVEL"
-    assert "status" in str(errors[0].exc_info[1] if errors[0].exc_info else "")
 
 
 # ------------------------------------------------------------------------------------------
@@ -398,7 +403,8 @@ def test_per_client_subscriptions_and_unsubscribe() -> None:
 
 
 def test_frame_echo_to_frame_subscribers() -> None:
-    """An observer subscribed to /nemesys/frame sees what the console sent."""
+    """An observer subscribed to /nemesys/frame sees what the console sent, ``data`` in
+    base64 as a ROS 2 rosbridge sends a ``uint8[]``."""
 
     async def main() -> None:
         async with (
@@ -408,141 +414,204 @@ def test_frame_echo_to_frame_subscribers() -> None:
         ):
             await send(observer, {"op": "subscribe", "topic": FRAME_TOPIC})
             await ping_pong(observer, "o")
-            await send(console, frame_publish(base64.b64encode(EXAMPLE).decode()))
+            await send(console, frame_publish(list(EXAMPLE)))
             echo = await receive(observer, topic(FRAME_TOPIC))
-            assert bytes(echo["msg"]["data"]) == EXAMPLE
+            assert echo["msg"] == {
+                "layout": {"dim": [], "data_offset": 0},
+                "data": base64.b64encode(EXAMPLE).decode(),
+            }
 
     run(main())
 
 
-def test_status_messages_after_set_level_echo_the_id() -> None:
+def test_unknown_ops_get_nothing_back_and_errors_go_to_rosout() -> None:
     async def main() -> None:
         async with serving(FakeVehicle()) as server, client(server) as ws:
-            await send(ws, {"op": "fly", "id": "silent"})
-            await send(ws, {"op": "set_level", "level": "error"})
-            await send(ws, {"op": "fly", "id": "loud"})
-            status = await receive(ws, lambda m: m.get("op") in {"status", "service_response"})
-            assert status["op"] == "status", "no status before set_level"
-            assert status["id"] == "loud" and status["level"] == "error"
-            assert "unknown op 'fly'" in status["msg"]
-            await send(ws, {"op": "set_level", "level": "none"})
-            await send(ws, {"op": "fly", "id": "quiet-again"})
+            await send(ws, {"op": "subscribe", "topic": "/rosout"})
+            for message in (
+                {"op": "set_level", "id": "l1", "level": "error"},
+                {"op": "status", "level": "error", "msg": "hello"},
+                {"op": "fly", "id": "f1"},
+            ):
+                await send(ws, message)
             await send(ws, {"op": "call_service", "id": "c", "service": "/nope"})
-            reply = await receive(ws, lambda m: m.get("op") in {"status", "service_response"})
-            assert reply["op"] == "service_response" and reply["result"] is False
-            assert isinstance(reply["values"], str) and "/nope" in reply["values"]
+            seen: list[dict[str, Any]] = []
+            async with asyncio.timeout(2):
+                while not any(m.get("op") == "service_response" for m in seen):
+                    seen.append(json.loads(await ws.recv()))
+            assert {m["op"] for m in seen} == {"publish", "service_response"}
+            errors = [m["msg"] for m in seen if m.get("topic") == "/rosout"]
+            texts = [e["msg"] for e in errors if e["level"] == 40]
+            assert "[id: l1] Unknown operation: set_level." in texts[0]
+            assert "Unknown operation: status." in texts[1]
+            assert "[id: f1] Unknown operation: fly." in texts[2]
+            assert all(e["name"] == "rosbridge_websocket" for e in errors)
+            reply = seen[-1]
+            assert reply["result"] is False and reply["values"] == "Service /nope does not exist"
 
     run(main())
 
 
-# ------------------------------------------------------------------------------------------
-# Faults: dropped with a logged reason, status when asked, connection and vehicle unaffected
-# ------------------------------------------------------------------------------------------
+def test_client_count_and_connected_clients_are_latched() -> None:
+    async def main() -> None:
+        async with serving(FakeVehicle()) as server, client(server) as ws:
+            await send(ws, {"op": "subscribe", "topic": "/client_count"})
+            assert (await receive(ws, topic("/client_count")))["msg"] == {"data": 1}
+            async with client(server) as other:
+                assert (await receive(ws, topic("/client_count")))["msg"] == {"data": 2}
+                await send(other, {"op": "subscribe", "topic": "/connected_clients"})
+                clients = (await receive(other, topic("/connected_clients")))["msg"]["clients"]
+                assert [c["ip_address"] for c in clients] == ["127.0.0.1", "127.0.0.1"]
+                assert set(clients[0]["connection_time"]) == {"sec", "nanosec"}
+            assert (await receive(ws, topic("/client_count")))["msg"] == {"data": 1}
 
-FAULTS: list[tuple[str, str, str]] = [
-    ("not json at all", "MalformedMessage", "not valid JSON"),
-    ('{"op": "publish", "topic": ', "MalformedMessage", "not valid JSON"),
-    ('[{"op": "publish"}]', "MalformedMessage", "an array"),
-    ('"just a string"', "MalformedMessage", "a string"),
-    ('{"id": "x1", "topic": "/nemesys/frame"}', "UnknownOp", "no 'op'"),
-    ('{"op": "takeoff", "id": "x1"}', "UnknownOp", "unknown op 'takeoff'"),
+    run(main())
+
+
+def test_fragments_over_the_wire() -> None:
+    vehicle = FakeVehicle()
+
+    async def main() -> None:
+        async with serving(vehicle, status_hz=20.0) as server, client(server) as ws:
+            await send(ws, {"op": "subscribe", "topic": STATUS_TOPIC, "fragment_size": 25})
+            parts: list[dict[str, Any]] = []
+            while not parts or parts[-1]["num"] + 1 < int(parts[-1]["total"]):  # floor: count
+                message = await receive(ws, op("fragment"))
+                if message["num"] == 0:
+                    parts = []
+                parts.append(message)
+            assert {p["id"] for p in parts} == {0} and isinstance(parts[0]["total"], float)
+            whole = json.loads("".join(p["data"] for p in parts))
+            assert whole["op"] == "publish" and whole["topic"] == STATUS_TOPIC
+            # A client's own fragments are reassembled: a frame in three parts.
+            text = json.dumps(frame_publish(list(EXAMPLE)))
+            size = len(text) // 3 + 1
+            chunks = [text[i : i + size] for i in range(0, len(text), size)]
+            for num, chunk in enumerate(chunks):
+                fragment = {"op": "fragment", "id": "f", "num": num, "total": 3, "data": chunk}
+                await send(ws, fragment)
+            assert await asyncio.to_thread(vehicle.got_frame.wait, 2)
+            assert vehicle.received() == [EXAMPLE]
+
+    run(main())
+
+
+FAULTS: list[tuple[str, str]] = [
+    ('[{"op": "publish"}]', "Received a message without an op."),
+    ('{"id": "x1", "topic": "/nemesys/frame"}', "without an op"),
+    ('{"op": "takeoff", "id": "x1"}', "Unknown operation: takeoff."),
+    ('{"op": "set_level", "id": "x1", "level": "error"}', "Unknown operation: set_level."),
     (
         '{"op": "advertise", "id": "x1", "topic": "/nemesys/frame", "type": "std_msgs/String"}',
-        "TypeMismatch",
-        "'std_msgs/String' is not std_msgs/UInt8MultiArray",
+        "advertise: Tried to register topic /nemesys/frame with type std_msgs/msg/String but it "
+        "is already established with type std_msgs/msg/UInt8MultiArray",
     ),
     (
         '{"op": "publish", "id": "x1", "topic": "/nemesys/frame", "msg": {"data": "hello there"}}',
-        "InvalidData",
         "base64",
     ),
     (
         '{"op": "publish", "id": "x1", "topic": "/nemesys/frame", "msg": {"data": [1, 2.5]}}',
-        "InvalidData",
         "data[1] = 2.5",
     ),
     (
         '{"op": "publish", "id": "x1", "topic": "/nemesys/frame", '
         '"msg": {"header": {}, "pose": {"position": {"x": 1}}}}',
-        "TypeMismatch",
-        "header, pose",
+        "Message type std_msgs/UInt8MultiArray does not have a field header",
     ),
     (
         '{"op": "publish", "id": "x1", "topic": "/nemesys/pose", "msg": {"data": [1]}}',
-        "ReadOnlyTopic",
-        "only the vehicle",
+        "Message type geometry_msgs/PoseStamped does not have a field data",
     ),
     (
-        '{"op": "subscribe", "id": "x1", "topic": "/nemesys/pose", "compression": "cbor"}',
-        "UnsupportedOp",
-        "'cbor'",
+        '{"op": "subscribe", "id": "x1", "topic": "/camera"}',
+        "Cannot infer topic type for topic /camera as it is not yet advertised",
     ),
-    ('{"op": "subscribe", "id": "x1", "topic": "/camera"}', "UnknownTopic", "'/camera'"),
-    ('{"op": "publish", "id": "x1", "pad": "' + "x" * 1100 + '"}', "OversizedMessage", "exceeds"),
+    (
+        '{"op": "subscribe", "id": "x1", "topic": "/nemesys/pose", "throttle_rate": 1.5}',
+        "Expected field throttle_rate to be one of (<class 'int'>,)",
+    ),
+    ('{"op": "publish", "id": "x1", "pad": "' + "x" * 1100 + '"}', "exceeds"),
 ]
 
 
-@pytest.mark.parametrize(("text", "error", "words"), FAULTS, ids=[f[1] for f in FAULTS])
-def test_fault_is_dropped_logged_and_answered(
-    text: str, error: str, words: str, caplog: pytest.LogCaptureFixture
+@pytest.mark.parametrize(("text", "words"), FAULTS)
+def test_fault_is_logged_on_rosout_and_nothing_comes_back(
+    text: str, words: str, caplog: pytest.LogCaptureFixture
 ) -> None:
     caplog.set_level(logging.INFO, logger=LOGGER)
     vehicle = FakeVehicle()
 
     async def main() -> None:
         async with (
-            serving(vehicle, max_message_bytes=1024) as server,
+            serving(vehicle, max_message_bytes=1024, hard_max_bytes=4096) as server,
             client(server) as ws,
+            client(server) as watcher,
             client(server) as bystander,
         ):
             await send(bystander, {"op": "subscribe", "topic": POSE_TOPIC})
-            await send(ws, {"op": "set_level", "level": "error"})
+            await send(watcher, {"op": "subscribe", "topic": "/rosout"})
+            await ping_pong(watcher, "w")
             await send(ws, text)
-            status = await receive(ws, op("status"))
-            assert status["level"] == "error" and words in status["msg"]
-            if '"id": "x1"' in text and error != "OversizedMessage":
-                assert status["id"] == "x1"
-            else:
-                assert "id" not in status
-            # Same connection still works, the vehicle only ever saw the good frame.
-            await ping_pong(ws, "after")
-            advertise = {
-                "op": "advertise",
-                "topic": FRAME_TOPIC,
-                "type": "std_msgs/UInt8MultiArray",
-            }
-            await send(ws, advertise)
+            log = await rosout(watcher)
+            assert words in log["msg"] and log["name"] == "rosbridge_websocket"
+            tagged = '"id": "x1"' in text and "pad" not in text
+            assert ("[id: x1]" in log["msg"]) == tagged
+            # Nothing came back; the same connection still works; the vehicle only ever saw
+            # the good frame.
+            await send(ws, {"op": "call_service", "id": "after", "service": "/rosapi/topics"})
+            reply = await receive(ws, lambda m: True)
+            assert reply["op"] == "service_response" and reply["id"] == "after"
             await send(ws, frame_publish(list(EXAMPLE)))
             await ping_pong(ws, "after-frame")
+            assert await asyncio.to_thread(vehicle.got_frame.wait, 2)
             assert vehicle.received() == [EXAMPLE]
             # The bystander kept getting poses throughout.
             assert (await receive(bystander, topic(POSE_TOPIC)))["msg"]["header"]
-            assert server.client_count == 2
+            assert server.client_count == 3
 
     run(main())
-    drops = dropped_logs(caplog)
-    assert len(drops) == 1
-    assert error in drops[0] and words in drops[0]
+    drops = error_logs(caplog)
+    assert len(drops) == 1 and words in drops[0]
     assert vehicle.advances > 0
 
 
-def test_binary_frame_is_dropped(caplog: pytest.LogCaptureFixture) -> None:
+def test_text_that_is_not_json_is_silently_kept_as_the_real_server_does(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    caplog.set_level(logging.INFO, logger=LOGGER)
+
+    async def main() -> None:
+        async with serving(FakeVehicle()) as server, client(server) as ws:
+            await send(ws, "not json at all")
+            await send(ws, '{"op": "call_service", "id": "a", ')  # half a message...
+            await send(ws, '"service": "/rosapi/topics"}')  # ...and the other half
+            reply = await receive(ws, lambda m: True)
+            assert reply["op"] == "service_response" and reply["id"] == "a"
+
+    run(main())
+    assert error_logs(caplog) == []
+
+
+def test_binary_frames(caplog: pytest.LogCaptureFixture) -> None:
+    """UTF-8 JSON in a binary frame is taken as text (as the real server); anything else
+    makes the real server drop the connection, and so does this one."""
     caplog.set_level(logging.INFO, logger=LOGGER)
     vehicle = FakeVehicle()
 
     async def main() -> None:
-        async with serving(vehicle) as server, client(server) as ws:
-            await send(ws, {"op": "set_level", "level": "error"})
-            await ws.send(json.dumps(frame_publish(list(EXAMPLE))).encode())
-            status = await receive(ws, op("status"))
-            assert "binary frame" in status["msg"]
-            await ws.send(EXAMPLE)
-            await ping_pong(ws, "still-up")
-            assert vehicle.received() == []
+        async with serving(vehicle) as server, client(server) as other:
+            async with client(server) as ws:
+                await ws.send(json.dumps(frame_publish(list(EXAMPLE))).encode())
+                assert await asyncio.to_thread(vehicle.got_frame.wait, 2)
+                await ws.send(b"\xff\x00binary")
+                with pytest.raises(ConnectionClosed):
+                    await ws.recv()
+            await ping_pong(other, "still-up")
+            assert vehicle.received() == [EXAMPLE]
 
     run(main())
-    drops = dropped_logs(caplog)
-    assert len(drops) == 2 and all("BinaryMessage" in m for m in drops)
+    assert any("is not UTF-8" in m for m in error_logs(caplog))
 
 
 def test_message_above_hard_limit_closes_only_that_connection(
@@ -553,10 +622,10 @@ def test_message_above_hard_limit_closes_only_that_connection(
 
     async def main() -> None:
         async with serving(vehicle, max_message_bytes=1000) as server:
-            assert server.hard_max_bytes == 4000
+            assert server.hard_max_bytes == 1000
             async with client(server) as big, client(server) as other:
                 await send(other, {"op": "subscribe", "topic": POSE_TOPIC})
-                await send(big, frame_publish(list(range(256)) * 10))  # > 4000 bytes
+                await send(big, frame_publish(list(range(256)) * 2))  # > 1000 bytes
                 with pytest.raises(ConnectionClosedError) as closed:
                     await big.recv()
                 assert closed.value.rcvd is not None and closed.value.rcvd.code == 1009
@@ -568,7 +637,7 @@ def test_message_above_hard_limit_closes_only_that_connection(
         assert vehicle.received() == []
 
     run(main())
-    assert any("above the hard limit of 4000 bytes" in r.getMessage() for r in caplog.records)
+    assert any("above the limit of 1000 bytes" in r.getMessage() for r in caplog.records)
 
 
 def test_disconnect_mid_message(caplog: pytest.LogCaptureFixture) -> None:
@@ -715,7 +784,7 @@ class GatedConnection:
 def test_outbox_latest_wins_and_order() -> None:
     async def main() -> None:
         ws = GatedConnection()
-        outbox = _Client(cast(Any, ws), ClientSession(), "t", send_timeout_s=5, max_queue=10)
+        outbox = ClientOutbox(cast(Any, ws), ClientSession(), "t", send_timeout_s=5, max_queue=10)
         writer = asyncio.create_task(outbox.run_writer())
         outbox.enqueue("ack-1")
         await asyncio.sleep(0)  # the writer takes ack-1 and waits on the gate
@@ -741,7 +810,7 @@ def test_outbox_overflow_and_stalled_send_drop_the_client(
 
     async def main() -> None:
         ws = GatedConnection()
-        outbox = _Client(cast(Any, ws), ClientSession(), "t", send_timeout_s=5, max_queue=3)
+        outbox = ClientOutbox(cast(Any, ws), ClientSession(), "t", send_timeout_s=5, max_queue=3)
         writer = asyncio.create_task(outbox.run_writer())
         for i in range(4):
             outbox.enqueue(f"ack-{i}")
@@ -752,7 +821,9 @@ def test_outbox_overflow_and_stalled_send_drop_the_client(
         writer.cancel()
 
         stalled = GatedConnection()
-        slow = _Client(cast(Any, stalled), ClientSession(), "s", send_timeout_s=0.05, max_queue=3)
+        slow = ClientOutbox(
+            cast(Any, stalled), ClientSession(), "s", send_timeout_s=0.05, max_queue=3
+        )
         slow.offer_latest(POSE_TOPIC, "pose")
         await asyncio.wait_for(slow.run_writer(), 1)
         assert stalled.aborted and stalled.sent == []
@@ -827,14 +898,14 @@ def test_unserializable_status_skips_only_itself(caplog: pytest.LogCaptureFixtur
 def test_internal_error_on_a_message_keeps_the_connection(
     caplog: pytest.LogCaptureFixture, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    original = ClientSession.receive_text
+    original = ClientSession.receive
 
-    def flaky(self: ClientSession, text: str) -> Outcome:
+    def flaky(self: ClientSession, text: str) -> list[Outcome]:
         if text == "boom":
             raise RuntimeError("bug")
         return original(self, text)
 
-    monkeypatch.setattr(ClientSession, "receive_text", flaky)
+    monkeypatch.setattr(ClientSession, "receive", flaky)
     caplog.set_level(logging.INFO, logger=LOGGER)
 
     async def main() -> None:
@@ -858,8 +929,10 @@ def test_lifecycle() -> None:
                     port = server.port
                     break
                 await asyncio.sleep(0.01)
-        async with connect(f"ws://127.0.0.1:{port}/rosbridge") as ws:
-            await ping_pong(ws, "path ignored")
+        with pytest.raises(InvalidStatus, match="404"):  # only "/", as the real server
+            await connect(f"ws://127.0.0.1:{port}/rosbridge")
+        async with connect(f"ws://127.0.0.1:{port}/?x=1") as ws:
+            await ping_pong(ws, "root path")
             await server.stop()
             with pytest.raises(ConnectionClosed):
                 await ws.recv()
