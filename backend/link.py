@@ -10,8 +10,8 @@
 
 Every link declares its :class:`Capability`: what the vehicle can report back over it.
 
-The protocol side (the messages, :class:`sim_bridge.rosbridge.ClientProtocol`, and their
-decoding) lives in :mod:`sim_bridge.rosbridge`, shared with the station's transmitter; this
+The protocol side (the messages, :class:`sim_bridge.rosbridge_client.ClientProtocol`, and their
+decoding) lives in :mod:`sim_bridge.rosbridge_client`, shared with the station's transmitter; this
 module is the transport.
 """
 

@@ -10,7 +10,7 @@ Versioning (semantic): a change a vehicle or console built for the old contract 
 with (a new optional field, a new optional topic) bumps the minor number; anything else (a
 topic renamed or retyped, a required field added, removed or changed in meaning, a QoS a
 peer of the old contract cannot match) bumps the major number. The patch number is for
-wording. The console accepts any vehicle with the same major number.
+wording. A vehicle and a console built for the same major number work together.
 """
 
 from __future__ import annotations
@@ -366,8 +366,12 @@ VERSION_RULE: Final = (
     "works with (a new optional field, a new optional topic) bumps the minor number; anything "
     "else (a topic renamed or retyped, a required field added, removed or changed in meaning, "
     "a QoS a peer of the old contract cannot match) bumps the major number; the patch number "
-    "is for wording. The console accepts any vehicle with the same major number."
+    "is for wording. A vehicle and a console built for the same major number work together."
 )
+
+#: The ROS 2 node that subscribes the frame topic on a NemeSys vehicle (the reference node in
+#: ros2/nemesys_vehicle, and the simulator's graph, are named so).
+VEHICLE_NODE: Final = "/nemesys_vehicle"
 
 #: What a NemeSys vehicle must do, beyond publishing and subscribing the topics.
 OBLIGATIONS: Final = (
@@ -390,6 +394,8 @@ OBLIGATIONS: Final = (
     "active command, or null): without it the acknowledgement path cannot be probed.",
     "A number the vehicle does not know is null (NaN and infinities become null through "
     "rosbridge); a required field is never left out.",
+    "A reference ROS 2 node that does all of this, wrapping the simulator's own onboard agent, "
+    "is ros2/nemesys_vehicle (its README says how to build and launch it).",
     "Run rosbridge_server with rosapi: the console lists the vehicle's topics through "
     "/rosapi/topics, and a one-shot sender asks /rosapi/subscribers whether the frame topic "
     "has its subscriber before publishing.",

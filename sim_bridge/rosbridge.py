@@ -32,6 +32,7 @@ from types import MappingProxyType
 from typing import Final
 
 from sim_bridge import contract
+from sim_bridge.contract import VEHICLE_NODE
 from sim_bridge.rosbridge_convert import (
     decode_uint8_data,
     decode_uint8_multiarray,
@@ -63,7 +64,6 @@ from sim_bridge.rosbridge_graph import (
     PARAMETER_EVENTS_TOPIC,
     ROSOUT_TOPIC,
     SERVER_TOPIC_TYPES,
-    VEHICLE_NODE,
     Graph,
     expand_name,
 )

@@ -19,6 +19,7 @@ from types import MappingProxyType
 from typing import Any, Final
 
 from sim_bridge import contract
+from sim_bridge.contract import VEHICLE_NODE
 from sim_bridge.rosbridge_convert import populate, time_msg
 from sim_bridge.rosbridge_errors import (
     BridgeError,
@@ -34,7 +35,6 @@ from sim_bridge.rosbridge_types import resolve_type
 BRIDGE_NODE: Final = "/rosbridge_websocket"
 ROSAPI_NODE: Final = "/rosapi"
 ROSAPI_PARAMS_NODE: Final = "/rosapi_params"
-VEHICLE_NODE: Final = "/nemesys_vehicle"
 #: The ROS 2 distribution the simulated graph is modelled on (rosapi/get_ros_version).
 ROS_DISTRO: Final = "jazzy"
 #: Seconds a publisher the bridge made for its clients outlives their last unadvertise.

@@ -13,6 +13,7 @@ from typing import Any, Self
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 
+from sim_bridge.contract import VEHICLE_NODE
 from sim_bridge.rosbridge import (
     FRAME_TOPIC,
     MISSION_TOPIC,
@@ -26,8 +27,7 @@ from .helpers import LoopThread
 #: Replies to one published frame: rosbridge messages (dicts) or raw text.
 Respond = Callable[[bytes], list[dict[str, Any] | str]]
 
-#: The vehicle's node, as rosapi lists the subscribers of ``/nemesys/frame``.
-VEHICLE_NODE = "/nemesys_vehicle"
+
 SUBSCRIBERS_SERVICE = "/rosapi/subscribers"
 
 

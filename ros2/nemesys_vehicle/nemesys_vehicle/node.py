@@ -36,6 +36,7 @@ from sim_bridge.contract import (
     MISSION_TOPIC,
     POSE_TOPIC,
     STATUS_TOPIC,
+    VEHICLE_NODE,
     Durability,
     QoS,
     Reliability,
@@ -65,7 +66,7 @@ class VehicleNode(Node):  # type: ignore[misc]  # rclpy is untyped here (not ins
     """The NemeSys vehicle node (parameters: ``config/params.yaml``)."""
 
     def __init__(self) -> None:
-        super().__init__("nemesys_vehicle")
+        super().__init__(VEHICLE_NODE.lstrip("/"))  # the contract's node name
         self.declare_parameters("", VehicleConfig.parameter_defaults())
         config = config_from_parameters(self.get_parameters(VehicleConfig.parameter_names()))
         self._mission_pub = self.create_publisher(
