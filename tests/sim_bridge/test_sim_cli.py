@@ -9,10 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import json
-import re
 import subprocess
-import sys
-import threading
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -25,9 +22,9 @@ from codec import encode_frame
 from sim_bridge.rosbridge import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC, STATUS_TOPIC
 
 from .helpers import Inbox, ros_client
+from .sim_process import NEMESYS, nemesys_sim
 
 #: ``nemesys`` as a subprocess: this interpreter running ``backend.cli``.
-NEMESYS = [sys.executable, "-m", "backend.cli"]
 
 CIRCLE = encode_frame("circle", speed=0.18, depth=2.5, radius=4, direction="cw").frame
 SQUARE = encode_frame("square", speed=0.18, depth=2, side_span=6, direction="ccw").frame
@@ -36,27 +33,8 @@ SQUARE = encode_frame("square", speed=0.18, depth=2, side_span=6, direction="ccw
 @pytest.fixture(scope="module")
 def sim_port() -> Iterator[int]:
     """`nemesys sim` on a free loopback port, ten times faster than real time."""
-    proc = subprocess.Popen(
-        [*NEMESYS, "sim", "--port", "0", "--time-scale", "10", "--seed", "5", "--quiet"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    stdout, stderr = proc.stdout, proc.stderr
-    assert stdout is not None and stderr is not None
-    lines: list[str] = []
-    reader = threading.Thread(target=lambda: lines.append(stdout.readline()), daemon=True)
-    reader.start()
-    reader.join(15)
-    match = re.search(r"ws://127\.0\.0\.1:(\d+)", lines[0] if lines else "")
-    if match is None:
-        proc.kill()
-        raise AssertionError(f"nemesys sim did not start: {lines} {stderr.read()}")
-    try:
-        yield int(match.group(1))
-    finally:
-        proc.terminate()
-        assert proc.wait(10) == 0, "nemesys sim must stop cleanly on SIGTERM"
+    with nemesys_sim("--time-scale", "10", "--seed", "5") as port:
+        yield port
 
 
 def _acks(inbox: Inbox, count: int) -> list[dict[str, Any]]:
