@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import secrets
 import time
 from collections.abc import Coroutine
 from dataclasses import replace
@@ -88,11 +89,17 @@ class Console:
             from sim_bridge.sim import SimConfig, Simulation
 
             self.sim = Simulation(SimConfig(seed=s.sim_seed, limits=self.limits))
+            # frames only from this console: a per-start secret for the rosbridge auth op
+            secret = secrets.token_hex(16)
             self.bridge = BridgeServer(
-                self.sim, "127.0.0.1", s.sim_port, time_scale=s.sim_time_scale
+                self.sim,
+                "127.0.0.1",
+                s.sim_port,
+                time_scale=s.sim_time_scale,
+                auth_secret=secret,
             )
             await self.bridge.start()
-            link: Link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}")
+            link: Link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}", auth_secret=secret)
         else:
             link = open_link(s.target, s.bitrate_bps)
         self.link = link

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
 import time
 from collections.abc import Callable
@@ -42,6 +43,7 @@ from sim_bridge.rosbridge import (
     canonical_type,
     same_type,
 )
+from sim_bridge.rosbridge_auth import auth_message
 from sim_bridge.rosbridge_client import (
     ClientProtocol,
     decode_json_string,
@@ -165,9 +167,15 @@ class RosbridgeLink(Link):
     """
 
     def __init__(
-        self, target: str, open_timeout_s: float = 3.0, rosapi_timeout_s: float = ROSAPI_TIMEOUT_S
+        self,
+        target: str,
+        open_timeout_s: float = 3.0,
+        rosapi_timeout_s: float = ROSAPI_TIMEOUT_S,
+        auth_secret: str | None = None,
     ) -> None:
         super().__init__(target)
+        #: The training bridge's secret: the link authenticates first (``auth`` op).
+        self.auth_secret = auth_secret
         self.open_timeout_s = open_timeout_s
         self.rosapi_timeout_s = rosapi_timeout_s
         self._conn: ClientConnection | None = None
@@ -207,6 +215,11 @@ class RosbridgeLink(Link):
                 async with connect(
                     self.target, open_timeout=self.open_timeout_s, max_size=2**22, proxy=None
                 ) as conn:
+                    if self.auth_secret is not None:
+                        auth = auth_message(
+                            self.auth_secret, "nemesys-console", self.target, time.time()
+                        )
+                        await conn.send(json.dumps(auth))
                     for opening in self._protocol.open_messages():
                         await conn.send(opening)
                     # what the vehicle publishes, asked again on every connection

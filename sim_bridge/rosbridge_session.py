@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any, Final
 
 from sim_bridge import contract
+from sim_bridge.rosbridge_auth import AuthGate
 from sim_bridge.rosbridge_convert import extract, populate
 from sim_bridge.rosbridge_errors import (
     BinaryMessage,
@@ -94,6 +95,7 @@ class ClientSession:
         client_id: str | None = None,
         fragment_size: object = DEFAULT_FRAGMENT_SIZE,
         fragment_timeout_s: float = DEFAULT_FRAGMENT_TIMEOUT_S,
+        auth: AuthGate | None = None,
     ) -> None:
         if max_message_bytes <= 0:
             raise ValueError("max_message_bytes must be positive")
@@ -109,6 +111,8 @@ class ClientSession:
         self._latched: set[str] = set()
         self._defragmenter = Defragmenter(max_message_bytes, fragment_timeout_s)
         self._logs: list[LogLine] = []
+        #: The training bridge's gate: a client publishes only after ``auth``.
+        self.auth = auth
 
     # -- state -------------------------------------------------------------------------------
 
@@ -152,6 +156,13 @@ class ClientSession:
             value = self._buffer.take()
             if value is NOTHING:
                 break
+            if self.auth is not None and isinstance(value, dict) and value.get("op") == "auth":
+                problem = self.auth.take(value)
+                if problem is not None:
+                    outcomes.append(self._fail(None, BridgeError(problem, value.get("id"))))
+                if not self._buffer.more():
+                    break
+                continue
             try:
                 op_of(value, text)
             except UnknownOp as error:
@@ -239,6 +250,9 @@ class ClientSession:
         return Outcome(request)
 
     def _publish(self, request: Publish) -> Outcome:
+        refusal = self.auth.refusal(request.topic) if self.auth is not None else None
+        if refusal is not None:
+            raise BridgeError(refusal, request.id)
         expanded, kind = self.graph.add_publisher(self.client_id, request.topic, None)
         self._published.add(expanded)
         message = populate(kind, request.msg, self.graph.ros_time())

@@ -54,6 +54,7 @@ from sim_bridge.rosbridge import (
     log_msg,
     pose_stamped_msg,
 )
+from sim_bridge.rosbridge_auth import AuthGate
 from sim_bridge.server_outbox import (
     DEFAULT_MAX_QUEUE,
     DEFAULT_SEND_TIMEOUT_S,
@@ -83,7 +84,8 @@ class BridgeServer:
     limit: a larger message closes that connection (code 1009), as tornado does above 10 MiB.
     ``url_path`` is the only path served (``"/"``, as the real server; others get 404);
     ``None`` serves any path. ``port=0`` picks a free port; read :attr:`port` after
-    :meth:`start`.
+    :meth:`start`. With ``auth_secret`` (the console's training bridge) a client may publish
+    only after the ``auth`` op (:mod:`sim_bridge.rosbridge_auth`); before it may subscribe.
     """
 
     def __init__(
@@ -101,6 +103,7 @@ class BridgeServer:
         send_timeout_s: float = DEFAULT_SEND_TIMEOUT_S,
         max_queue: int = DEFAULT_MAX_QUEUE,
         url_path: str | None = "/",
+        auth_secret: str | None = None,
     ) -> None:
         if not time_scale >= 0.0:
             raise ValueError("time_scale must be >= 0")
@@ -122,6 +125,7 @@ class BridgeServer:
         self.max_message_bytes = max_message_bytes
         self.hard_max_bytes = hard
         self.url_path = url_path
+        self.auth_secret = auth_secret
         # Tick at least twice per pose period so the pose rate holds.
         self._tick_s = min(tick_s, self._pose_period_s / 2.0)
         self._send_timeout_s = send_timeout_s
@@ -213,7 +217,8 @@ class BridgeServer:
 
     async def _serve_client(self, ws: ServerConnection) -> None:
         name = f"#{next(self._client_ids)} {peer_of(ws)}"
-        session = ClientSession(self.max_message_bytes, self.graph)
+        gate = AuthGate(self.auth_secret) if self.auth_secret is not None else None
+        session = ClientSession(self.max_message_bytes, self.graph, auth=gate)
         client = ClientOutbox(ws, session, name, self._send_timeout_s, self._max_queue)
         client.connected_at = self._ros_time()
         self._clients.add(client)

@@ -1,0 +1,56 @@
+"""The training simulator's rosbridge takes frames only from the console: a local process may
+watch the vehicle but not retask it behind the operator's back."""
+
+from __future__ import annotations
+
+import json
+import time
+
+from fastapi.testclient import TestClient
+from websockets.sync.client import connect
+
+from codec import encode_frame
+from sim_bridge.contract import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC
+
+from .conftest import console_of, send, wait_state, wait_until
+
+
+def test_a_stranger_can_watch_but_not_publish_a_frame(client: TestClient) -> None:
+    console = console_of(client)
+    port = console.bridge.port
+    frames_before = console.sim.frames_in
+    frame = list(encode_frame("hover", {"duration": 60, "depth": 1, "heading": 0}).frame.to_bytes())
+    with connect(f"ws://127.0.0.1:{port}", proxy=None, open_timeout=5) as ws:
+        for topic in (POSE_TOPIC, MISSION_TOPIC):
+            ws.send(json.dumps({"op": "subscribe", "topic": topic}))
+        ws.send(
+            json.dumps(
+                {"op": "advertise", "topic": FRAME_TOPIC, "type": "std_msgs/msg/UInt8MultiArray"}
+            )
+        )
+        ws.send(json.dumps({"op": "publish", "topic": FRAME_TOPIC, "msg": {"data": frame}}))
+        forged = {
+            "op": "auth",
+            "mac": "0" * 64,
+            "client": "x",
+            "dest": "y",
+            "rand": "z",
+            "t": time.time(),
+            "level": "operator",
+            "end": time.time() + 60,
+        }
+        ws.send(json.dumps(forged))
+        ws.send(json.dumps({"op": "publish", "topic": FRAME_TOPIC, "msg": {"data": frame}}))
+        # watching works: poses arrive
+        topics: set[str] = set()
+        deadline = time.monotonic() + 5
+        while POSE_TOPIC not in topics and time.monotonic() < deadline:
+            topics.add(json.loads(ws.recv(timeout=5)).get("topic", ""))
+        assert POSE_TOPIC in topics
+        # the console's own command still goes through, and is the only frame the vehicle saw
+        cmd = wait_state(client, send(client)["id"])
+        assert cmd["state"] == "acknowledged", cmd
+        wait_until(lambda: console.sim.frames_in == frames_before + 1, what="one frame in")
+        time.sleep(0.2)  # a check for absence: nothing else arrives
+        assert console.sim.frames_in == frames_before + 1
+        assert console.sim.agent.active.pattern == "circle"
