@@ -17,9 +17,12 @@ from fastapi import FastAPI, Request
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 
-from backend.api import authoring, commands, live, scripts, training
+from backend.api import authoring, commands, errors_db, live, scripts, training
+from backend.api.openapi import security_schemes
+from backend.bounded_input import BodyLimit, shorten, validation_errors
 from backend.commands import RateLimited
 from backend.console import Console
+from backend.security import HostGuard, allowed_hosts, install_redaction
 from backend.settings import Settings
 from codec import EncodeError
 from planner import PlanError
@@ -33,6 +36,8 @@ def create_app(settings: Settings | None = None, *, viewer: bool = True) -> Fast
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        # after the server configured its logging: no token reaches any log output
+        install_redaction([cfg.token])
         console = Console(cfg)
         app.state.console = console
         await console.start(viewer=viewer)
@@ -49,6 +54,10 @@ def create_app(settings: Settings | None = None, *, viewer: bool = True) -> Fast
     )
     app.state.settings = cfg
     # No CORS middleware: cross-origin browser calls are refused (closed by default).
+    # Bodies over the cap are refused (413) before routing, authentication or parsing.
+    app.add_middleware(BodyLimit, max_bytes=cfg.max_body_bytes)
+    # Requests naming another Host are refused (400) before anything else: DNS rebinding.
+    app.add_middleware(HostGuard, allowed=allowed_hosts(cfg.host, cfg.allowed_hosts))
     for router in (
         authoring.router,
         commands.router,
@@ -59,22 +68,28 @@ def create_app(settings: Settings | None = None, *, viewer: bool = True) -> Fast
         app.include_router(router)
     _errors(app)
     _static(app)
+    security_schemes(app)
     return app
 
 
 def _errors(app: FastAPI) -> None:
+    validation_errors(app)
+    errors_db.register(app)
+
     @app.exception_handler(EncodeError)
     async def encode_error(_request: Request, err: EncodeError) -> JSONResponse:
         loc = ["body", "params", err.field] if err.field else ["body", "pattern"]
         return JSONResponse(
-            {"detail": [{"loc": loc, "msg": str(err), "type": "value_error"}]}, status_code=422
+            {"detail": [{"loc": loc, "msg": shorten(str(err)), "type": "value_error"}]},
+            status_code=422,
         )
 
     @app.exception_handler(PlanError)
     async def plan_error(_request: Request, err: PlanError) -> JSONResponse:
         loc = ["body", "params", err.field] if err.field else ["body", "params"]
         return JSONResponse(
-            {"detail": [{"loc": loc, "msg": str(err), "type": "plan_error"}]}, status_code=422
+            {"detail": [{"loc": loc, "msg": shorten(str(err)), "type": "plan_error"}]},
+            status_code=422,
         )
 
     @app.exception_handler(RateLimited)

@@ -46,7 +46,7 @@ from backend.health import FrameLedger, Outcome
 from backend.lifecycle import ON_ITS_WAY, RETRYABLE, Event, IllegalTransition, advance
 from backend.link import Link
 from backend.mirror import VehicleMirror
-from backend.store import MissionLog, now_iso
+from backend.store import LogWriteError, MissionLog, now_iso
 from backend.telemetry import TelemetryHub
 from codec import Encoded, delivery_probability, encode_frame
 from planner import Plan
@@ -164,7 +164,10 @@ class CommandManager:
 
     def _stop_all(self, why: str) -> None:
         for cid in [*self._live, *(c for c in self._awaiting if c not in self._live)]:
-            self._end(cid, Event.INTERRUPTED, "sent", reason=why)
+            try:
+                self._end(cid, Event.INTERRUPTED, "sent", reason=why)
+            except LogWriteError as err:  # stopped all the same; the log keeps its last state
+                logger.error("command %s stopped (%s), but %s", cid, why, err)
 
     # --- sending ----------------------------------------------------------------------------
 
@@ -225,8 +228,12 @@ class CommandManager:
         assert record is not None
         if d.copies is not None:
             more = d.tried + (self.surface_copies_now() or MIN_SURFACE_COPIES) - d.copies
+            try:  # logged first: no copy leaves that the log does not count
+                record = self._update(d.command_id, copies=(record["copies"] or 0) + more)
+            except LogWriteError as err:
+                err.outcome = "no copy was added to the Surface already on its way"
+                raise
             d.copies += more
-            record = self._update(d.command_id, copies=(record["copies"] or 0) + more)
         d.wake.set()
         return record
 
@@ -302,7 +309,10 @@ class CommandManager:
                 await asyncio.wait_for(d.wake.wait(), d.interval_s)
             d.wake.clear()
         if self._live.get(d.command_id) is d:
-            self._copies_done(d)
+            try:
+                self._copies_done(d)
+            except LogWriteError as err:
+                logger.error("command %s: its copies are out, but %s", d.command_id, err)
 
     async def _send_copy(self, d: Delivery) -> None:
         async with self._tx_lock:  # frames leave one at a time, in the order of the rule
@@ -310,28 +320,39 @@ class CommandManager:
                 return  # replaced while waiting its turn: nothing goes out
             d.tried += 1
             reason = await self.link.transmit(d.enc.frame)
-            cid = d.command_id
-            record = self.log.command(cid)
-            assert record is not None
-            fields: dict[str, Any] = {"attempts": record["attempts"] + 1}
-            if reason is not None:
-                d.last_failure = reason
-                self._update(cid, **fields, reason=f"copy {d.tried} did not leave: {reason}")
-                return
-            live = self._live.get(cid) is d
-            sent = record["copies_sent"] + 1
-            fields.update(
-                copies_sent=sent,
-                p_delivered=delivery_probability(d.ber, sent, loss=d.loss),
-                sent_at=now_iso(),
-            )
-            if live and record["state"] in ON_ITS_WAY:
-                fields.update(state=advance(record["state"], Event.COPY_SENT), reason=None)
-            self.ledger.frame_out(cid, answer_expected=live and d.two_way)
-            self.last_sent = {"id": cid, **command_json(d.enc.command)}
-            self._update(cid, **fields)
-            if live and d.two_way:
-                self._await_ack(cid, d.enc)
+            try:
+                self._copy_out(d, reason)
+            except LogWriteError as err:  # the copy is accounted for here; no more leave
+                how = f"left at {now_iso()}" if reason is None else f"did not leave ({reason})"
+                what = f"copy {d.tried} (frame {d.enc.frame.hex}) {how}"
+                logger.error("command %s: %s, but %s: delivery stopped", d.command_id, what, err)
+                if self._live.get(d.command_id) is d:
+                    del self._live[d.command_id]
+
+    def _copy_out(self, d: Delivery, reason: str | None) -> None:
+        """Write down a copy handed to the link (``reason``: why it did not leave)."""
+        cid = d.command_id
+        record = self.log.command(cid)
+        assert record is not None
+        fields: dict[str, Any] = {"attempts": record["attempts"] + 1}
+        if reason is not None:
+            d.last_failure = reason
+            self._update(cid, **fields, reason=f"copy {d.tried} did not leave: {reason}")
+            return
+        live = self._live.get(cid) is d
+        sent = record["copies_sent"] + 1
+        fields.update(
+            copies_sent=sent,
+            p_delivered=delivery_probability(d.ber, sent, loss=d.loss),
+            sent_at=now_iso(),
+        )
+        if live and record["state"] in ON_ITS_WAY:
+            fields.update(state=advance(record["state"], Event.COPY_SENT), reason=None)
+        self.ledger.frame_out(cid, answer_expected=live and d.two_way)
+        self.last_sent = {"id": cid, **command_json(d.enc.command)}
+        self._update(cid, **fields)
+        if live and d.two_way:
+            self._await_ack(cid, d.enc)
 
     def _await_ack(self, command_id: int, enc: Encoded) -> None:
         self._awaiting[command_id] = enc
@@ -406,13 +427,36 @@ class CommandManager:
         announced after the commit."""
         held: list[dict[str, Any]] = []
         self._held = held
+        live = dict(self._live)
         try:
             with self.log.transaction():
                 yield
+        except LogWriteError as err:
+            self._held = None
+            self._rolled_back(live, err)
+            raise
         finally:
             self._held = None
         for record in held:
             self._announce(record)
+
+    def _rolled_back(self, live: dict[int, Delivery], err: LogWriteError) -> None:
+        """The log writes of a send failed (none is committed): the deliveries it began are
+        cancelled before their first copy (their tasks have not run yet), and those it
+        superseded stay stopped: interrupted, if the log can still be written."""
+        err.outcome = "nothing was transmitted"
+        for cid, d in list(self._live.items()):
+            if live.get(cid) is not d and d.task is not None:
+                d.task.cancel()
+                del self._live[cid]
+        for cid in sorted(live.keys() - self._live.keys()):
+            why = f"stopped by a send the mission log could not record ({err.reason})"
+            logger.error("command %s: %s", cid, why)
+            record = self.log.command(cid)
+            with contextlib.suppress(LogWriteError, IllegalTransition):
+                if record is not None:
+                    state = advance(record["state"], Event.INTERRUPTED)
+                    self._update(cid, state=state, reason=why)
 
     # --- acknowledgements -------------------------------------------------------------------
 

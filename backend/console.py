@@ -22,6 +22,7 @@ from backend.health import UNKNOWN_VALUES_RECENT_S, LinkHealth, assess
 from backend.link import Link, RosbridgeLink, open_link
 from backend.settings import Settings
 from backend.store import MissionLog
+from backend.store_open import open_checked
 from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
 from codec import (
     FRAME_BITS,
@@ -75,7 +76,8 @@ class Console:
 
     async def start(self, *, viewer: bool = True) -> None:
         s = self.settings
-        self.log = MissionLog(s.db_path)
+        # checked (quick_check, not locked, writable): a LogError names the file and the fix
+        self.log = open_checked(s.db_path)
         # ``nemesys console`` already did this before printing its URL; an app built otherwise
         # (tests, an embedding program) gets it here, before any command is taken
         recovered = self.log.recover_interrupted()

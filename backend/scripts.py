@@ -90,7 +90,9 @@ class Trigger(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     kind: TriggerKind
-    t_s: float | None = Field(default=None, ge=0.0, le=MAX_SCRIPT_TIME_S, allow_inf_nan=False)
+    t_s: float | None = Field(
+        default=None, ge=0.0, le=MAX_SCRIPT_TIME_S, allow_inf_nan=False, strict=True
+    )
 
     @model_validator(mode="after")
     def _time_only_for_at(self) -> Trigger:

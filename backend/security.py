@@ -1,8 +1,10 @@
 """The console's edges: which hosts and origins it answers, and tokens kept out of every log.
 
 * **Host** (DNS rebinding): a request whose ``Host`` is neither a loopback name nor the bound
-  address nor one configured in ``allowed_hosts`` is refused (400) by Starlette's own
-  ``TrustedHostMiddleware``, for HTTP and websockets alike.
+  address nor one configured in ``allowed_hosts`` is refused by :class:`HostGuard`: 400 with
+  a JSON error naming the allowed names, or a refused websocket handshake (403). (Starlette's
+  ``TrustedHostMiddleware`` does the same check but answers plain text without saying what
+  is allowed, and mis-parses ``[::1]:8000``.)
 * **Origin** (``/ws``): a browser's websocket is accepted only from the page's own origin or
   one configured in ``allowed_origins``; a client that sends no Origin (not a browser) is
   accepted, as the token still guards every control message.
@@ -18,6 +20,10 @@ import re
 from collections.abc import Iterable
 from typing import Final
 from urllib.parse import urlsplit
+
+from starlette.datastructures import Headers
+from starlette.responses import JSONResponse
+from starlette.types import ASGIApp, Receive, Scope, Send
 
 #: Host names that always reach a console bound to loopback.
 LOOPBACK_HOSTS: Final = ("localhost", "127.0.0.1", "::1", "[::1]")
@@ -36,6 +42,39 @@ def allowed_hosts(bound_host: str, extra: Iterable[str] = ()) -> list[str]:
     if bound_host not in ("0.0.0.0", "::", ""):
         hosts.append(bound_host)
     return list(dict.fromkeys(hosts))
+
+
+def host_name(host_header: str) -> str:
+    """The name in a Host header, without its port (``[::1]:8000`` -> ``[::1]``)."""
+    host = host_header.strip().lower()
+    if host.startswith("["):
+        return host[: host.find("]") + 1] if "]" in host else host
+    return host.split(":", 1)[0]
+
+
+class HostGuard:
+    """ASGI middleware: only requests naming one of ``allowed`` hosts reach the app."""
+
+    def __init__(self, app: ASGIApp, allowed: Iterable[str]) -> None:
+        self.app = app
+        self.allowed = frozenset(name.lower() for name in allowed)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] not in ("http", "websocket"):
+            await self.app(scope, receive, send)
+            return
+        host = Headers(scope=scope).get("host", "")
+        if host_name(host) in self.allowed:
+            await self.app(scope, receive, send)
+            return
+        if scope["type"] == "websocket":
+            await send({"type": "websocket.close", "code": 1008})
+            return
+        detail = (
+            f"Host {host[:60]!r} is not this console's (DNS rebinding guard); allowed: "
+            f"{', '.join(sorted(self.allowed))} (setting allowed_hosts adds names)"
+        )
+        await JSONResponse({"detail": detail}, status_code=400)(scope, receive, send)
 
 
 def origin_allowed(origin: str | None, host: str | None, extra: Iterable[str] = ()) -> bool:

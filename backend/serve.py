@@ -7,8 +7,19 @@ FastAPI, uvicorn) are imported only when the console runs."""
 from __future__ import annotations
 
 import argparse
+import errno
 import os
-from typing import Any, TextIO
+import socket
+import sys
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any, TextIO
+
+if TYPE_CHECKING:
+    import uvicorn
+
+#: The exit status of bad input (``backend.cli.EXIT_USAGE``): a setting, the mission log,
+#: the port.
+EXIT_USAGE = 2
 
 
 def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -57,15 +68,23 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     except ValidationError as err:
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
-        from backend.cli import UsageError
+        return _usage(f"setting {where}: {first['msg']}")
+    from backend.store import LogWriteError
+    from backend.store_open import ELSEWHERE, LogError, open_checked
 
-        raise UsageError(f"setting {where}: {first['msg']}") from None
-    from backend.store import MissionLog
-
-    # before the URL: what an earlier run left on its way is interrupted, not stuck
-    log = MissionLog(settings.db_path)
+    # before the URL: the log is usable, and what an earlier run left on its way is
+    # interrupted, not stuck
+    try:
+        log = open_checked(settings.db_path)
+    except LogError as err:
+        return _usage(str(err))
     try:
         recovered = log.recover_interrupted()
+    except LogWriteError as err:
+        return _usage(
+            f"mission log {settings.db_path} cannot be written ({err.reason}): free some space "
+            f"or make it writable, {ELSEWHERE}"
+        )
     finally:
         log.close()
     if recovered:
@@ -75,19 +94,107 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
             f"{'is' if one else 'are'} now interrupted (retry {'it' if one else 'them'} from "
             "the log)\n"
         )
-    url = f"http://{settings.host}:{settings.port}/?token={settings.token}"
+    try:
+        sockets = listen_sockets(settings.host, settings.port)
+    except OSError as err:
+        return _usage(port_problem(settings.host, settings.port, err))
+    port = sockets[0].getsockname()[1]  # the one chosen, if asked for port 0
+    url = f"http://{settings.host}:{port}/?token={settings.token}"
     mode = "training (simulated vehicle)" if settings.training else f"vehicle at {settings.target}"
-    out.write(
-        f"NemeSys console, {mode}; mission log {settings.db_path}\n"
-        f"Open this URL (it holds the operator token; without it the page is read-only):\n"
-        f"    {url}\n"
-    )
-    out.flush()
-    uvicorn.run(
+
+    def announce() -> None:
+        out.write(
+            f"NemeSys console, {mode}; mission log {settings.db_path}\n"
+            f"Open this URL (it holds the operator token; without it the page is read-only):\n"
+            f"    {url}\n"
+        )
+        out.flush()
+
+    config = uvicorn.Config(
         create_app(settings),
         host=settings.host,
         port=settings.port,
         log_level=os.environ.get("NEMESYS_LOG_LEVEL", "warning"),
         ws="websockets-sansio",
+        # /ws answers an over-size message itself (live.py); above the body cap uvicorn
+        # closes the connection (1009) rather than hold up to its default 16 MiB
+        ws_max_size=settings.max_body_bytes,
     )
+    server = _server(config, announce)
+    try:
+        server.run(sockets=sockets)
+    except OSError as err:  # uvicorn could not serve on the sockets
+        if server.started:
+            raise
+        return _usage(port_problem(settings.host, port, err))
+    except SystemExit as exc:  # uvicorn: the app did not start (it logged why)
+        if server.started:
+            raise
+        print("nemesys console: the console did not start (the error is above)", file=sys.stderr)
+        return exc.code if isinstance(exc.code, int) else 1
+    finally:
+        for sock in sockets:
+            sock.close()
     return 0
+
+
+def _usage(message: str) -> int:
+    """One line on stderr, exit status 2 (as the CLI's ``UsageError``: raising that from here
+    would not reach ``python -m backend.cli``'s handler, a second copy of the module)."""
+    print(f"nemesys console: {message}", file=sys.stderr)
+    return EXIT_USAGE
+
+
+def listen_sockets(host: str, port: int) -> list[socket.socket]:
+    """Bound sockets for every address of ``host`` (as asyncio's ``create_server`` binds
+    them), handed to uvicorn: a busy port is found here, before anything starts, and nobody
+    can take it in between. (Only a socket bound with ``SO_REUSEADDR`` but not listening
+    could still make uvicorn's ``listen`` fail: that is handled where it runs.)
+
+    Raises:
+        OSError: the port is in use, or the address is not one of this machine's.
+    """
+    infos = socket.getaddrinfo(host or None, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    sockets: list[socket.socket] = []
+    try:
+        for family, kind, proto, _name, address in dict.fromkeys(infos):
+            sock = socket.socket(family, kind, proto)
+            sockets.append(sock)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            if family == socket.AF_INET6:
+                sock.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
+            sock.bind(address)  # not listening yet: uvicorn listens once the app has started
+    except OSError:
+        for sock in sockets:
+            sock.close()
+        raise
+    return sockets
+
+
+def port_problem(host: str, port: int, err: OSError) -> str:
+    """The one line ``nemesys console`` prints when it cannot listen on ``host:port``."""
+    if err.errno == errno.EADDRINUSE:
+        return f"port {port} on {host} is in use: another console? choose --port"
+    if isinstance(err, socket.gaierror) or err.errno == errno.EADDRNOTAVAIL:
+        return f"cannot listen on {host}: not an address of this machine; choose --host"
+    if err.errno == errno.EACCES:
+        return f"port {port} on {host} is not allowed to this user: choose --port above 1023"
+    return f"cannot listen on port {port} on {host} ({err.strerror or err}): choose --port"
+
+
+def _server(config: uvicorn.Config, on_started: Callable[[], None]) -> uvicorn.Server:
+    """uvicorn's server, calling ``on_started`` once it listens (the lifespan has started the
+    console by then: a request to the URL succeeds)."""
+    import uvicorn
+
+    class Server(uvicorn.Server):
+        async def startup(self, sockets: list[socket.socket] | None = None) -> None:
+            try:
+                await super().startup(sockets=sockets)
+            except OSError:  # listen() failed: the console stops, as uvicorn's own bind does
+                await self.lifespan.shutdown()
+                raise
+            if self.started:
+                on_started()
+
+    return Server(config)

@@ -103,6 +103,15 @@ class Settings(BaseSettings):
     max_depth_m: Annotated[float, Field(gt=0, le=100)] = 100.0
     max_speed_mps: Annotated[float, Field(gt=0, le=2.55)] = 1.0
     telemetry_hz: Annotated[float, Field(gt=0, le=50)] = 10.0
+    #: Largest request body accepted (bytes): a larger one is refused with 413 before it is
+    #: read, parsed or authenticated. Also uvicorn's websocket message limit (above the /ws
+    #: control cap, so an over-size control message gets an error reply).
+    max_body_bytes: Annotated[int, Field(ge=8192, le=1 << 30)] = 65536
+    #: Host names the console answers besides loopback names and the bound address (DNS
+    #: rebinding: a request with any other Host is refused), e.g. ["console.ship"].
+    allowed_hosts: list[Annotated[str, Field(min_length=1, max_length=253)]] = []
+    #: Origins whose pages may open /ws besides the console's own (e.g. a chart plotter's).
+    allowed_origins: list[Annotated[str, Field(min_length=1, max_length=300)]] = []
 
     @field_validator("target")
     @classmethod

@@ -2,13 +2,17 @@
 
 SQLite in WAL mode with ``synchronous=FULL``: a committed row survives a killed process or a
 power cut. One connection guarded by a lock (the console is one process; writes are small).
-Rows are only ever inserted or updated field by field, so no record is half written.
+Rows are only ever inserted or updated field by field, so no record is half written. A write
+that fails (disk full, the file made read-only) raises :class:`LogWriteError`. Track points are
+written within :data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that).
+Opening a log with its checks: :func:`backend.store_open.open_checked`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import json
+import logging
 import sqlite3
 import threading
 from collections.abc import Iterable, Iterator, Mapping
@@ -17,61 +21,19 @@ from pathlib import Path
 from typing import Any
 
 from backend.lifecycle import ON_ITS_WAY, TERMINAL, Event, State, advance
+from backend.store_schema import create_or_migrate
 
-SCHEMA = """
-CREATE TABLE IF NOT EXISTS dives (
-    id INTEGER PRIMARY KEY,
-    started_at TEXT NOT NULL,
-    target TEXT NOT NULL
-);
-CREATE TABLE IF NOT EXISTS commands (
-    id INTEGER PRIMARY KEY,
-    dive INTEGER NOT NULL REFERENCES dives(id),
-    created_at TEXT NOT NULL,
-    updated_at TEXT NOT NULL,
-    operator TEXT NOT NULL,
-    target TEXT NOT NULL,
-    kind TEXT NOT NULL,
-    pattern TEXT NOT NULL,
-    pattern_id INTEGER NOT NULL,
-    params TEXT NOT NULL,
-    requested TEXT NOT NULL,
-    bits TEXT NOT NULL,
-    hex TEXT NOT NULL,
-    state TEXT NOT NULL,
-    attempts INTEGER NOT NULL DEFAULT 0,
-    sent_at TEXT,
-    acked_at TEXT,
-    ack TEXT,
-    reason TEXT,
-    copies INTEGER,
-    copies_sent INTEGER NOT NULL DEFAULT 0,
-    p_delivered REAL NOT NULL DEFAULT 0,
-    ber REAL,
-    two_way INTEGER,
-    superseded_by INTEGER
-);
-CREATE INDEX IF NOT EXISTS commands_dive ON commands(dive);
-CREATE TABLE IF NOT EXISTS track (
-    dive INTEGER NOT NULL REFERENCES dives(id),
-    t_s REAL NOT NULL,
-    x_m REAL NOT NULL,
-    y_m REAL NOT NULL,
-    z_m REAL NOT NULL,
-    heading_deg REAL NOT NULL
-);
-CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);
-"""
+logger = logging.getLogger("backend.store")
 
-#: Columns added since the first release: (name, declaration), added to an older log at open.
-_ADDED_COLUMNS = (
-    ("copies", "INTEGER"),
-    ("copies_sent", "INTEGER NOT NULL DEFAULT 0"),
-    ("p_delivered", "REAL NOT NULL DEFAULT 0"),
-    ("ber", "REAL"),
-    ("two_way", "INTEGER"),
-    ("superseded_by", "INTEGER"),
-)
+#: How long a write waits for a lock another connection holds before it fails (s).
+BUSY_TIMEOUT_S = 1.0
+#: Track points are buffered at most this long after the first of them arrived (s)...
+TRACK_FLUSH_S = 0.5
+#: ... or until this many are buffered.
+TRACK_BATCH = 10
+#: Points kept while the log cannot be written (the oldest are dropped beyond).
+TRACK_BUFFER_MAX = 3600
+
 #: Columns holding JSON text.
 _JSON = ("params", "requested", "ack")
 #: Columns holding booleans (SQLite integers).
@@ -122,6 +84,32 @@ CSV_COLUMNS = (
 )
 
 
+class LogWriteError(Exception):
+    """The mission log cannot be written (disk full, file or directory made read-only, locked
+    by another process, I/O error): SQLite's ``reason``. ``outcome``: what the caller did
+    about it (e.g. "nothing was transmitted"), added to the message."""
+
+    def __init__(self, reason: str, outcome: str | None = None) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.outcome = outcome
+
+    def __str__(self) -> str:
+        tail = f"; {self.outcome}" if self.outcome else ""
+        return f"the mission log cannot be written: {self.reason}{tail}"
+
+
+@contextlib.contextmanager
+def _writing() -> Iterator[None]:
+    """SQLite's errors of a write as :class:`LogWriteError` (our own misuse stays as it is)."""
+    try:
+        yield
+    except (sqlite3.IntegrityError, sqlite3.ProgrammingError):
+        raise
+    except sqlite3.DatabaseError as err:
+        raise LogWriteError(str(err)) from err
+
+
 def now_iso() -> str:
     """Current UTC time, ISO 8601 with milliseconds."""
     return datetime.now(UTC).isoformat(timespec="milliseconds")
@@ -130,26 +118,50 @@ def now_iso() -> str:
 class MissionLog:
     """The SQLite mission log. Thread-safe."""
 
-    def __init__(self, path: Path | str) -> None:
+    def __init__(self, path: Path | str, *, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
         self.path = Path(path)
         if str(path) != ":memory:":
             self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.RLock()  # re-entered by the writes of a transaction()
-        self._db = sqlite3.connect(str(path), check_same_thread=False, isolation_level=None)
-        self._db.row_factory = sqlite3.Row
-        self._db.execute("PRAGMA journal_mode=WAL")
-        self._db.execute("PRAGMA synchronous=FULL")
-        self._db.execute("PRAGMA foreign_keys=ON")
-        self._db.executescript(SCHEMA)
-        self._migrate()
         self._track: list[tuple[int, float, float, float, float, float]] = []
+        self._track_timer: threading.Timer | None = None
+        self._track_failing = False
+        self._closed = False
+        self._db = sqlite3.connect(
+            str(path), timeout=busy_timeout_s, check_same_thread=False, isolation_level=None
+        )
+        self._db.row_factory = sqlite3.Row
+        try:
+            self._db.execute("PRAGMA journal_mode=WAL")
+            self._db.execute("PRAGMA synchronous=FULL")
+            self._db.execute("PRAGMA foreign_keys=ON")
+            create_or_migrate(self._db)
+        except BaseException:
+            self._db.close()
+            raise
 
-    def _migrate(self) -> None:
-        """Add the columns an older log lacks (values of old rows: the declared defaults)."""
-        have = {row["name"] for row in self._db.execute("PRAGMA table_info(commands)")}
-        for name, declaration in _ADDED_COLUMNS:
-            if name not in have:
-                self._db.execute(f"ALTER TABLE commands ADD COLUMN {name} {declaration}")
+    def set_busy_timeout(self, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
+        """How long a write waits for another connection's lock before it fails."""
+        with self._lock:
+            self._db.execute(f"PRAGMA busy_timeout = {round(busy_timeout_s * 1000)}")
+
+    def check(self) -> list[str]:
+        """SQLite's ``quick_check``: the problems it finds (none: the file is intact). Then a
+        write that changes nothing, rolled back: raises ``sqlite3.OperationalError`` if the log
+        is locked by another process or read-only."""
+        with self._lock:
+            rows = self._db.execute("PRAGMA quick_check").fetchall()
+            self._db.execute("BEGIN IMMEDIATE")  # busy: locked
+            try:
+                self._db.execute("DELETE FROM dives WHERE 0")  # read-only, as opened
+            finally:
+                self._db.execute("ROLLBACK")
+        return [
+            line
+            for row in rows
+            for line in str(row[0]).splitlines()
+            if line != "ok" and not line.startswith("***")
+        ]
 
     def recover_interrupted(self) -> int:
         """Every command an earlier run left on its way (``queued`` or ``transmitted``) becomes
@@ -163,7 +175,7 @@ class MissionLog:
                 "SELECT MAX(t) FROM (SELECT MAX(updated_at) AS t FROM commands "
                 "UNION ALL SELECT MAX(started_at) FROM dives)"
             ).fetchone()[0]
-            with self.transaction():
+            with self.transaction(), _writing():
                 cur = self._db.execute(
                     "UPDATE commands SET state = ?, updated_at = ?, "
                     "reason = 'the console stopped while this command was ' || state || "
@@ -182,23 +194,32 @@ class MissionLog:
             if self._db.in_transaction:  # nested: part of the outer one
                 yield
                 return
-            self._db.execute("BEGIN IMMEDIATE")
+            with _writing():
+                self._db.execute("BEGIN IMMEDIATE")
             try:
                 yield
+                with _writing():
+                    self._db.execute("COMMIT")
             except BaseException:
-                self._db.execute("ROLLBACK")
+                if self._db.in_transaction:  # SQLite may have rolled back already
+                    with contextlib.suppress(sqlite3.Error):
+                        self._db.execute("ROLLBACK")
                 raise
-            self._db.execute("COMMIT")
 
     def close(self) -> None:
         with self._lock:
-            self._flush_track()
+            if self._closed:
+                return
+            self._closed = True
+            if self._track_timer is not None:
+                self._track_timer.cancel()
+            self._flush_track_logged()
             self._db.close()
 
     # --- dives ---------------------------------------------------------------------------
 
     def new_dive(self, target: str) -> int:
-        with self._lock:
+        with self._lock, _writing():
             cur = self._db.execute(
                 "INSERT INTO dives (started_at, target) VALUES (?, ?)", (now_iso(), target)
             )
@@ -206,7 +227,7 @@ class MissionLog:
 
     def dives(self) -> list[dict[str, Any]]:
         with self._lock:
-            self._flush_track()
+            self._flush_track_logged()
             rows = self._db.execute(
                 "SELECT d.id, d.started_at, d.target, "
                 "(SELECT COUNT(*) FROM commands c WHERE c.dive = d.id) AS commands, "
@@ -236,7 +257,7 @@ class MissionLog:
         }
         cols = list(row)
         values = [json.dumps(row[c]) if c in _JSON else row[c] for c in cols]
-        with self._lock:
+        with self._lock, _writing():
             cur = self._db.execute(
                 f"INSERT INTO commands ({', '.join(cols)}) VALUES ({', '.join('?' * len(cols))})",
                 values,
@@ -258,7 +279,7 @@ class MissionLog:
         fields["updated_at"] = now_iso()
         sets = ", ".join(f"{k} = ?" for k in fields)
         values = [json.dumps(v) if k in _JSON else v for k, v in fields.items()]
-        with self._lock:
+        with self._lock, _writing():
             self._db.execute(f"UPDATE commands SET {sets} WHERE id = ?", [*values, command_id])
             got = self._command(command_id)
         if got is None:
@@ -310,20 +331,48 @@ class MissionLog:
     def add_track(
         self, dive: int, t_s: float, x_m: float, y_m: float, z_m: float, heading_deg: float
     ) -> None:
-        """Buffer one track point; written in batches of 10 (and on close)."""
+        """Buffer one track point; written (one commit) within :data:`TRACK_FLUSH_S` of the
+        first point buffered, at :data:`TRACK_BATCH` points, on a read and on close. A write
+        that fails is logged and tried again by the timer (never raised)."""
         with self._lock:
             self._track.append((dive, t_s, x_m, y_m, z_m, heading_deg))
-            if len(self._track) >= 10:
-                self._flush_track()
+            del self._track[:-TRACK_BUFFER_MAX]
+            if len(self._track) >= TRACK_BATCH and not self._track_failing:
+                self._flush_track_logged()
+            elif self._track_timer is None and not self._closed:
+                self._track_timer = threading.Timer(TRACK_FLUSH_S, self._flush_track_due)
+                self._track_timer.daemon = True
+                self._track_timer.start()
+
+    def _flush_track_due(self) -> None:
+        with self._lock:
+            self._track_timer = None
+            if not self._closed:
+                self._flush_track_logged()
+
+    def _flush_track_logged(self) -> None:
+        try:
+            self._flush_track()
+        except LogWriteError as err:
+            if not self._track_failing:  # once, not at every point
+                logger.error("track points are kept in memory only: %s", err)
+            self._track_failing = True
 
     def _flush_track(self) -> None:
         if self._track:
-            self._db.executemany("INSERT INTO track VALUES (?, ?, ?, ?, ?, ?)", self._track)
+            with self.transaction(), _writing():
+                self._db.executemany("INSERT INTO track VALUES (?, ?, ?, ?, ?, ?)", self._track)
             self._track = []
+            if self._track_failing:
+                logger.warning("track points are written to the mission log again")
+                self._track_failing = False
+        if self._track_timer is not None:
+            self._track_timer.cancel()
+            self._track_timer = None
 
     def track(self, dive: int) -> list[dict[str, float]]:
         with self._lock:
-            self._flush_track()
+            self._flush_track_logged()
             rows = self._db.execute(
                 "SELECT t_s, x_m, y_m, z_m, heading_deg FROM track WHERE dive = ? ORDER BY t_s",
                 (dive,),

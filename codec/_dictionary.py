@@ -200,6 +200,14 @@ PATTERNS: tuple[Pattern, ...] = (
 )
 
 
+#: What :meth:`CommandDictionary.lookup` strips around a name, and the most digits it reads
+#: as an ID (leading zeros included; ``int`` is never given thousands of digits).
+_ASCII_SPACE = " \t\r\n\f\v"
+_MAX_ID_DIGITS = 8
+#: Longest quote of an unknown pattern in the error message.
+_MAX_SHOWN = 40
+
+
 class CommandDictionary(Mapping[str, Pattern]):
     """Patterns by name, with lookup by ID; validated once at construction."""
 
@@ -229,26 +237,32 @@ class CommandDictionary(Mapping[str, Pattern]):
         return self._by_id.get(pattern_id)
 
     def lookup(self, pattern: str | int) -> Pattern:
-        """Pattern by name (``box_orbit``, ``box-orbit``, ``Box Orbit``) or ID.
+        """Pattern by name (``box_orbit``, ``box-orbit``, ``Box Orbit``) or ID (``7``).
+
+        Text is ASCII only: a name in any case with ``-`` or a space for ``_``, or an ID in
+        ASCII digits (``7``, ``07``); surrounding spaces and tabs are ignored. Other digits
+        (``٣``, ``¹``) and look-alike letters name no pattern.
 
         Raises:
-            EncodeError: no such pattern; the message lists the known ones.
+            EncodeError: no such pattern; the message quotes (the start of) what was given
+                and lists the known ones.
         """
-        found: Pattern | None
+        found: Pattern | None = None
         if isinstance(pattern, bool):
             found = None
         elif isinstance(pattern, int):
             found = self._by_id.get(pattern)
-        elif isinstance(pattern, str):
-            key = pattern.strip().lower().replace("-", "_").replace(" ", "_")
+        elif isinstance(pattern, str) and pattern.isascii():
+            key = pattern.strip(_ASCII_SPACE).lower().replace("-", "_").replace(" ", "_")
             found = self._by_name.get(key)
-            if found is None and key.isdigit():
+            if found is None and key.isdigit() and len(key) <= _MAX_ID_DIGITS:
                 found = self._by_id.get(int(key))
-        else:
-            found = None
         if found is None:
             known = ", ".join(f"{p.name} ({p.id})" for p in self._by_id.values())
-            raise EncodeError(f"unknown pattern {pattern!r}: known patterns are {known}")
+            shown = repr(pattern)
+            if len(shown) > _MAX_SHOWN:
+                shown = shown[: _MAX_SHOWN - 1] + "…"
+            raise EncodeError(f"unknown pattern {shown}: known patterns are {known}")
         return found
 
 

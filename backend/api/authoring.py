@@ -9,13 +9,23 @@ from fastapi.responses import JSONResponse
 
 from backend.api.deps import ConsoleDep, token_from, token_ok
 from backend.api.models import CommandIn, DecodeIn
+from backend.api.schemas import (
+    DecodeFailure,
+    DecodeResult,
+    EncodeDoc,
+    PatternDoc,
+    PreviewDoc,
+    Session,
+    ValidationErrorResponse,
+    errors,
+)
 from codec import DecodeError, decode_frame, describe_dictionary
 from sim_bridge.agent import command_json
 
 router = APIRouter(prefix="/api", tags=["authoring"])
 
 
-@router.get("/session")
+@router.get("/session", response_model=Session)
 def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
     """Mode, target, where the 3D view is, and whether the caller holds the operator token."""
     s = console.settings
@@ -49,29 +59,49 @@ def _link_capability(console: ConsoleDep) -> dict[str, Any]:
     }
 
 
-@router.get("/dictionary")
+@router.get(
+    "/dictionary",
+    response_model=list[PatternDoc],
+    response_model_exclude_unset=True,  # a field's optional keys stay absent, as in the codec
+)
 def dictionary() -> list[dict[str, Any]]:
     """Every pattern with its fields: name, unit, range, steps, default, choices."""
     return describe_dictionary()
 
 
-@router.post("/preview", response_class=JSONResponse)
+# preview and encode return a JSONResponse: their model documents the shape, and a Response is
+# not re-validated on the way out (that would be half a preview's time)
+@router.post(
+    "/preview",
+    response_class=JSONResponse,
+    response_model=PreviewDoc,
+    responses=errors((413, 422)),
+)
 def preview(body: CommandIn, console: ConsoleDep) -> JSONResponse:
     """The frame (bits, sections, hex, airtime) and the path the vehicle would fly from where it
     is now, expanded from the decoded packet, with estimates, limit violations and the diff
     against the active pattern. Also drawn in the 3D view."""
-    # a JSONResponse skips re-validating the (plain JSON) document: half the request's time
     return JSONResponse(console.preview(body.pattern, dict(body.params)))
 
 
-@router.post("/encode", response_class=JSONResponse)
+@router.post(
+    "/encode", response_class=JSONResponse, response_model=EncodeDoc, responses=errors((413, 422))
+)
 def encode(body: CommandIn, console: ConsoleDep) -> JSONResponse:
     """The frame only: snapped values, bits by section, hex, airtime."""
     _, doc = console.encode(body.pattern, dict(body.params))
     return JSONResponse(doc)
 
 
-@router.post("/decode")
+@router.post(
+    "/decode",
+    response_model=DecodeResult,
+    responses=errors(
+        (413, 422),
+        models={422: ValidationErrorResponse | DecodeFailure},
+        why={422: "invalid input, or the frame is rejected (detail: reason, message, field)"},
+    ),
+)
 def decode(body: DecodeIn) -> dict[str, Any]:
     """Decode 100 bits or 25 hex digits; 422 with the reason when the frame is rejected."""
     try:

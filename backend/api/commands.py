@@ -10,8 +10,19 @@ from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
-from backend.api.deps import ConsoleDep, OperatorDep
+from backend.api.deps import ConsoleDep, IdField, IdPath, OperatorDep
 from backend.api.models import LinkIn, RetryIn, SendIn
+from backend.api.schemas import (
+    OPERATOR,
+    CommandRecord,
+    DiveDetail,
+    DiveSummary,
+    LimitViolationError,
+    ReplayResult,
+    ValidationErrorResponse,
+    VehicleView,
+    errors,
+)
 from backend.commands import CommandManager, NotRetryable
 from backend.health import LinkHealth
 from backend.store import STATES, csv_rows
@@ -25,7 +36,20 @@ def _manager(console: ConsoleDep) -> CommandManager:
     return console.commands
 
 
-@router.post("/commands", status_code=status.HTTP_202_ACCEPTED)
+@router.post(
+    "/commands",
+    status_code=status.HTTP_202_ACCEPTED,
+    response_model=CommandRecord,
+    response_model_exclude_unset=True,
+    responses=errors(
+        (*OPERATOR, 409, 413, 422, 429, 503),
+        models={409: LimitViolationError, 422: ValidationErrorResponse | LimitViolationError},
+        why={
+            409: "limits an operator may override, without override: true",
+            422: "invalid input, or limits no operator can override (the depth rating)",
+        },
+    ),
+)
 async def send(body: SendIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Queue a command for transmission (logged first). 422: limits that cannot be
     overridden or bad values; 409: overridable limits without ``override``; 429: rate limit."""
@@ -45,7 +69,13 @@ async def send(body: SendIn, console: ConsoleDep, _op: OperatorDep) -> dict[str,
     return await _manager(console).submit(enc, copies=body.copies)
 
 
-@router.post("/surface", status_code=status.HTTP_202_ACCEPTED)
+@router.post(
+    "/surface",
+    status_code=status.HTTP_202_ACCEPTED,
+    response_model=CommandRecord,
+    response_model_exclude_unset=True,
+    responses=errors((*OPERATOR, 503)),
+)
 async def surface(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Abort: send surface now and again every ``surface_repeat_s``: until acknowledged on a
     two-way link, a bounded number of times on a one-way link. It replaces any command still
@@ -53,9 +83,18 @@ async def surface(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     return await _manager(console).surface()
 
 
-@router.post("/commands/{command_id}/retry", status_code=status.HTTP_202_ACCEPTED)
+@router.post(
+    "/commands/{command_id}/retry",
+    status_code=status.HTTP_202_ACCEPTED,
+    response_model=CommandRecord,
+    response_model_exclude_unset=True,
+    responses=errors(
+        (*OPERATOR, 404, 409, 413, 422, 429, 503),
+        why={409: "the command is not in a retryable state"},
+    ),
+)
 async def retry(
-    command_id: int, console: ConsoleDep, _op: OperatorDep, body: RetryIn | None = None
+    command_id: IdPath, console: ConsoleDep, _op: OperatorDep, body: RetryIn | None = None
 ) -> dict[str, Any]:
     """A new attempt of an interrupted, timed-out, failed, rejected or superseded command
     (the same record); it replaces any command still being repeated."""
@@ -76,7 +115,7 @@ class LogFilter(BaseModel):
     state: StateQ = None
     pattern: Annotated[str | None, Field(max_length=32)] = None
     target: Annotated[str | None, Field(max_length=200)] = None
-    dive: Annotated[int | None, Field(ge=1)] = None
+    dive: IdField | None = None
     since: Annotated[str | None, Field(max_length=40, description="ISO time, UTC")] = None
     until: Annotated[str | None, Field(max_length=40, description="ISO time, UTC")] = None
 
@@ -89,7 +128,12 @@ def _rows(console: ConsoleDep, filters: LogFilter, limit: int) -> list[dict[str,
     return console.log.commands(**filters.model_dump(), limit=limit)
 
 
-@router.get("/commands")
+@router.get(
+    "/commands",
+    response_model=list[CommandRecord],
+    response_model_exclude_unset=True,
+    responses=errors((422,)),
+)
 def commands(
     console: ConsoleDep, filters: FilterQ, limit: Annotated[int, Query(ge=1, le=1000)] = 200
 ) -> list[dict[str, Any]]:
@@ -97,8 +141,13 @@ def commands(
     return _rows(console, filters, limit)
 
 
-@router.get("/commands/{command_id}")
-def command(command_id: int, console: ConsoleDep) -> dict[str, Any]:
+@router.get(
+    "/commands/{command_id}",
+    response_model=CommandRecord,
+    response_model_exclude_unset=True,
+    responses=errors((404, 422)),
+)
+def command(command_id: IdPath, console: ConsoleDep) -> dict[str, Any]:
     assert console.log is not None
     record = console.log.command(command_id)
     if record is None:
@@ -109,7 +158,15 @@ def command(command_id: int, console: ConsoleDep) -> dict[str, Any]:
 ExportLimitQ = Annotated[int, Query(ge=1, le=100_000)]
 
 
-@router.get("/log.json")
+# the exports return their documents as built (up to 100 000 records, not re-validated)
+@router.get(
+    "/log.json",
+    response_model=list[CommandRecord],
+    responses={
+        **errors((422,)),
+        200: {"description": "the log as a JSON file (Content-Disposition: attachment)"},
+    },
+)
 def log_json(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_000) -> JSONResponse:
     """The log as a JSON file (newest first)."""
     return JSONResponse(
@@ -118,7 +175,17 @@ def log_json(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_00
     )
 
 
-@router.get("/log.csv")
+@router.get(
+    "/log.csv",
+    response_class=Response,
+    responses={
+        **errors((422,)),
+        200: {
+            "description": "the log as a CSV file: a header row, then one row per record",
+            "content": {"text/csv": {"schema": {"type": "string"}}},
+        },
+    },
+)
 def log_csv(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_000) -> Response:
     """The log as a CSV file (oldest first), with the acknowledgement's figures as columns."""
     buf = io.StringIO()
@@ -130,7 +197,7 @@ def log_csv(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_000
     )
 
 
-@router.get("/dives")
+@router.get("/dives", response_model=list[DiveSummary])
 def dives(console: ConsoleDep) -> list[dict[str, Any]]:
     assert console.log is not None
     return console.log.dives()
@@ -147,14 +214,21 @@ def _dive(console: ConsoleDep, dive: int) -> dict[str, Any]:
     }
 
 
-@router.get("/dives/{dive}")
-def dive(dive: int, console: ConsoleDep) -> dict[str, Any]:
+@router.get(
+    "/dives/{dive}",
+    response_model=DiveDetail,
+    response_model_exclude_unset=True,
+    responses=errors((404, 422)),
+)
+def dive(dive: IdPath, console: ConsoleDep) -> dict[str, Any]:
     """A dive's track (1 Hz) and its commands, for replay."""
     return _dive(console, dive)
 
 
-@router.post("/dives/{dive}/replay")
-def replay(dive: int, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+@router.post(
+    "/dives/{dive}/replay", response_model=ReplayResult, responses=errors((*OPERATOR, 404, 422))
+)
+def replay(dive: IdPath, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Draw a dive's track and its acknowledged commands in the 3D view."""
     doc = _dive(console, dive)
     if console.viewer is not None:
@@ -171,13 +245,20 @@ def replay(dive: int, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     return {"dive": dive, "track_points": len(doc["track"]), "commands": len(doc["commands"])}
 
 
-@router.get("/vehicle")
+@router.get("/vehicle", response_model=VehicleView, response_model_exclude_unset=True)
 def vehicle(console: ConsoleDep) -> dict[str, Any]:
     """Pose, status, the vehicle's echoed active command vs the last sent, link state."""
     return console.vehicle()
 
 
-@router.put("/link")
+@router.put(
+    "/link",
+    response_model=LinkHealth,
+    responses=errors(
+        (*OPERATOR, 409, 413, 422),
+        why={409: "link_ber in training (the emulated channel's BER is used)"},
+    ),
+)
 def set_link(body: LinkIn, console: ConsoleDep, _op: OperatorDep) -> LinkHealth:
     """What the station assumes of its link: ``link_ber`` (a real link's bit-error rate,
     [0, 0.5); 409 in training, where the emulated channel's is used) and ``delivery_target``

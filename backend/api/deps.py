@@ -1,11 +1,13 @@
-"""Shared dependencies: the running console, and the operator token check."""
+"""Shared dependencies: the running console, the operator token check, and the bounds of
+integers that reach the mission log (SQLite's INTEGER is signed 64-bit)."""
 
 from __future__ import annotations
 
 import secrets
 from typing import Annotated
 
-from fastapi import Depends, HTTPException, Request, status
+from fastapi import Depends, HTTPException, Path, Request, status
+from pydantic import Field
 
 from backend.console import Console
 
@@ -16,6 +18,16 @@ def get_console(request: Request) -> Console:
 
 
 ConsoleDep = Annotated[Console, Depends(get_console)]
+
+#: The largest integer SQLite stores (signed 64-bit); beyond it a query would raise
+#: ``OverflowError`` (a 500): every integer that reaches the log is bounded to 422 first.
+SQLITE_INT_MAX = (1 << 63) - 1
+SQLITE_INT_MIN = -(1 << 63)
+
+#: A row id of the mission log (command id, dive number) as a path parameter: 1 and up.
+IdPath = Annotated[int, Path(ge=1, le=SQLITE_INT_MAX)]
+#: The same as a field of a query or body model (``LogFilter.dive``).
+IdField = Annotated[int, Field(ge=1, le=SQLITE_INT_MAX)]
 
 
 def token_from(authorization: str | None, header_token: str | None) -> str | None:

@@ -7,27 +7,70 @@ import contextlib
 import json
 from typing import Any
 
-from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+from fastapi import APIRouter, WebSocket, WebSocketDisconnect, status
 
 from backend.api.deps import token_ok
 from backend.api.models import check_copies
+from backend.bounded_input import shorten
 from backend.commands import RateLimited
 from backend.console import Console
+from backend.security import origin_allowed
 from codec import CodecError
 from planner import PlanError
 
 router = APIRouter(tags=["live"])
 
-#: Largest control message accepted (bytes).
+#: Largest control message accepted (bytes); uvicorn's own limit (``ws_max_size``) must be
+#: larger, so that an over-size message gets this error reply rather than a closed socket.
 MAX_CONTROL_BYTES = 4096
+#: Deepest nesting of arrays and objects in a control message (checked before parsing).
+MAX_CONTROL_DEPTH = 32
+
+
+def nesting_over(text: str, limit: int) -> bool:
+    """Whether the JSON ``text`` nests arrays and objects deeper than ``limit``: a scan of
+    the brackets outside strings, without parsing (no recursion, whatever the input)."""
+    depth = 0
+    in_string = escaped = False
+    for char in text:
+        if in_string:
+            if escaped:
+                escaped = False
+            elif char == "\\":
+                escaped = True
+            elif char == '"':
+                in_string = False
+        elif char == '"':
+            in_string = True
+        elif char in "[{":
+            depth += 1
+            if depth > limit:
+                return True
+        elif char in "]}":
+            depth -= 1
+    return False
+
+
+class _NotANumber(ValueError):
+    """``NaN``, ``Infinity`` or ``-Infinity``, which Python's JSON parser would accept."""
+
+
+def _no_constant(name: str) -> Any:
+    raise _NotANumber(f"{name} is not a JSON number")
 
 
 @router.websocket("/ws")
 async def live(websocket: WebSocket) -> None:
     """Server -> client: ``telemetry`` (10 Hz, latest wins), ``command``, ``vehicle`` and
     ``error`` messages. Client -> server: ``auth`` then ``surface`` or ``send``; control
-    without the token is refused (the connection stays, read-only)."""
+    without the token is refused (the connection stays, read-only). A browser page from
+    another origin is refused at the handshake (403)."""
     console: Console = websocket.app.state.console
+    headers = websocket.headers
+    allowed = console.settings.allowed_origins
+    if not origin_allowed(headers.get("origin"), headers.get("host"), allowed):
+        await websocket.close(code=status.WS_1008_POLICY_VIOLATION)
+        return
     await websocket.accept()
     pump = asyncio.create_task(console.hub.serve(websocket))
     authed = False
@@ -56,10 +99,14 @@ async def live(websocket: WebSocket) -> None:
 
 
 async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
-    if len(text.encode()) > MAX_CONTROL_BYTES:
+    if len(text) > MAX_CONTROL_BYTES or len(text.encode()) > MAX_CONTROL_BYTES:
         return {"type": "error", "detail": f"message over {MAX_CONTROL_BYTES} bytes"}
+    if nesting_over(text, MAX_CONTROL_DEPTH):
+        return {"type": "error", "detail": f"message nested deeper than {MAX_CONTROL_DEPTH}"}
     try:
-        msg = json.loads(text)
+        msg = json.loads(text, parse_constant=_no_constant)
+    except _NotANumber as err:
+        return {"type": "error", "detail": str(err)}
     except ValueError:
         return {"type": "error", "detail": "not JSON"}
     if not isinstance(msg, dict):
@@ -73,7 +120,7 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
     if kind not in ("surface", "send"):
         return {
             "type": "error",
-            "detail": f"unknown message type {kind!r}; use auth, surface, send",
+            "detail": f"unknown message type {shorten(repr(kind), 40)}; use auth, surface, send",
         }
     if not authed:
         return {"type": "error", "detail": "token required: send {type: auth, token} first"}
@@ -98,7 +145,8 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
                 }
             record = await console.commands.submit(enc, copies=copies)
     except (CodecError, PlanError) as err:
-        return {"type": "error", "detail": str(err), "field": getattr(err, "field", None)}
+        field = getattr(err, "field", None)
+        return {"type": "error", "detail": shorten(str(err)), "field": field}
     except RateLimited as err:
         return {"type": "error", "detail": str(err)}
     return {"type": "queued", "command": record}

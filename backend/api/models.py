@@ -1,7 +1,13 @@
-"""Request bodies. pydantic validates every input; errors are 422 naming the field."""
+"""Request bodies. pydantic validates every input; errors are 422 naming the field.
+
+Every model is strict: a boolean is not a number, a numeric string is not a number, a float
+is not an integer, and NaN and infinity (which Python's JSON parser reads from ``NaN`` and
+``Infinity``) are refused in every float field.
+"""
 
 from __future__ import annotations
 
+import math
 from typing import Annotated
 
 from pydantic import (
@@ -9,19 +15,47 @@ from pydantic import (
     BeforeValidator,
     ConfigDict,
     Field,
-    StrictFloat,
+    PlainValidator,
     StrictInt,
-    StrictStr,
 )
 
+from backend.api.deps import SQLITE_INT_MAX, SQLITE_INT_MIN
 from backend.settings import DeliveryTargetIn, LinkBerIn
 from codec import MAX_COPIES
 
-ParamIn = StrictFloat | StrictInt | StrictStr
+#: Longest text parameter value (choices such as ``ccw``, or a number written as text).
+MAX_PARAM_TEXT = 32
+
+
+def check_param(value: object) -> float | int | str:
+    """A parameter value: a finite number (an integer within SQLite's signed 64-bit range)
+    or a short text; never a boolean. One error at the parameter itself, so ``loc`` ends
+    with its name."""
+    if isinstance(value, bool):
+        raise ValueError(f"must be a number or a text, not {str(value).lower()}")
+    if isinstance(value, int):
+        if not SQLITE_INT_MIN <= value <= SQLITE_INT_MAX:
+            raise ValueError("integer out of range: at most 64-bit signed")
+        return value
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            raise ValueError(f"must be a finite number, got {value}")
+        return value
+    if isinstance(value, str):
+        if len(value) > MAX_PARAM_TEXT:
+            raise ValueError(f"text values are at most {MAX_PARAM_TEXT} characters")
+        return value
+    raise ValueError(f"must be a number or a text, got {type(value).__name__}")
+
+
+ParamIn = Annotated[
+    float | int | str,
+    PlainValidator(check_param, json_schema_input_type=float | int | str),
+]
 
 
 class Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 
 class CommandIn(Strict):

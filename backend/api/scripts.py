@@ -10,10 +10,12 @@ from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, ConfigDict
 
 from backend.api.deps import ConsoleDep, OperatorDep
+from backend.api.schemas import OPERATOR, OnboardScript, RunState, errors
 from backend.console import Console
 from backend.scripts import (
     MissionScript,
     ScriptError,
+    ScriptPreview,
     ScriptRunError,
     ScriptRunner,
     export_onboard,
@@ -28,16 +30,22 @@ router = APIRouter(prefix="/api/scripts", tags=["scripts"])
 
 #: How often a run checks its triggers (s).
 POLL_S = 0.2
-#: The run state before any run.
+#: The run state before any run: every key of a run's, empty.
 IDLE: dict[str, Any] = {
     "running": False,
     "outcome": None,
     "mode": None,
+    "name": None,
     "step": None,
     "next": None,
     "waiting_for": None,
+    "due_s": None,
+    "elapsed_s": None,
     "steps": [],
+    "reason": None,
 }
+#: The errors of a run control.
+RUN_CONTROL = errors((*OPERATOR, 409), why={409: "no step awaits the operator's go"})
 
 
 class RunIn(BaseModel):
@@ -50,8 +58,8 @@ def _plan_error(err: ScriptError) -> HTTPException:
     return HTTPException(422, [{**e, "loc": ["body", *e["loc"]]} for e in err.errors()])
 
 
-@router.post("/preview")
-def script_preview(script: MissionScript, console: ConsoleDep) -> dict[str, Any]:
+@router.post("/preview", responses=errors((413, 422)))
+def script_preview(script: MissionScript, console: ConsoleDep) -> ScriptPreview:
     """The whole script as one path (NED) with its timeline, from where the vehicle is now;
     drawn in the 3D view."""
     mirror = console.commands.mirror if console.commands else None
@@ -66,11 +74,22 @@ def script_preview(script: MissionScript, console: ConsoleDep) -> dict[str, Any]
             for s, i in zip(doc.steps, path.step_start, strict=False)
         ]
         console.viewer.show_script(path.x_m, path.y_m, path.z_m, labels)
-    out: dict[str, Any] = doc.model_dump()
-    return out
+    return doc
 
 
-@router.post("/export", response_model=None)
+@router.post(
+    "/export",
+    response_class=Response,
+    responses={
+        **errors((413, 422)),
+        200: {
+            "description": "the onboard script: JSON (format=json) or CSV t_s,pattern,hex "
+            "(format=csv), as an attachment",
+            "model": OnboardScript,
+            "content": {"text/csv": {"schema": {"type": "string"}}},
+        },
+    },
+)
 def script_export(
     script: MissionScript, console: ConsoleDep, format: Literal["json", "csv"] = "json"
 ) -> Response:
@@ -98,12 +117,16 @@ def _state(console: Console) -> dict[str, Any]:
     return {**state, "commands": console.script_commands}
 
 
-@router.get("/run")
+@router.get("/run", response_model=RunState)
 def run_state(console: ConsoleDep) -> dict[str, Any]:
     return _state(console)
 
 
-@router.post("/run")
+@router.post(
+    "/run",
+    response_model=RunState,
+    responses=errors((*OPERATOR, 409, 413, 422), why={409: "a script is already running"}),
+)
 async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Run a script against the vehicle: ``auto`` sends each step at its trigger; ``step``
     proposes each step and waits for the operator's go (``/run/next``)."""
@@ -116,7 +139,7 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, A
     return _state(console)
 
 
-@router.post("/run/next")
+@router.post("/run/next", response_model=RunState, responses=RUN_CONTROL)
 async def run_next(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Operator's go: send the proposed step."""
     runner = console.runner
@@ -130,7 +153,7 @@ async def run_next(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     return _state(console)
 
 
-@router.post("/run/stop")
+@router.post("/run/stop", response_model=RunState, responses=errors(OPERATOR))
 def run_stop(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     if console.runner is not None:
         console.runner.stop()

@@ -10,15 +10,32 @@ from fastapi import APIRouter, HTTPException
 
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.models import ChannelIn, CurrentIn, TimeScaleIn
+from backend.api.schemas import (
+    OPERATOR,
+    ChannelSettings,
+    CurrentSettings,
+    NewDive,
+    ScenarioLoaded,
+    TimeScale,
+    TrainingOff,
+    TrainingOn,
+    errors,
+)
+from backend.api.schemas.errors import ERROR_TEXT
 from backend.console import SCENARIO_PRESETS
 from codec import encode_frame
 
 router = APIRouter(prefix="/api/training", tags=["training"])
 
+#: 409 on every control: a real vehicle has none.
+NO_SIM = {409: "training controls need the simulated vehicle (target 'sim')"}
+#: The errors of a training control with a body.
+SETTING = errors((*OPERATOR, 409, 413, 422), why=NO_SIM)
+
 
 def _sim(console: ConsoleDep) -> Any:
     if console.sim is None:
-        raise HTTPException(409, "training controls need the simulated vehicle (target 'sim')")
+        raise HTTPException(409, NO_SIM[409])
     return console.sim
 
 
@@ -27,7 +44,7 @@ def _given(body: ChannelIn | CurrentIn) -> dict[str, Any]:
     return {k: v for k, v in body.model_dump(exclude_unset=True).items() if v is not None}
 
 
-@router.get("")
+@router.get("", response_model=TrainingOn | TrainingOff)
 def training(console: ConsoleDep) -> dict[str, Any]:
     sim = console.sim
     if sim is None:
@@ -42,7 +59,7 @@ def training(console: ConsoleDep) -> dict[str, Any]:
     }
 
 
-@router.put("/channel")
+@router.put("/channel", response_model=ChannelSettings, responses=SETTING)
 def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     sim = _sim(console)
     fields = _given(body)
@@ -52,21 +69,27 @@ def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> dict[str,
     return _json(asdict(sim.channel.config))
 
 
-@router.put("/current")
+@router.put("/current", response_model=CurrentSettings, responses=SETTING)
 def current(body: CurrentIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     sim = _sim(console)
     sim.current.set_config(replace(sim.current.config, **_given(body)))
     return asdict(sim.current.config)
 
 
-@router.put("/time_scale")
+@router.put("/time_scale", response_model=TimeScale, responses=SETTING)
 def time_scale(body: TimeScaleIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, float]:
     _sim(console)
     console.bridge.time_scale = body.time_scale
     return {"time_scale": body.time_scale}
 
 
-@router.post("/reset")
+#: A new dive is written to the mission log first: 503 when it cannot be.
+NEW_DIVE = {503: "the mission log cannot be written (the new dive); nothing was changed"}
+
+
+@router.post(
+    "/reset", response_model=NewDive, responses=errors((*OPERATOR, 409, 503), why=NO_SIM | NEW_DIVE)
+)
 async def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
     """The vehicle back to its start pose, a full battery and no command: a new dive. Every
     repetition stops; what was on its way ends ``interrupted``. (On the event loop: it stops
@@ -75,7 +98,20 @@ async def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
     return {"dive": console.reset_vehicle()}
 
 
-@router.post("/scenario/{name}")
+@router.post(
+    "/scenario/{name}",
+    response_model=ScenarioLoaded,
+    response_model_exclude_unset=True,
+    responses=errors(
+        (*OPERATOR, 404, 409, 422, 429, 503),
+        why={
+            **NO_SIM,
+            **NEW_DIVE,
+            404: "no such scenario",
+            429: ERROR_TEXT[429] + " (its first command)",
+        },
+    ),
+)
 async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Load one of the paper's scenarios: the vehicle reset to its start, its first command
     sent. The retask is the operator's to send (the preset returns it, ready to preview)."""

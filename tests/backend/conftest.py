@@ -50,6 +50,7 @@ def settings_for(db_path: Path, **overrides: Any) -> Settings:
         "db_path": db_path,
         "viewer_port": 0,
         "sim_time_scale": TIME_SCALE,
+        "allowed_hosts": ["testserver"],  # Starlette's TestClient's Host
         **overrides,
     }
     return Settings(**values)

@@ -11,6 +11,7 @@ from backend.security import (
     LOOPBACK_HOSTS,
     TokenRedactor,
     allowed_hosts,
+    host_name,
     install_redaction,
     origin_allowed,
     redact,
@@ -78,3 +79,16 @@ def test_redactor_on_a_handler_cleans_records_at_every_level() -> None:
         logger.removeHandler(handler)
     text = stream.getvalue()
     assert SECRET not in text and text.count("***") >= 3
+
+
+@pytest.mark.parametrize(
+    ("header", "name"),
+    [
+        ("127.0.0.1:8000", "127.0.0.1"),
+        ("[::1]:8000", "[::1]"),
+        ("LocalHost", "localhost"),
+        ("", ""),
+    ],
+)
+def test_host_name_strips_the_port(header: str, name: str) -> None:
+    assert host_name(header) == name

@@ -137,6 +137,38 @@ def test_unknown_pattern_lists_the_known_ones(key: object) -> None:
         make_command(key, {})  # type: ignore[arg-type]
 
 
+@pytest.mark.parametrize(
+    "key",
+    [
+        "\u0663",  # ARABIC-INDIC DIGIT THREE: str.isdigit() and int() accept it
+        "\u00b9",  # SUPERSCRIPT ONE: str.isdigit() accepts it, int() raises ValueError
+        "\uff13",  # FULLWIDTH DIGIT THREE
+        "\u20033",  # an EM SPACE before an ASCII 3: only ASCII spaces are stripped
+        "\u212aircle",  # KELVIN SIGN lower-cases to an ASCII k: no look-alike letters
+        "\uff43ircle",  # FULLWIDTH c
+        "3.0",
+        "+3",
+        "-0",
+        "9" * 5000,  # more digits than int() converts; quoted as 40 characters at most
+    ],
+)
+def test_pattern_text_is_ascii_names_or_ascii_digits(key: str) -> None:
+    with pytest.raises(EncodeError) as err:
+        DICTIONARY.lookup(key)
+    text = str(err.value)
+    assert text.startswith("unknown pattern ") and err.value.field is None
+    assert "circle (3)" in text and "box_orbit (7)" in text and "surface (15)" in text
+    assert len(text) < 250  # quotes at most 40 characters of what was given
+
+
+@pytest.mark.parametrize(
+    ("key", "name"),
+    [("3", "circle"), ("3 ", "circle"), ("\t3\n", "circle"), ("03", "circle"), ("015", "surface")],
+)
+def test_ascii_digits_name_the_id_leading_zeros_included(key: str, name: str) -> None:
+    assert DICTIONARY.lookup(key).name == name
+
+
 def test_mapping_lookup_is_exact() -> None:
     with pytest.raises(KeyError):
         DICTIONARY["box-orbit"]  # the Mapping is by exact name; lookup() is lenient

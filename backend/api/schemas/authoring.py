@@ -1,0 +1,210 @@
+"""Session, dictionary, encode, preview and decode documents."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, Field
+
+from backend.api.schemas.common import (
+    CommandJson,
+    LimitViolation,
+    Number,
+    Params,
+    ParamValue,
+    VehicleStateOut,
+)
+from backend.link import Capability
+
+# --- session ------------------------------------------------------------------------------
+
+
+class SessionLimits(BaseModel):
+    max_depth_m: float
+    max_speed_mps: float
+
+
+class LinkCapability(BaseModel):
+    """What the vehicle link can report back (``unknown`` before it is known)."""
+
+    capability: Capability
+    acknowledges: bool
+    telemetry: bool
+
+
+class Session(BaseModel):
+    """Mode, target, where the 3D view is, and whether the caller holds the operator token."""
+
+    mode: Literal["training", "vehicle"]
+    target: str
+    viewer_url: str | None = Field(description="the 3D view's page; null without a viewer")
+    bitrate_bps: float
+    operator: str
+    authenticated: bool = Field(description="the request carried the operator token")
+    dive: int
+    version: str
+    limits: SessionLimits
+    link: LinkCapability
+
+
+# --- dictionary ---------------------------------------------------------------------------
+
+
+class ScaleSegment(BaseModel):
+    start: float
+    step: float
+    count: int
+
+
+class _FieldDoc(BaseModel):
+    j: int = Field(description="position in the frame: 1 for j1")
+    name: str
+    label: str
+    unit: str
+    doc: str
+    scale: str
+    range: str
+    steps: str
+    error: str
+
+
+class ChoiceFieldDoc(_FieldDoc):
+    """A field whose value is one of ``choices``."""
+
+    kind: Literal["choice"]
+    default: ParamValue
+    choices: list[str]
+
+
+class NumberFieldDoc(_FieldDoc):
+    """A numeric field (``count``: integers): its range, codes and scale segments."""
+
+    kind: Literal["count", "number"]
+    default: ParamValue
+    min: Number
+    max: Number
+    codes: list[int] = Field(description="first and last code")
+    segments: list[ScaleSegment]
+    period: float | None = Field(None, description="present for a periodic scale (angles)")
+    max_rel_error: float | None = Field(None, description="present for a relative scale")
+    max_abs_error: float
+
+
+FieldDoc = Annotated[ChoiceFieldDoc | NumberFieldDoc, Field(discriminator="kind")]
+
+
+class PatternDoc(BaseModel):
+    """A pattern of the command dictionary with its fields (j1..j6)."""
+
+    id: int
+    name: str
+    label: str
+    doc: str
+    fields: list[FieldDoc]
+
+
+# --- encode / preview / decode ------------------------------------------------------------
+
+
+class Snap(BaseModel):
+    """A value as asked for and as sent (snapped to the field's steps)."""
+
+    field: str
+    requested: ParamValue
+    sent: ParamValue
+    unit: str
+    changed: bool
+    text: str
+
+
+class FrameSection(BaseModel):
+    name: str
+    start: int
+    length: int
+    bits: str
+
+
+class EncodeDoc(CommandJson):
+    """The frame: snapped values, bits by section, hex, airtime."""
+
+    requested: Params
+    snaps: list[Snap]
+    bits: str
+    hex: str
+    sections: list[FrameSection]
+    airtime_ms: float
+    bitrate_bps: float
+    frame_bits: int
+
+
+class PlannedPath(BaseModel):
+    """The path (NED m, s from the command's start); ``body_start``: the index where the
+    pattern begins after the join; ``repeats``: the pattern loops."""
+
+    x_m: list[float]
+    y_m: list[float]
+    z_m: list[float]
+    t_s: list[float]
+    body_start: int
+    repeats: bool
+
+
+class PlanEstimate(BaseModel):
+    """Size and cost of the path (a repeating pattern: the join and one lap)."""
+
+    waypoints: int
+    length_m: float
+    duration_s: float
+    transit_length_m: float
+    transit_duration_s: float
+    lap_length_m: float | None
+    lap_duration_s: float | None
+    depth_min_m: float
+    depth_max_m: float
+    x_min_m: float
+    x_max_m: float
+    y_min_m: float
+    y_max_m: float
+    join_length_m: float
+    join_duration_s: float
+    battery_pct: float
+
+
+class ParamChange(BaseModel):
+    param: str
+    old: ParamValue | None
+    new: ParamValue | None
+    unit: str
+
+
+class PlanDiff(BaseModel):
+    """What replacing the vehicle's active pattern by this one changes."""
+
+    active: str
+    changes: list[ParamChange]
+    pattern_changed: bool
+    duration_delta_s: float | None
+    length_delta_m: float | None
+    anchor_moved_m: float
+
+
+class PreviewDoc(EncodeDoc):
+    """The frame and the path the vehicle would fly from where it is now, with estimates,
+    limit violations, the diff against the active pattern, and what sending it now would do
+    (``two_way``, ``copies``, ``p_delivered``: absent while the console starts)."""
+
+    path: PlannedPath
+    estimate: PlanEstimate
+    violations: list[LimitViolation]
+    diff: PlanDiff | None = Field(description="null when no pattern is active")
+    from_: VehicleStateOut = Field(alias="from", description="where the path starts")
+    two_way: bool | None = None
+    copies: int | None = None
+    p_delivered: float | None = None
+
+
+class DecodeResult(BaseModel):
+    ok: Literal[True]
+    command: CommandJson
+    corrected: int = Field(description="bits the BCH decoder corrected")
+    sync_errors: int = Field(description="preamble and delimiter bits wrong")

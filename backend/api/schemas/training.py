@@ -1,0 +1,87 @@
+"""The training controls' documents (the simulated vehicle's channel, current and clock)."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, Field
+
+from backend.api.schemas.common import Number, Params
+from backend.api.schemas.records import CommandRecord
+
+
+class ChannelSettings(BaseModel):
+    """The emulated ME channel."""
+
+    bitrate_bps: Number
+    range_m: float | None = Field(description="null: no range limit")
+    ber: float
+    burst_rate: float
+    burst_length_bits: int
+    loss: float
+    delay_s: float
+
+
+class CurrentSettings(BaseModel):
+    """The water current (NED) and its Gauss-Markov drift."""
+
+    north_mps: float
+    east_mps: float
+    speed_sigma_mps: float
+    direction_sigma_deg: float
+    time_constant_s: float
+    bound_sigmas: float
+
+
+class ChannelStats(BaseModel):
+    """The emulated channel's counters."""
+
+    frames_in: int
+    frames_delivered: int
+    frames_lost_range: int
+    frames_lost_random: int
+    bits_sent: int
+    bits_flipped: int
+    bursts: int
+
+
+class TrainingOn(BaseModel):
+    """Training mode: the simulated vehicle's settings."""
+
+    enabled: Literal[True]
+    channel: ChannelSettings
+    current: CurrentSettings
+    time_scale: float
+    scenarios: list[str]
+    channel_stats: ChannelStats
+
+
+class TrainingOff(BaseModel):
+    """A real vehicle: no training controls."""
+
+    enabled: Literal[False]
+    scenarios: list[str]
+
+
+class TimeScale(BaseModel):
+    time_scale: float
+
+
+class NewDive(BaseModel):
+    dive: int
+
+
+class Retask(BaseModel):
+    """The scenario's retask, for the operator to preview and send."""
+
+    pattern: str
+    params: Params
+    at_s: float
+
+
+class ScenarioLoaded(BaseModel):
+    dive: int
+    scenario: str
+    title: str
+    sent: CommandRecord = Field(description="the scenario's first command")
+    next: Retask

@@ -1,0 +1,70 @@
+"""The mission log's tables, and the columns added to an older log when it is opened."""
+
+from __future__ import annotations
+
+import sqlite3
+
+SCHEMA = """
+CREATE TABLE IF NOT EXISTS dives (
+    id INTEGER PRIMARY KEY,
+    started_at TEXT NOT NULL,
+    target TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS commands (
+    id INTEGER PRIMARY KEY,
+    dive INTEGER NOT NULL REFERENCES dives(id),
+    created_at TEXT NOT NULL,
+    updated_at TEXT NOT NULL,
+    operator TEXT NOT NULL,
+    target TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    pattern TEXT NOT NULL,
+    pattern_id INTEGER NOT NULL,
+    params TEXT NOT NULL,
+    requested TEXT NOT NULL,
+    bits TEXT NOT NULL,
+    hex TEXT NOT NULL,
+    state TEXT NOT NULL,
+    attempts INTEGER NOT NULL DEFAULT 0,
+    sent_at TEXT,
+    acked_at TEXT,
+    ack TEXT,
+    reason TEXT,
+    copies INTEGER,
+    copies_sent INTEGER NOT NULL DEFAULT 0,
+    p_delivered REAL NOT NULL DEFAULT 0,
+    ber REAL,
+    two_way INTEGER,
+    superseded_by INTEGER
+);
+CREATE INDEX IF NOT EXISTS commands_dive ON commands(dive);
+CREATE TABLE IF NOT EXISTS track (
+    dive INTEGER NOT NULL REFERENCES dives(id),
+    t_s REAL NOT NULL,
+    x_m REAL NOT NULL,
+    y_m REAL NOT NULL,
+    z_m REAL NOT NULL,
+    heading_deg REAL NOT NULL
+);
+CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);
+"""
+
+#: Columns added since the first release: (name, declaration), added to an older log at open.
+ADDED_COLUMNS = (
+    ("copies", "INTEGER"),
+    ("copies_sent", "INTEGER NOT NULL DEFAULT 0"),
+    ("p_delivered", "REAL NOT NULL DEFAULT 0"),
+    ("ber", "REAL"),
+    ("two_way", "INTEGER"),
+    ("superseded_by", "INTEGER"),
+)
+
+
+def create_or_migrate(db: sqlite3.Connection) -> None:
+    """Create the tables a new log lacks, and add the columns an older log lacks (values of
+    old rows: the declared defaults)."""
+    db.executescript(SCHEMA)
+    have = {row[1] for row in db.execute("PRAGMA table_info(commands)")}
+    for name, declaration in ADDED_COLUMNS:
+        if name not in have:
+            db.execute(f"ALTER TABLE commands ADD COLUMN {name} {declaration}")
