@@ -20,22 +20,19 @@ from typing import Any
 from backend.commands import CommandManager
 from backend.health import UNKNOWN_VALUES_RECENT_S, LinkHealth, assess
 from backend.link import Link, RosbridgeLink, open_link
+from backend.preview import frame_doc, plan_doc
 from backend.settings import Settings
-from backend.store import MissionLog
+from backend.store import LogWriteError, MissionLog
 from backend.store_open import open_checked
 from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
 from codec import (
-    FRAME_BITS,
     Encoded,
     airtime_s,
     decode_frame,
     delivery_probability,
     encode_frame,
-    sections,
 )
-from planner import Limits, Plan, VehicleState, compare, estimate, plan, validate
-from sim_bridge.agent import command_json
-from sim_bridge.environment import SOC_LINEAR_PCT_PER_H
+from planner import Limits, Plan, VehicleState, plan
 
 logger = logging.getLogger("backend.console")
 
@@ -69,6 +66,7 @@ class Console:
         self._drawer: asyncio.Task[None] | None = None
         self._health_task: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
+        self._echo_flagged = False  # an echo mismatch is logged once each time it begins
         #: The bit-error rate assumed of a real link (``link_ber``; the operator may change it).
         self.assumed_ber = settings.link_ber
 
@@ -106,7 +104,7 @@ class Console:
             link = open_link(s.target, s.bitrate_bps)
         self.link = link
         link.on_pose = self._on_pose
-        link.on_status = self.hub.set_status
+        link.on_status = self._on_status
         self.commands = CommandManager(
             self.log,
             link,
@@ -123,7 +121,7 @@ class Console:
             airtime_s=airtime_s(s.bitrate_bps),
             target=s.target,
         )
-        link.on_mission = self.commands.on_mission
+        link.on_mission = self._on_mission
         self.commands.vehicle.on_plan = self._show_active
         await link.start()
         if isinstance(link, RosbridgeLink) and s.training:
@@ -159,6 +157,42 @@ class Console:
         self._runner_task = asyncio.create_task(coro, name="mission script")
 
     # --- telemetry -----------------------------------------------------------------------
+
+    def _on_status(self, msg: dict[str, Any]) -> None:
+        self.hub.set_status(msg)
+        self._check_echo()
+
+    def _on_mission(self, ack: dict[str, Any]) -> None:
+        assert self.commands is not None
+        self.commands.on_mission(ack)
+        self._check_echo()
+
+    def _check_echo(self) -> None:
+        """Vehicle activity this console did not cause (an echo mismatch) goes into the
+        mission log as an event, once each time it begins."""
+        cm = self.commands
+        mismatch = cm is not None and cm.echo_mismatch
+        if not mismatch or self._echo_flagged:
+            self._echo_flagged = mismatch
+            return
+        self._echo_flagged = True
+        assert cm is not None and self.log is not None
+        last = cm.vehicle.accepted or {}
+        status = self.hub.status or {}
+        active = cm.vehicle_active or {"pattern": status.get("pattern")}
+        detail = (
+            f"the vehicle runs {active.get('pattern')}, not {last.get('pattern')} (command "
+            f"{last.get('id')}, the last it accepted from this console): retasked by another "
+            "station, restarted, or not this console's vehicle"
+        )
+        data = {"vehicle_active": active, "last_accepted_id": last.get("id")}
+        try:
+            event = self.log.add_event(self.dive, "echo_mismatch", detail, data)
+        except LogWriteError as err:
+            logger.error("could not log an echo mismatch: %s", err)
+            return
+        logger.warning("echo mismatch: %s", detail)
+        self.hub.publish({"type": "event", "event": event})
 
     def _on_pose(self, msg: dict[str, Any]) -> None:
         pose = pose_from_message(msg)
@@ -287,38 +321,7 @@ class Console:
     def encode(self, pattern: str, params: dict[str, Any]) -> tuple[Encoded, dict[str, Any]]:
         """Encode (raises codec.EncodeError naming the field) and describe the frame."""
         enc = encode_frame(pattern, params)
-        cmd, frame = enc.command, enc.frame
-        bits = frame.bits
-        doc = {
-            **command_json(cmd),
-            "requested": {s.field: s.requested for s in enc.snaps},
-            "snaps": [
-                {
-                    "field": s.field,
-                    "requested": s.requested,
-                    "sent": s.sent,
-                    "unit": s.unit,
-                    "changed": s.changed,
-                    "text": str(s),
-                }
-                for s in enc.snaps
-            ],
-            "bits": bits,
-            "hex": frame.hex,
-            "sections": [
-                {
-                    "name": sec.name,
-                    "start": sec.start,
-                    "length": sec.length,
-                    "bits": bits[sec.start : sec.start + sec.length],
-                }
-                for sec in sections(cmd.pattern)
-            ],
-            "airtime_ms": airtime_s(self.settings.bitrate_bps) * 1e3,
-            "bitrate_bps": self.settings.bitrate_bps,
-            "frame_bits": FRAME_BITS,
-        }
-        return enc, doc
+        return enc, frame_doc(enc, self.settings.bitrate_bps)
 
     def preview(self, pattern: str, params: dict[str, Any], *, show: bool = True) -> dict[str, Any]:
         """The frame and the path the vehicle would fly from where it is now.
@@ -340,48 +343,8 @@ class Console:
         state = self.vehicle_state()
         current = self.commands.mirror if self.commands else None
         new = plan(cmd, state, current)
-        est = estimate(new)
         path = new.path
-        doc["path"] = {
-            "x_m": list(path.xs),
-            "y_m": list(path.ys),
-            "z_m": list(path.zs),
-            "t_s": list(path.times),
-            "body_start": path.body_start,
-            "repeats": path.loop_start is not None,
-        }
-        doc["estimate"] = {
-            **{k: v for k, v in est.as_dict().items() if isinstance(v, int | float | None)},
-            "join_length_m": est.transit_length_m,
-            "join_duration_s": est.transit_duration_s,
-            # the paper's battery fit: 9.23 % an hour at nominal load, beyond the first hour
-            "battery_pct": est.duration_s / 3600.0 * SOC_LINEAR_PCT_PER_H,
-        }
-        doc["violations"] = [
-            {
-                "param": v.param,
-                "value": v.value,
-                "limit": v.limit,
-                "unit": v.unit,
-                "message": v.message,
-                "overridable": v.overridable,
-            }
-            for v in validate(new, self.limits)
-        ]
-        doc["diff"] = None
-        if current is not None:
-            d = compare(current, new)
-            doc["diff"] = {
-                "active": current.pattern,
-                "changes": [
-                    {"param": c.param, "old": c.old, "new": c.new, "unit": c.unit}
-                    for c in d.changes
-                ],
-                "pattern_changed": d.pattern_changed,
-                "duration_delta_s": d.delta("duration_s"),
-                "length_delta_m": d.delta("length_m"),
-                "anchor_moved_m": d.anchor_moved_m,
-            }
+        doc.update(plan_doc(new, current, self.limits))
         doc["from"] = state.as_dict()
         if self.commands is not None:
             # what sending it now would do: copies chosen from the link, and their odds

@@ -15,7 +15,7 @@ import json
 import logging
 import sqlite3
 import threading
-from collections.abc import Iterable, Iterator, Mapping
+from collections.abc import Iterator, Mapping
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -57,31 +57,6 @@ _UPDATABLE = frozenset(
 )
 STATES = tuple(State)
 FINAL_STATES = frozenset(str(s) for s in TERMINAL)
-#: CSV columns taken from the acknowledgement (the rest are the record's own).
-CSV_ACK_COLUMNS = ("corrected_bits", "decode_latency_ms", "replan_latency_ms")
-#: The CSV export's columns, in order.
-CSV_COLUMNS = (
-    "id",
-    "dive",
-    "created_at",
-    "operator",
-    "target",
-    "kind",
-    "pattern",
-    "params",
-    "hex",
-    "bits",
-    "state",
-    "attempts",
-    "sent_at",
-    "acked_at",
-    "reason",
-    "copies",
-    "copies_sent",
-    "p_delivered",
-    "superseded_by",
-    *CSV_ACK_COLUMNS,
-)
 
 
 class LogWriteError(Exception):
@@ -326,6 +301,30 @@ class MissionLog:
             rows = self._db.execute(sql, args).fetchall()
         return [_record(r) for r in rows]
 
+    # --- events: what the vehicle did that the console did not cause ------------------------
+
+    def add_event(
+        self, dive: int, kind: str, detail: str, data: Mapping[str, Any] | None = None
+    ) -> dict[str, Any]:
+        """Write one event (committed); returns it with its id."""
+        row = (dive, now_iso(), kind, detail, None if data is None else json.dumps(data))
+        with self._lock, _writing():
+            cur = self._db.execute(
+                "INSERT INTO events (dive, at, kind, detail, data) VALUES (?, ?, ?, ?, ?)", row
+            )
+        keys = ("dive", "at", "kind", "detail")
+        return {"id": int(cur.lastrowid or 0), **dict(zip(keys, row, strict=False)), "data": data}
+
+    def events(self, dive: int | None = None) -> list[dict[str, Any]]:
+        """Events, oldest first (of one dive)."""
+        sql = "SELECT * FROM events" + (" WHERE dive = ?" if dive is not None else "")
+        with self._lock:
+            rows = self._db.execute(sql + " ORDER BY id", () if dive is None else (dive,))
+            out = [dict(r) for r in rows.fetchall()]
+        for event in out:
+            event["data"] = None if event["data"] is None else json.loads(event["data"])
+        return out
+
     # --- track ---------------------------------------------------------------------------
 
     def add_track(
@@ -389,15 +388,3 @@ def _record(row: sqlite3.Row) -> dict[str, Any]:
         if out.get(col) is not None:
             out[col] = bool(out[col])
     return out
-
-
-def csv_rows(records: Iterable[Mapping[str, Any]]) -> Iterable[list[str]]:
-    """The log as CSV rows (header first, :data:`CSV_COLUMNS`); JSON columns as JSON text."""
-    yield list(CSV_COLUMNS)
-    for r in records:
-        ack = r.get("ack") or {}
-        values = (ack.get(c) if c in CSV_ACK_COLUMNS else r.get(c) for c in CSV_COLUMNS)
-        yield [
-            json.dumps(v) if isinstance(v, dict | list) else "" if v is None else str(v)
-            for v in values
-        ]

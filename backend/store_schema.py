@@ -47,6 +47,15 @@ CREATE TABLE IF NOT EXISTS track (
     heading_deg REAL NOT NULL
 );
 CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);
+CREATE TABLE IF NOT EXISTS events (
+    id INTEGER PRIMARY KEY,
+    dive INTEGER NOT NULL REFERENCES dives(id),
+    at TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    detail TEXT NOT NULL,
+    data TEXT
+);
+CREATE INDEX IF NOT EXISTS events_dive ON events(dive);
 """
 
 #: Columns added since the first release: (name, declaration), added to an older log at open.

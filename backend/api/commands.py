@@ -25,7 +25,8 @@ from backend.api.schemas import (
 )
 from backend.commands import CommandManager, NotRetryable
 from backend.health import LinkHealth
-from backend.store import STATES, csv_rows
+from backend.store import STATES
+from backend.store_csv import csv_rows
 
 router = APIRouter(prefix="/api", tags=["commands"])
 

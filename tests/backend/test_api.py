@@ -16,7 +16,7 @@ from urllib.parse import parse_qs, urlsplit
 import pytest
 from fastapi.testclient import TestClient
 
-from backend.store import csv_rows
+from backend.store_csv import csv_rows
 from codec import copies_for, decode_frame, delivery_probability, encode_frame
 
 from .conftest import (
@@ -806,10 +806,18 @@ def test_echo_mismatch_when_another_station_retasks_the_vehicle(client: TestClie
     assert v["active"]["pattern"] == "square"
     assert v["last_sent"]["id"] == circle["id"]
     assert [c["id"] for c in client.get("/api/commands").json()] == [circle["id"]]
+    # the activity this console did not cause is in the mission log, once
+    log = console_of(client).log
+    assert log is not None
+    events = wait_until(lambda: log.events(circle["dive"]), what="the event")
+    assert [e["kind"] for e in events] == ["echo_mismatch"]
+    assert "square" in events[0]["detail"] and "circle" in events[0]["detail"]
+    assert events[0]["data"]["last_accepted_id"] == circle["id"]
     # once this console has sent what the vehicle runs, the echo agrees again
     square = wait_state(client, send(client, "square", SQUARE)["id"])
     assert square["state"] == "acknowledged"
     assert client.get("/api/vehicle").json()["echo_mismatch"] is False
+    assert len(log.events(circle["dive"])) == 1  # logged when it began, not on every status
 
 
 # --- training -----------------------------------------------------------------------------

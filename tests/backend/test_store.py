@@ -14,7 +14,8 @@ from typing import Any
 
 import pytest
 
-from backend.store import FINAL_STATES, STATES, MissionLog, csv_rows, now_iso
+from backend.store import FINAL_STATES, STATES, MissionLog, now_iso
+from backend.store_csv import csv_rows
 
 from .conftest import SQUARE, command_fields
 
