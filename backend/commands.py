@@ -28,10 +28,10 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections import OrderedDict
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
+from backend.command_records import CommandRecords
 from backend.delivery import (
     DAMAGE_REASONS,
     MIN_SURFACE_COPIES,
@@ -42,8 +42,7 @@ from backend.delivery import (
     best_match,
     planned_copies,
 )
-from backend.health import FrameLedger, Outcome
-from backend.lifecycle import ON_ITS_WAY, RETRYABLE, Event, IllegalTransition, advance
+from backend.lifecycle import ON_ITS_WAY, RETRYABLE, Event, advance
 from backend.link import Link
 from backend.mirror import VehicleMirror
 from backend.store import LogWriteError, MissionLog, now_iso
@@ -67,7 +66,7 @@ class NotRetryable(Exception):
     """The command cannot be retried in its state."""
 
 
-class CommandManager:
+class CommandManager(CommandRecords):
     """Owns transmissions, acknowledgements, timeouts, and the vehicle's mirror."""
 
     def __init__(
@@ -88,11 +87,10 @@ class CommandManager:
         airtime_s: float = 100 / 36000,
         target: str | None = None,
     ) -> None:
-        self.log = log
+        super().__init__(log, hub)
         self.link = link
         #: What the log records as the target (the settings' name for it, e.g. "sim").
         self.target = target or link.target
-        self.hub = hub
         self._dive = dive
         self.operator = operator
         self.ack_timeout_s = ack_timeout_s
@@ -104,15 +102,10 @@ class CommandManager:
         self._link_delay_s = link_delay_s
         self.airtime_s = airtime_s
         self._rate = RateLimiter(max_sends_per_minute)
-        self._live: dict[int, Delivery] = {}  # copies still going out
-        self._awaiting: OrderedDict[int, Encoded] = OrderedDict()  # id -> frame, oldest first
-        self._timeouts: dict[int, asyncio.TimerHandle] = {}
         self._tx_lock = asyncio.Lock()
-        self.ledger = FrameLedger()
         self.last_ack_s: float | None = None  # monotonic arrival of the last acknowledgement
         self.last_sent: dict[str, Any] | None = None
         self.vehicle = VehicleMirror(hub, dive)
-        self._held: list[dict[str, Any]] | None = None  # announcements awaiting a commit
 
     # --- the vehicle mirror, as the console reads it ---------------------------------------
 
@@ -389,74 +382,6 @@ class CommandManager:
                 reason=f"no acknowledgement within {wait:.1f} s of the last copy: the frame "
                 "was lost or damaged, the vehicle is out of range, or it did not answer",
             )
-
-    def _end(self, command_id: int, event: Event, outcome: Outcome, **fields: Any) -> None:
-        """The one way a record ends: its repetition stops, its timer goes, its frames are
-        settled in the ledger and its terminal state is written."""
-        d = self._live.pop(command_id, None)
-        if d is not None and d.task is not None and d.task is not asyncio.current_task():
-            d.task.cancel()
-        self._awaiting.pop(command_id, None)
-        handle = self._timeouts.pop(command_id, None)
-        if handle is not None:
-            handle.cancel()
-        self.ledger.settle(command_id, outcome)
-        record = self.log.command(command_id)
-        assert record is not None
-        try:
-            state = advance(record["state"], event)
-        except IllegalTransition as err:  # a bookkeeping bug: say so, keep the record
-            logger.error("command %s: %s", command_id, err)
-            return
-        self._update(command_id, state=state, **fields)
-
-    def _update(self, command_id: int, **fields: Any) -> dict[str, Any]:
-        record = self.log.update_command(command_id, **fields)
-        self._announce(record)
-        return record
-
-    def _announce(self, record: dict[str, Any]) -> None:
-        if self._held is not None:
-            self._held.append(record)
-        else:
-            self.hub.publish({"type": "command", "command": record})
-
-    @contextlib.contextmanager
-    def _atomic(self) -> Iterator[None]:
-        """The log writes inside are committed together (a crash leaves all or none) and
-        announced after the commit."""
-        held: list[dict[str, Any]] = []
-        self._held = held
-        live = dict(self._live)
-        try:
-            with self.log.transaction():
-                yield
-        except LogWriteError as err:
-            self._held = None
-            self._rolled_back(live, err)
-            raise
-        finally:
-            self._held = None
-        for record in held:
-            self._announce(record)
-
-    def _rolled_back(self, live: dict[int, Delivery], err: LogWriteError) -> None:
-        """The log writes of a send failed (none is committed): the deliveries it began are
-        cancelled before their first copy (their tasks have not run yet), and those it
-        superseded stay stopped: interrupted, if the log can still be written."""
-        err.outcome = "nothing was transmitted"
-        for cid, d in list(self._live.items()):
-            if live.get(cid) is not d and d.task is not None:
-                d.task.cancel()
-                del self._live[cid]
-        for cid in sorted(live.keys() - self._live.keys()):
-            why = f"stopped by a send the mission log could not record ({err.reason})"
-            logger.error("command %s: %s", cid, why)
-            record = self.log.command(cid)
-            with contextlib.suppress(LogWriteError, IllegalTransition):
-                if record is not None:
-                    state = advance(record["state"], Event.INTERRUPTED)
-                    self._update(cid, state=state, reason=why)
 
     # --- acknowledgements -------------------------------------------------------------------
 
