@@ -226,7 +226,7 @@ def test_send_lawnmower_is_acknowledged_and_the_vehicle_moves(
         " !== before",
         arg=before,
         polling=POLL_MS,
-        timeout=5_000,
+        timeout=20_000,
     )
     expect(page.get_by_test_id("echo-active")).to_contain_text("lawnmower")
     expect(page.get_by_test_id("echo-mismatch")).to_be_hidden()
@@ -299,7 +299,7 @@ def test_surface_button_is_acknowledged_and_the_banner_clears(
         "() => { const b = document.querySelector('[data-testid=\"surface-state\"]');"
         " return b.hidden || !b.textContent.includes('surfacing'); }",
         polling=POLL_MS,
-        timeout=5_000,
+        timeout=20_000,
     )
     assert banner.is_hidden() or text_of(page, "surface-state") == "surface acknowledged"
     watched.assert_clean()
@@ -432,7 +432,7 @@ def test_link_indicator_is_green_with_acks_and_turns_red_on_timeouts(
         )
         expect(row.get_by_test_id(f"retry-{command_id}")).to_be_enabled()
 
-    expect(indicator).to_have_class(re.compile(r"\blevel-red\b"), timeout=10_000)
+    expect(indicator).to_have_class(re.compile(r"\blevel-red\b"), timeout=30_000)
     expect(indicator).to_have_attribute("title", re.compile(r"timed out"))
     expect(indicator).to_contain_text("failing")  # in words too, not only in red
     expect(page.get_by_test_id("status-link")).to_contain_text("timed out")
