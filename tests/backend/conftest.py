@@ -91,7 +91,7 @@ def console_of(client: TestClient) -> Console:
 
 def wait_until(
     probe: Callable[[], T | Literal[False] | None],
-    timeout_s: float = 5.0,
+    timeout_s: float = 15.0,  # generous: a loaded 2-core machine
     interval_s: float = 0.02,
     what: str = "",
 ) -> T:
@@ -118,7 +118,7 @@ def wait_state(
     client: TestClient,
     command_id: int,
     states: tuple[str, ...] = FINAL,
-    timeout_s: float = 5.0,
+    timeout_s: float = 15.0,
 ) -> dict[str, Any]:
     """The command's record once its state is one of ``states``."""
 
