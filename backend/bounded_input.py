@@ -9,7 +9,8 @@ whatever the app answers after that is dropped). The 413 closes the connection: 
 an over-size body is never read.
 
 :func:`validation_errors` replaces FastAPI's 422 handler: each error keeps ``loc``, ``msg``
-and ``type``, with ``input`` cut to a short excerpt and no ``ctx`` or ``url``.
+and ``type``, with ``input`` cut to a short excerpt and no ``ctx`` or ``url``; a body the
+JSON parser cannot read at all (not Unicode text, nested too deeply) is a 422 as well.
 """
 
 from __future__ import annotations
@@ -19,8 +20,10 @@ import math
 from typing import Any
 
 from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
+from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 #: Longest ``input`` echoed in a 422 (characters of its JSON text), and longest ``loc`` item.
@@ -125,13 +128,21 @@ def excerpt(value: Any) -> Any:
         return f"<an integer of {value.bit_length()} bits>"
     if isinstance(value, str):
         return value if len(value) <= EXCERPT_CHARS else value[: EXCERPT_CHARS - 1] + "…"
+    if isinstance(value, bytes | bytearray):  # a body FastAPI did not parse (not JSON): text
+        return excerpt(bytes(value).decode("utf-8", errors="replace"))
+    native = True
     try:
-        text = json.dumps(value, ensure_ascii=False, default=repr)
-    except (ValueError, RecursionError):  # an integer too long for text, a deep structure
+        try:
+            text = json.dumps(value, ensure_ascii=False)
+        except TypeError:  # something JSON has no form for (bytes inside): quoted as text
+            native = False
+            text = json.dumps(value, ensure_ascii=False, default=repr)
+    except (TypeError, ValueError, RecursionError):  # a long integer, a deep structure
         return f"<{type(value).__name__}>"
-    if len(text) <= EXCERPT_CHARS and "NaN" not in text and "Infinity" not in text:
+    short = len(text) <= EXCERPT_CHARS
+    if native and short and "NaN" not in text and "Infinity" not in text:
         return value
-    return text[: EXCERPT_CHARS - 1] + "…" if len(text) > EXCERPT_CHARS else text
+    return text if short else text[: EXCERPT_CHARS - 1] + "…"
 
 
 def shorten(text: str, limit: int = MSG_CHARS) -> str:
@@ -156,11 +167,35 @@ def short_error(error: dict[str, Any]) -> dict[str, Any]:
     return out
 
 
+def body_parse_error(err: BaseException | None) -> dict[str, Any] | None:
+    """The validation error of a JSON body the parser gave up on other than with a
+    ``JSONDecodeError`` (which FastAPI answers 422 ``json_invalid`` itself), else ``None``:
+    bytes that are not Unicode text (``UnicodeDecodeError``), or arrays and objects nested
+    deeper than the parser goes (``RecursionError``). FastAPI answers those 400 "There was an
+    error parsing the body", a status no operation documents; they are invalid input."""
+    if isinstance(err, UnicodeDecodeError):
+        msg = f"JSON decode error: the body is not Unicode text ({err.reason})"
+        return {"loc": ["body", err.start], "msg": msg, "type": "json_invalid", "input": {}}
+    if isinstance(err, RecursionError):
+        msg = "JSON decode error: nested too deeply"
+        return {"loc": ["body"], "msg": msg, "type": "json_invalid", "input": {}}
+    return None
+
+
 def validation_errors(app: FastAPI) -> None:
-    """Install the 422 handler that never echoes more than an excerpt of the input."""
+    """Install the 422 handler that never echoes more than an excerpt of the input, and
+    answer a JSON body that cannot be parsed at all (:func:`body_parse_error`) with the same
+    422 as malformed JSON instead of FastAPI's undocumented 400."""
 
     @app.exception_handler(RequestValidationError)
     async def request_validation(_request: Request, err: RequestValidationError) -> JSONResponse:
         return JSONResponse(
             {"detail": [short_error(dict(e)) for e in err.errors()]}, status_code=422
         )
+
+    @app.exception_handler(StarletteHTTPException)
+    async def http_error(request: Request, err: StarletteHTTPException) -> Response:
+        error = body_parse_error(err.__cause__) if err.status_code == 400 else None
+        if error is not None:
+            return JSONResponse({"detail": [error]}, status_code=422)
+        return await http_exception_handler(request, err)

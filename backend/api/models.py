@@ -17,6 +17,7 @@ from pydantic import (
     Field,
     PlainValidator,
     StrictInt,
+    WithJsonSchema,
 )
 
 from backend.api.deps import SQLITE_INT_MAX, SQLITE_INT_MIN
@@ -77,13 +78,12 @@ def check_copies(value: object) -> object:
     return value
 
 
-#: How many copies of a command the operator may ask for.
+#: How many copies of a command the operator may ask for. The bounds are the integer's, not
+#: the union's: on ``StrictInt | None`` pydantic applies them to null too (a TypeError: 500).
 CopiesIn = Annotated[
-    StrictInt | None,
+    Annotated[StrictInt, Field(ge=1, le=MAX_COPIES)] | None,
     BeforeValidator(check_copies),
     Field(
-        ge=1,
-        le=MAX_COPIES,
         description=f"copies of the frame, 1-{MAX_COPIES}, spaced copy_interval_s apart; "
         "omitted: chosen from the link's bit-error rate to reach the delivery target "
         "(one on a two-way link)",
@@ -131,10 +131,22 @@ class TimeScaleIn(Strict):
     time_scale: Annotated[float, Field(ge=0, le=50)]
 
 
+#: ``link_ber`` and ``delivery_target`` as the OpenAPI states them. The settings' types check
+#: their intervals in a validator, after which pydantic writes the bounds into the schema under
+#: its own names (``ge``, ``lt``: no JSON Schema keyword), leaving the numbers unbounded.
+LinkBerField = Annotated[
+    LinkBerIn, WithJsonSchema({"type": "number", "minimum": 0, "exclusiveMaximum": 0.5})
+]
+DeliveryTargetField = Annotated[
+    DeliveryTargetIn,
+    WithJsonSchema({"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1}),
+]
+
+
 class LinkIn(Strict):
     """What the station assumes of its link; a field left out keeps its value."""
 
     #: Bit-error rate of a real link, [0, 0.5) (training uses the emulated channel's).
-    link_ber: LinkBerIn | None = None
+    link_ber: LinkBerField | None = None
     #: Delivery probability the number of copies is chosen to reach, (0, 1).
-    delivery_target: DeliveryTargetIn | None = None
+    delivery_target: DeliveryTargetField | None = None

@@ -443,6 +443,71 @@ def test_429s(make_client: MakeClient) -> None:
     assert c.call("POST", "/api/surface", headers=AUTH).status_code == 202
 
 
+# --- found by schemathesis (tests/backend/test_schemathesis.py) ------------------------------
+
+#: Constraint names of pydantic's: in a JSON Schema they bound nothing.
+PYDANTIC_ONLY = {"ge", "gt", "le", "lt", "min_length", "max_length", "multiple_of", "strict"}
+
+
+def test_a_body_that_is_not_json_is_a_documented_422(client: TestClient) -> None:
+    """A body sent as text/plain (FastAPI hands the model its bytes: the excerpt of them in
+    the 422 was a 500), and one the JSON parser cannot read at all, not Unicode text or nested
+    deeper than it goes (FastAPI's undocumented 400): each a 422 on every operation with a
+    body, quoting the text."""
+    c = contract(client)
+    text = {**AUTH, "Content-Type": "text/plain"}
+    as_json = {**AUTH, "Content-Type": "application/json"}
+    for method, path, op in list(c.operations()):
+        if "requestBody" not in op:
+            continue
+        url = path.format(**PATH_VALUES)
+        r = c.call(method, url, content=b'{"frame": "0"}', headers=text)
+        assert r.status_code == 422, f"{method} {path}: {r.status_code}"
+        assert r.json()["detail"][0]["input"] == '{"frame": "0"}', r.text
+        for body in (b"\xa1\xc2 is not UTF-8", b"[" * 5000):
+            r = c.call(method, url, content=body, headers=as_json)
+            assert r.status_code == 422, f"{method} {path}: {r.status_code} {r.text[:200]}"
+            assert r.json()["detail"][0]["type"] == "json_invalid", r.text
+    r = c.call("POST", "/api/decode", content=b"\xa1\xc2", headers=as_json)
+    assert r.json()["detail"][0]["loc"] == ["body", 0]
+
+
+def test_copies_null_is_no_copies_given(client: TestClient) -> None:
+    """``copies: null`` (the documented default) was a 500: the bounds of the integer were
+    applied to null."""
+    c = contract(client)
+    body = {"pattern": "circle", "params": CIRCLE, "copies": None}
+    r = c.call("POST", "/api/commands", json=body, headers=AUTH)
+    assert r.status_code == 202 and r.json()["copies"] == 1, r.text  # two-way: one copy
+    retry = f"/api/commands/{interrupted_record(client)}/retry"
+    assert c.call("POST", retry, json={"copies": None}, headers=AUTH).status_code == 202
+
+
+def test_the_document_bounds_only_with_json_schema_keywords(client: TestClient) -> None:
+    """pydantic writes a bound it checks after a validator under its own name (``ge``,
+    ``lt``), which bounds nothing in a JSON Schema: PUT /api/link's fields were unbounded
+    (schemathesis sent ``delivery_target`` 0 and 2e16 as valid)."""
+    spec = contract(client).spec
+    found: list[str] = []
+
+    def walk(node: Any, where: str, names: bool = False) -> None:
+        if isinstance(node, dict):
+            for key, value in node.items():
+                if key in PYDANTIC_ONLY and not names:
+                    found.append(f"{where}/{key}")
+                walk(value, f"{where}/{key}", names=key == "properties" and not names)
+        elif isinstance(node, list):
+            for i, item in enumerate(node):
+                walk(item, f"{where}/{i}")
+
+    walk(spec, "")
+    assert not found
+    link = spec["components"]["schemas"]["LinkIn"]["properties"]
+    assert {"type": "number", "minimum": 0, "exclusiveMaximum": 0.5} in link["link_ber"]["anyOf"]
+    bounded = {"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1}
+    assert bounded in link["delivery_target"]["anyOf"]
+
+
 def test_503_while_the_console_cannot_take_commands(client: TestClient) -> None:
     c = contract(client)
     console = console_of(client)
