@@ -56,7 +56,9 @@ function renderSession(s) {
     auth.textContent = "token rejected (403): read-only";
     auth.className = "auth-bad";
   } else {
-    auth.textContent = s && s.operator ? `operator ${s.operator}` : "operator";
+    // the role, and the operator's name when it is not just "operator" again
+    const name = s && s.operator && s.operator !== "operator" ? ` (${s.operator})` : "";
+    auth.textContent = `operator${name}`;
     auth.className = "auth-ok";
   }
   if (s && s.link) setSessionLink(s.link);

@@ -52,9 +52,7 @@ export function upsertCommand(record, { quiet = false } = {}) {
   }
   applyAuth(undefined, row);
   trackSurface(r);
-  if (r.kind !== "surface" && WENT_OUT.has(r.state)) {
-    if (!lastSent || sortKey(r) >= sortKey(lastSent)) setLastSent(r);
-  }
+  if (WENT_OUT.has(r.state) && isNewer(r)) setLastSent(r);
   if (!quiet && old && old.state !== r.state && r.state === "rejected") {
     notify(`command ${r.id} (${r.pattern}) rejected: ${r.reason || "no reason given"}`, "warn");
   }
@@ -124,6 +122,11 @@ async function retry(id) {
 
 // ---- echo check ----
 
+/** Newer than the last sent shown: ids grow with time, a Surface included. */
+function isNewer(cmd) {
+  return !lastSent || Number(cmd.id) >= Number(lastSent.id);
+}
+
 function setLastSent(cmd) {
   lastSent = cmd;
   $("echo-sent").textContent = cmd ? commandText(cmd) : "–";
@@ -133,6 +136,7 @@ function setLastSent(cmd) {
 export function renderEcho(v) {
   if (!v) return;
   if ("active" in v) $("echo-active").textContent = v.active ? commandText(v.active) : "nothing (idle)";
-  if (v.last_sent) setLastSent(v.last_sent);
+  // a late or polled answer never puts an older command back (the stale echo)
+  if (v.last_sent && isNewer(v.last_sent)) setLastSent(v.last_sent);
   if ("echo_mismatch" in v) $("echo-mismatch").hidden = !v.echo_mismatch;
 }

@@ -41,8 +41,9 @@ def open_page(w: Watched, console: Console, *, token: bool = True, viewer: bool 
         polling=POLL_MS,
     )
     operator = console.get("/api/session")["operator"]
+    role = "operator" if operator == "operator" else f"operator ({operator})"
     expect(page.get_by_test_id("auth-state")).to_have_text(
-        f"operator {operator}" if token else "read-only (observer)"
+        role if token else "read-only (observer)"
     )
     if token:  # the token left the address bar (it is kept in sessionStorage)
         assert "token" not in page.url
@@ -125,7 +126,7 @@ def commands(console: Console, **query: str) -> list[dict[str, Any]]:
     return rows
 
 
-def wait_command(console: Console, pattern: str, timeout_s: float = 5.0) -> dict[str, Any]:
+def wait_command(console: Console, pattern: str, timeout_s: float = 15.0) -> dict[str, Any]:
     """The newest logged command of ``pattern``, once there is one."""
     deadline = time.monotonic() + timeout_s
     while True:
@@ -677,4 +678,28 @@ def test_link_assumptions_in_training_leave_the_ber_to_the_channel(
     expect(error).to_contain_text("in training the copies follow the emulated channel's BER")
     expect(result).to_have_text("not applied")
     assert console.get("/api/vehicle")["link"]["ber"] != 0.01
+    watched.assert_clean()
+
+
+def test_the_echo_check_last_sent_follows_the_newest_command(
+    console: Console, watched: Watched
+) -> None:
+    """After a Surface, then a hover, "last sent" says hover, and nothing puts the older
+    Surface back: not its repeats, not a poll of the vehicle, not a reload."""
+    page = open_page(watched, console)
+    surface = console.post("/api/surface", None, token=True)
+    wait_command(console, "surface")
+    hover = console.post(
+        "/api/commands",
+        {"pattern": "hover", "params": {"duration": 60, "depth": 2, "heading": 90}},
+        token=True,
+    )
+    expect(page.get_by_test_id("echo-sent")).to_contain_text("hover", timeout=30_000)
+    record = console.get(f"/api/commands/{surface['id']}")
+    assert record["state"] in ("acknowledged", "superseded"), record
+    page.wait_for_timeout(2500)  # longer than a Surface repeat: a check for absence
+    expect(page.get_by_test_id("echo-sent")).to_contain_text("hover")
+    assert console.get("/api/vehicle")["last_sent"]["id"] == hover["id"]
+    page.reload()
+    expect(page.get_by_test_id("echo-sent")).to_contain_text("hover", timeout=30_000)
     watched.assert_clean()
