@@ -142,7 +142,8 @@ function violationItem(v) {
   return {
     param: v.param,
     kind: v.overridable ? "warn" : "error",
-    text: `${v.param}: ${v.message || "outside the limits"}${facts}${v.overridable ? " [overridable]" : ""}`,
+    // the planner's message usually names the parameter itself ("depth = 150 m ..."): once
+    text: `${v.message && v.message.startsWith(v.param) ? "" : `${v.param}: `}${v.message || "outside the limits"}${facts}${v.overridable ? " [overridable]" : ""}`,
   };
 }
 

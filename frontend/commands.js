@@ -54,7 +54,9 @@ export function upsertCommand(record, { quiet = false } = {}) {
   trackSurface(r);
   if (WENT_OUT.has(r.state) && isNewer(r)) setLastSent(r);
   if (!quiet && old && old.state !== r.state && r.state === "rejected") {
-    notify(`command ${r.id} (${r.pattern}) rejected: ${r.reason || "no reason given"}`, "warn");
+    // the row says why in full; the toast names the reason's code and points there
+    const code = (r.ack && r.ack.reason) || "see its row";
+    notify(`command ${r.id} (${r.pattern}) rejected: ${code}`, "warn");
   }
 }
 
@@ -76,7 +78,10 @@ function detailText(r) {
     const a = r.ack || {};
     const field = a.field ? ` (field ${a.field})` : "";
     const flipped = a.channel_flipped_bits != null ? `; channel flipped ${a.channel_flipped_bits} bits` : "";
-    return `${r.reason || a.reason || "no reason given"}${field}${a.detail ? `: ${a.detail}` : ""}${flipped}`;
+    // the reason once: the record's reason already carries the vehicle's detail
+    const reason = r.reason || [a.reason, a.detail].filter(Boolean).join(": ") || "no reason given";
+    const named = a.field && reason.includes(a.field) ? "" : field;
+    return `${reason}${named}${flipped}`;
   }
   return stateText(r);
 }

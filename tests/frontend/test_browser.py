@@ -703,3 +703,21 @@ def test_the_echo_check_last_sent_follows_the_newest_command(
     page.reload()
     expect(page.get_by_test_id("echo-sent")).to_contain_text("hover", timeout=30_000)
     watched.assert_clean()
+
+
+def test_a_rejection_says_its_reason_once(console: Console, watched: Watched) -> None:
+    page = open_page(watched, console)
+    body = {
+        "pattern": "circle",
+        "params": {"speed": 1.5, "depth": 3, "radius": 5, "direction": "cw"},
+        "override": True,
+    }
+    sent = console.post("/api/commands", body, token=True)
+    wait_text(page, f"state-{sent['id']}", "rejected", ACK_MS)
+    record = console.get(f"/api/commands/{sent['id']}")
+    detail = record["ack"]["detail"]
+    assert detail and record["reason"].endswith(detail)
+    row = page.get_by_test_id(f"command-detail-{sent['id']}")
+    expect(row).to_contain_text(detail)
+    assert row.inner_text().count(detail) == 1, row.inner_text()
+    watched.assert_clean()
