@@ -24,6 +24,9 @@ export function el(tag, attrs = {}, ...children) {
 // ---- messages ----
 
 /** Show a dismissable message; kind is "info", "warn" or "error". Info fades after 8 s. */
+const MAX_TOASTS = 3;
+const FADE_MS = { info: 8000, warn: 10000 };
+
 export function notify(text, kind = "info") {
   const box = $("messages");
   if (!box) return;
@@ -34,8 +37,13 @@ export function notify(text, kind = "info") {
     el("button", { type: "button", class: "dismiss", testid: "message-dismiss", "aria-label": "dismiss message", onclick: () => item.remove() }, "×"),
   );
   box.prepend(item);
-  while (box.children.length > 6) box.lastElementChild.remove();
-  if (kind === "info") setTimeout(() => item.remove(), 8000);
+  // at most MAX_TOASTS stacked: the oldest that is not an error goes first
+  while (box.children.length > MAX_TOASTS) {
+    const oldestFirst = [...box.children].reverse();
+    (oldestFirst.find((c) => !c.classList.contains("message-error")) || oldestFirst[0]).remove();
+  }
+  // information fades (the command's row keeps what it said); errors stay until dismissed
+  if (kind in FADE_MS) setTimeout(() => item.remove(), FADE_MS[kind]);
 }
 
 export function notifyError(prefix, err) {

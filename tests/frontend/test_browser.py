@@ -721,3 +721,23 @@ def test_a_rejection_says_its_reason_once(console: Console, watched: Watched) ->
     expect(row).to_contain_text(detail)
     assert row.inner_text().count(detail) == 1, row.inner_text()
     watched.assert_clean()
+
+
+def test_toasts_stack_three_at_most_and_information_fades(
+    console: Console, watched: Watched
+) -> None:
+    page = open_page(watched, console)
+    body = {
+        "pattern": "circle",
+        "params": {"speed": 1.5, "depth": 3, "radius": 5, "direction": "cw"},
+        "override": True,
+    }
+    ids = [console.post("/api/commands", body, token=True)["id"] for _ in range(4)]
+    for command_id in ids:  # four rejections: four warnings
+        wait_text(page, f"state-{command_id}", "rejected", ACK_MS)
+    messages = page.get_by_test_id("messages").get_by_test_id("message")
+    expect(messages.first).to_contain_text("rejected")
+    assert messages.count() <= 3
+    expect(messages).to_have_count(0, timeout=30_000)  # they fade; the rows keep the reasons
+    expect(page.get_by_test_id(f"command-detail-{ids[-1]}")).to_contain_text("speed")
+    watched.assert_clean()
