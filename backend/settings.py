@@ -14,7 +14,7 @@ import secrets
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BeforeValidator, Field, field_validator
+from pydantic import BeforeValidator, Field, WithJsonSchema, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 #: The target meaning "the embedded simulator" (training mode).
@@ -57,8 +57,16 @@ _JSON_BER, _JSON_TARGET = _checks(text=False)
 #: as JSON request fields (numbers only).
 LinkBer = Annotated[float, _TEXT_BER, Field(ge=0, lt=0.5)]
 DeliveryTarget = Annotated[float, _TEXT_TARGET, Field(gt=0, lt=1)]
-LinkBerIn = Annotated[float, _JSON_BER, Field(ge=0, lt=0.5)]
-DeliveryTargetIn = Annotated[float, _JSON_TARGET, Field(gt=0, lt=1)]
+#: The request fields' bounds in JSON Schema keywords: after a validator, pydantic would
+#: write ``Field(ge=...)`` under its own names, which the OpenAPI's readers ignore.
+LinkBerIn = Annotated[
+    float, _JSON_BER, WithJsonSchema({"type": "number", "minimum": 0, "exclusiveMaximum": 0.5})
+]
+DeliveryTargetIn = Annotated[
+    float,
+    _JSON_TARGET,
+    WithJsonSchema({"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1}),
+]
 
 
 class Settings(BaseSettings):

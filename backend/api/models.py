@@ -17,7 +17,6 @@ from pydantic import (
     Field,
     PlainValidator,
     StrictInt,
-    WithJsonSchema,
 )
 
 from backend.api.deps import SQLITE_INT_MAX, SQLITE_INT_MIN
@@ -131,22 +130,10 @@ class TimeScaleIn(Strict):
     time_scale: Annotated[float, Field(ge=0, le=50)]
 
 
-#: ``link_ber`` and ``delivery_target`` as the OpenAPI states them. The settings' types check
-#: their intervals in a validator, after which pydantic writes the bounds into the schema under
-#: its own names (``ge``, ``lt``: no JSON Schema keyword), leaving the numbers unbounded.
-LinkBerField = Annotated[
-    LinkBerIn, WithJsonSchema({"type": "number", "minimum": 0, "exclusiveMaximum": 0.5})
-]
-DeliveryTargetField = Annotated[
-    DeliveryTargetIn,
-    WithJsonSchema({"type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 1}),
-]
-
-
 class LinkIn(Strict):
     """What the station assumes of its link; a field left out keeps its value."""
 
     #: Bit-error rate of a real link, [0, 0.5) (training uses the emulated channel's).
-    link_ber: LinkBerField | None = None
+    link_ber: LinkBerIn | None = None
     #: Delivery probability the number of copies is chosen to reach, (0, 1).
-    delivery_target: DeliveryTargetField | None = None
+    delivery_target: DeliveryTargetIn | None = None
