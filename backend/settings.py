@@ -121,6 +121,33 @@ class Settings(BaseSettings):
     #: Origins whose pages may open /ws besides the console's own (e.g. a chart plotter's).
     allowed_origins: list[Annotated[str, Field(min_length=1, max_length=300)]] = []
 
+    # --- geo reference and chart (backend/geo.py, backend/gps.py, backend/tiles.py) -------
+    #: Latitude and longitude of the NED origin (deg, WGS84). Unset: training uses its
+    #: documented site (backend.geo.TRAINING_DATUM); a real vehicle takes the surface GPS's
+    #: first fix when ``gps`` is set, else has no datum (positions in metres only).
+    datum_lat_deg: Annotated[float, Field(ge=-90, le=90)] | None = None
+    datum_lon_deg: Annotated[float, Field(ge=-180, le=180)] | None = None
+    #: The ME transmitter's (surface station's) position (deg); unset: the datum. A surface
+    #: GPS, when set, moves it with each fix.
+    station_lat_deg: Annotated[float, Field(ge=-90, le=90)] | None = None
+    station_lon_deg: Annotated[float, Field(ge=-180, le=180)] | None = None
+    #: Surface GPS, NMEA 0183: "" (none), udp://127.0.0.1:10110 or serial:///dev/ttyUSB1?baud=4800.
+    gps: str = ""
+    #: Reach of the ME link from the transmitter (m): the paper's 730 m.
+    me_range_m: Annotated[float, Field(gt=0, le=100000)] = 730.0
+    #: Optional local map tiles: a directory of z/x/y.png tiles or an .mbtiles file.
+    tiles: Path | None = None
+
+    # --- vehicle profile (backend/profile.py); unset: the twin's figures in training --------
+    #: Top speed through the water (m/s).
+    top_speed_mps: Annotated[float, Field(gt=0, le=5)] | None = None
+    #: Largest vertical speed (m/s).
+    heave_rate_mps: Annotated[float, Field(gt=0, le=5)] | None = None
+    #: Largest turn rate (deg/s).
+    yaw_rate_dps: Annotated[float, Field(gt=0, le=360)] | None = None
+    #: Time on a full battery at cruise (s).
+    endurance_s: Annotated[float, Field(gt=0, le=1e7)] | None = None
+
     @field_validator("target")
     @classmethod
     def _target(cls, value: str) -> str:
