@@ -11,7 +11,7 @@ import { initLog, loadLog } from "./log.js";
 import { initScript, addStep } from "./script.js";
 import { renderTelemetry, startAgeTicker } from "./status.js";
 import { initTraining, loadTraining } from "./training.js";
-import { $, notify, notifyError, applyAuth, debounce } from "./ui.js";
+import { $, notify, notifyError, applyAuth, debounce, emit } from "./ui.js";
 
 const RETRY_MS = 3000;
 let session = null;
@@ -62,6 +62,7 @@ function renderSession(s) {
     auth.className = "auth-ok";
   }
   if (s && s.link) setSessionLink(s.link);
+  if (s) emit("session", { session: s });
   setAssumptionsMode(mode);
   $("token-form").hidden = token && !rejected;
   $("token-clear").hidden = !token;
@@ -104,6 +105,7 @@ async function loadVehicle() {
   try {
     const v = await api("/api/vehicle");
     renderTelemetry(v);
+    emit("telemetry", { msg: v });
     renderEcho(v);
   } catch (err) {
     notifyError("vehicle state", err);
@@ -144,12 +146,18 @@ async function main() {
   let opened = false;
   const refreshLog = debounce(loadLog, 2000);
   live = connectLive({
-    telemetry: renderTelemetry,
+    telemetry: (m) => {
+      renderTelemetry(m);
+      emit("telemetry", { msg: m });
+    },
     command: (m) => {
       upsertCommand(m.command);
       refreshLog();
     },
-    vehicle: renderEcho,
+    vehicle: (m) => {
+      renderEcho(m);
+      emit("vehicle", { msg: m });
+    },
     link: (m) => renderLink(m.link),
     open: () => {
       if (opened) {

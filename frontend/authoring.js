@@ -4,7 +4,7 @@
 import { api, ApiError } from "./api.js";
 import { initCopies, readCopies, copiesLine } from "./copies.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
-import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite } from "./ui.js";
+import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite, emit } from "./ui.js";
 
 const state = {
   form: null,
@@ -75,11 +75,13 @@ export async function runPreview() {
     state.preview = preview;
     state.previewError = null;
     renderPreview(preview);
+    emit("preview", { preview, command: body });
   } catch (err) {
     if (err.name === "AbortError" || seq !== state.seq) return;
     state.preview = null;
     state.previewError = err;
     renderPreviewError(err);
+    emit("preview", { preview: null, command: body });
   }
 }
 

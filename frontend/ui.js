@@ -165,3 +165,18 @@ export function setOff(node, off) {
   node.dataset.off = off ? "1" : "0";
   applyAuth(writable, node.parentElement || document);
 }
+
+// ---- page events: one bus between the panels (chart, plots, prediction listen) ----
+// "nemesys:session" {session}, "nemesys:preview" {preview, command} (null preview: cleared),
+// "nemesys:telemetry" {msg} (a /ws telemetry message or GET /api/vehicle),
+// "nemesys:vehicle" {msg} (the echo/active-path state).
+
+/** Announce `name` ("session", "preview", ...) with `detail` to every listener on the page. */
+export function emit(name, detail) {
+  window.dispatchEvent(new CustomEvent(`nemesys:${name}`, { detail }));
+}
+
+/** Listen to `name` ("session", "preview", ...): `fn(detail)`. */
+export function on(name, fn) {
+  window.addEventListener(`nemesys:${name}`, (e) => fn(e.detail));
+}
