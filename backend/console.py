@@ -18,6 +18,7 @@ from dataclasses import replace
 from typing import Any
 
 from backend.commands import CommandManager
+from backend.geo import Datum, initial_datum
 from backend.health import UNKNOWN_VALUES_RECENT_S, LinkHealth, assess
 from backend.link import Link, RosbridgeLink, open_link
 from backend.preview import frame_doc, plan_doc
@@ -50,6 +51,8 @@ class Console:
     def __init__(self, settings: Settings) -> None:
         self.settings = settings
         self.limits = Limits(max_depth_m=settings.max_depth_m, max_speed_mps=settings.max_speed_mps)
+        #: The NED origin's latitude and longitude (None: not known, positions in metres only).
+        self.datum: Datum | None = initial_datum(settings)
         self.log: MissionLog | None = None
         self.dive = 0
         self.sim: Any = None  # sim_bridge.sim.Simulation in training mode

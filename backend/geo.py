@@ -26,11 +26,16 @@ import pymap3d
 
 from codec._record import Record, init
 
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from backend.settings import Settings
+
 __all__ = [
     "TRAINING_DATUM",
     "Datum",
     "dm",
     "geodetic_to_ned",
+    "initial_datum",
     "ned_to_geodetic",
 ]
 
@@ -56,7 +61,6 @@ class Datum(Record):
         init(self, "lon_deg", _check("lon_deg", lon_deg, 180.0))
 
 
-
 def _check(name: str, value: float, bound: float) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
         raise ValueError(f"{name} must be finite, in [-{bound:g}, {bound:g}] deg, got {value!r}")
@@ -69,6 +73,14 @@ def _check(name: str, value: float, bound: float) -> float:
 #: university), 29.5316 N, 82.3031 W, open water about 400 m across. A documented stand-in,
 #: not the paper's trial site (the paper does not give one).
 TRAINING_DATUM: Final = Datum(29.5316, -82.3031)
+
+
+def initial_datum(settings: Settings) -> Datum | None:
+    """The datum at start: the settings' when given, training's site in training, else None
+    (a surface GPS may set it later)."""
+    if settings.datum_lat_deg is not None and settings.datum_lon_deg is not None:
+        return Datum(settings.datum_lat_deg, settings.datum_lon_deg)
+    return TRAINING_DATUM if settings.training else None
 
 
 def ned_to_geodetic(
