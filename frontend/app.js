@@ -8,28 +8,22 @@ import { setDictionary } from "./form.js";
 import { renderLink, setSessionLink } from "./link.js";
 import { connectLive } from "./live.js";
 import { initLog, loadLog } from "./log.js";
+import { initChart } from "./chart.js";
+import { initPlots } from "./plots.js";
+import { initPrediction } from "./prediction.js";
 import { initScript, addStep } from "./script.js";
-import { renderTelemetry, startAgeTicker } from "./status.js";
+import { initShortcuts } from "./shortcuts.js";
+import { renderDatum, renderTelemetry, startAgeTicker } from "./status.js";
+import { initTheme } from "./theme.js";
 import { initTraining, loadTraining } from "./training.js";
 import { $, notify, notifyError, applyAuth, debounce, emit } from "./ui.js";
+import { initView, viewerSrc } from "./view.js"; // this page's own 3D view
 
 const RETRY_MS = 3000;
 let session = null;
 let live = null;
 
 // ---- session and token ----
-
-/** The viewer runs on its own port; if it names a loopback host, use the host this page came from. */
-function viewerSrc(url) {
-  try {
-    const u = new URL(url, window.location.href);
-    const loopback = ["127.0.0.1", "localhost", "0.0.0.0", "[::1]"];
-    if (loopback.includes(u.hostname) && !loopback.includes(window.location.hostname)) u.hostname = window.location.hostname;
-    return u.href;
-  } catch {
-    return url;
-  }
-}
 
 function renderSession(s) {
   const mode = s ? s.mode : null;
@@ -62,6 +56,7 @@ function renderSession(s) {
     auth.className = "auth-ok";
   }
   if (s && s.link) setSessionLink(s.link);
+  if (s && "datum" in s) renderDatum(s.datum);
   if (s) emit("session", { session: s });
   setAssumptionsMode(mode);
   $("token-form").hidden = token && !rejected;
@@ -134,7 +129,23 @@ async function loadDictionary() {
   }
 }
 
+/** The columns fill the window below the header, whose height changes when it wraps. */
+function trackTopbar() {
+  const bar = document.querySelector(".topbar");
+  const set = () => document.documentElement.style.setProperty("--topbar-h", `${bar.offsetHeight}px`);
+  new ResizeObserver(set).observe(bar);
+  set();
+}
+
 async function main() {
+  trackTopbar();
+  initTheme();
+  initView();
+  initShortcuts();
+  // the chart, the prediction and the plots listen to the page events from here on
+  initChart().catch((err) => notifyError("chart", err));
+  initPrediction();
+  initPlots().catch((err) => notifyError("plots", err));
   adoptUrlToken();
   initToken();
   initCommands({ wsSurface: () => Boolean(live && live.send({ type: "surface" })) });

@@ -4,7 +4,7 @@
 import { api, ApiError } from "./api.js";
 import { initCopies, readCopies, copiesLine } from "./copies.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
-import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite, emit } from "./ui.js";
+import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite, emit, latLon } from "./ui.js";
 
 const state = {
   form: null,
@@ -118,6 +118,7 @@ function renderPreview(r) {
   $("frame-hex").textContent = r.hex || "–";
   $("airtime").textContent = r.airtime_ms == null ? "–" : `${num(r.airtime_ms, 3)} ms at ${num(r.bitrate_bps, 0)} b/s`;
   renderEstimates(r.estimate);
+  $("estimates").dataset.pattern = r.pattern || ""; // whose preview is shown (tests wait on it)
   const violations = Array.isArray(r.violations) ? r.violations : [];
   state.form.setSnaps(r.snaps);
   state.form.setErrors(new Map());
@@ -168,8 +169,8 @@ function renderEstimates(e) {
   const rows = [
     ["length", withUnit(e.length_m, "m", 1)],
     ["duration", e.duration_s == null ? "repeats (no end)" : withUnit(e.duration_s, "s", 1)],
-    ["depth range", depth],
     ["battery use", withUnit(e.battery_pct, "%", 2)],
+    ["depth range", depth],
     ["join", `${withUnit(e.join_length_m, "m", 1)}, ${withUnit(e.join_duration_s, "s", 1)}`],
   ];
   box.replaceChildren(...rows.map(([k, v]) => el("div", { dataset: { key: k } }, el("dt", {}, k), el("dd", {}, v))));
@@ -204,13 +205,27 @@ function renderConfirm(preview, command) {
     const diff = preview.diff || {};
     parts.push(el("p", { testid: "confirm-summary" },
       "Active: ", el("strong", {}, diff.active || "none"), "  ->  new: ", el("strong", {}, preview.pattern)));
-    const changes = Array.isArray(diff.changes) ? diff.changes : [];
+    const changes = realChanges(diff.changes);
+    const active = Boolean(preview.diff);
+    const changedPattern = active && diff.active !== preview.pattern;
     parts.push(changes.length
       ? el("ul", { class: "changes", testid: "confirm-changes" }, ...changes.map((c) =>
-        el("li", {}, changeText(c, preview.pattern))))
-      : el("p", { class: "hint", testid: "confirm-changes" }, diff.active === preview.pattern ? "No parameter changes (a repeat)." : "New pattern: every parameter is new."));
-    parts.push(el("p", { testid: "confirm-deltas" },
-      `duration ${delta(diff.duration_delta_s, "s")}, length ${delta(diff.length_delta_m, "m")}`));
+        el("li", { dataset: { param: c.param } }, changeText(c, preview.pattern))))
+      : !active ? firstCommand(preview)
+        : el("p", { class: "hint", testid: "confirm-changes" },
+          changedPattern ? "New pattern, same parameter values." : "No parameter changes (a repeat)."));
+    parts.push(confirmEstimates(preview));
+    if (active) {
+      parts.push(el("p", { testid: "confirm-deltas" },
+        `against the running ${diff.active}: duration ${delta(diff.duration_delta_s, "s")}, length ${delta(diff.length_delta_m, "m")}`));
+    }
+    const from = preview.from;
+    if (from && Number.isFinite(from.x_m) && Number.isFinite(from.y_m)) {
+      const geo = latLon(from.lat_deg, from.lon_deg);
+      parts.push(el("p", { class: "hint", testid: "confirm-from" },
+        "starts from ", el("span", { class: "position" }, `x ${num(from.x_m, 1)} m north, y ${num(from.y_m, 1)} m east`),
+        geo === "–" ? null : el("span", { class: "latlon" }, ` ${geo}`)));
+    }
     parts.push(el("p", { class: "hint" }, `frame ${preview.hex || "–"}, ${num(preview.airtime_ms, 3)} ms on air`));
     const violations = Array.isArray(preview.violations) ? preview.violations : [];
     if (violations.length) {
@@ -224,6 +239,44 @@ function renderConfirm(preview, command) {
   $("confirm-title").textContent = `Send ${command.pattern}?`;
   body.replaceChildren(...parts);
   updateConfirmButton();
+}
+
+/** Nothing runs yet: every parameter is new; list them as they will be sent (snapped). */
+function firstCommand(preview) {
+  const params = Object.entries(preview.params || {});
+  return el("div", { testid: "confirm-changes" },
+    el("p", { class: "hint" }, "Nothing is running: every parameter is new."),
+    params.length ? el("ul", { class: "changes" }, ...params.map(([k, v]) =>
+      el("li", { dataset: { param: k } }, `${k}: ${withUnit(v, unitOf(preview.pattern, k))}`))) : null);
+}
+
+/** The changes that are real: a parameter whose old and new (snapped, as the vehicle decodes
+ * them) values are equal is not one, even when the pattern changes. */
+function realChanges(changes) {
+  if (!Array.isArray(changes)) return [];
+  return changes.filter((c) => !sameValue(c.old, c.new));
+}
+
+function sameValue(a, b) {
+  if (a === b) return true;
+  if (a === null || a === undefined || b === null || b === undefined) return false;
+  const x = Number(a);
+  const y = Number(b);
+  return typeof a !== "string" && typeof b !== "string" && Number.isFinite(x) && x === y;
+}
+
+/** What the new plan costs: shown on every send, the first one too. */
+function confirmEstimates(preview) {
+  const e = preview.estimate || {};
+  const rows = [
+    ["duration", e.duration_s == null ? "repeats (no end)" : withUnit(e.duration_s, "s", 1)],
+    ["length", withUnit(e.length_m, "m", 1)],
+    ["depth range", e.depth_min_m == null ? "unknown" : `${num(e.depth_min_m, 2)} to ${num(e.depth_max_m, 2)} m`],
+    ["battery use", withUnit(e.battery_pct, "%", 2)],
+  ];
+  // the copies and p(delivered): the line below (copies.js copiesLine), once
+  return el("dl", { class: "kv estimates confirm-estimates", testid: "confirm-estimates" },
+    ...rows.map(([k, v]) => el("div", { dataset: { key: k } }, el("dt", {}, k), el("dd", {}, v))));
 }
 
 function changeText(c, pattern) {

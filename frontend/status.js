@@ -1,7 +1,7 @@
 // The vehicle status panel: latest telemetry wins; the age ticks locally between messages.
 
 import { currentLink, renderLink, setRadio } from "./link.js";
-import { $, num, withUnit } from "./ui.js";
+import { $, num, withUnit, latLon } from "./ui.js";
 
 const STALE_S = 5;
 const LOW_BATTERY_PCT = 20;
@@ -44,11 +44,23 @@ export function renderTelemetry(msg) {
     const y = known(s.y_m, p.y_m);
     set("status-position", x === null && y === null ? "unknown"
       : `x ${x === null ? "unknown" : `${num(x, 1)} m`} north, y ${y === null ? "unknown" : `${num(y, 1)} m`} east`);
+    // latitude/longitude as the API computed them (backend/geo.py): null without a datum
+    const lat = known(p.lat_deg, s.lat_deg);
+    const lon = known(p.lon_deg, s.lon_deg);
+    const geo = latLon(lat, lon);
+    set("status-latlon", geo === "–" ? (x === null || y === null ? "–" : "no datum: lat/lon unknown") : geo);
     setRadio(s.link);
   }
   if (msg.link && typeof msg.link === "object") renderLink(msg.link);
   if (msg.age_s !== undefined && msg.age_s !== null) ageAt = { age: Number(msg.age_s) || 0, received: performance.now() };
   tickAge();
+}
+
+/** The datum (lat/lon of the north/east origin) from /api/session; null: none set. */
+export function renderDatum(datum) {
+  const text = datum ? latLon(datum.lat_deg, datum.lon_deg) : "–";
+  set("status-datum", datum ? text : "none set (no lat/lon)");
+  $("status-datum").title = datum ? `north/east 0 m is at ${text}` : "no datum: set one in the settings or from the surface GPS";
 }
 
 export function tickAge() {

@@ -180,3 +180,38 @@ export function emit(name, detail) {
 export function on(name, fn) {
   window.addEventListener(`nemesys:${name}`, (e) => fn(e.detail));
 }
+
+// ---- latitude and longitude ----
+
+/** Degrees and decimal minutes as on a chart, exactly as backend/geo.py dm() prints them:
+ * dm(29.5316, true) -> "29°31.896'N", dm(-82.3031, false) -> "082°18.186'W"; "–" if unknown. */
+export function dm(value, isLat) {
+  if (value === null || value === undefined || value === "" || !Number.isFinite(Number(value))) return "–";
+  const v = Number(value);
+  const hemi = isLat ? (v >= 0 ? "N" : "S") : (v >= 0 ? "E" : "W");
+  const a = Math.abs(v);
+  let deg = Math.trunc(a);
+  let minutes = (a - deg) * 60.0;
+  let text = fixed3(minutes);
+  if (Number(text) >= 60.0) {
+    deg += 1;
+    minutes = 0.0;
+    text = fixed3(minutes);
+  }
+  return `${String(deg).padStart(isLat ? 2 : 3, "0")}°${text.padStart(6, "0")}'${hemi}`;
+}
+
+/** x.toFixed(3) with Python's rounding of an exact tie (half to even), as f"{x:.3f}" does. */
+function fixed3(x) {
+  const scaled = x * 1000;
+  const floor = Math.floor(scaled);
+  if (scaled - floor === 0.5 && floor % 2 === 0 && (floor + 0.5) / 1000 === x) return (floor / 1000).toFixed(3);
+  return x.toFixed(3);
+}
+
+/** "29°31.896'N 082°18.186'W", or "–" when either is unknown. */
+export function latLon(latDeg, lonDeg) {
+  const lat = dm(latDeg, true);
+  const lon = dm(lonDeg, false);
+  return lat === "–" || lon === "–" ? "–" : `${lat} ${lon}`;
+}
