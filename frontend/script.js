@@ -1,5 +1,6 @@
 // Mission scripts: ordered steps (pattern, parameters, trigger), preview, save/load, onboard
-// export, and running them in auto or step mode.
+// export, and running them in auto or step mode. The script (name + steps) is kept in
+// localStorage on every change and restored when the page loads.
 
 import { api } from "./api.js";
 import { dictionary, paramForm, fillPatternSelect, defaultParams, commandText } from "./form.js";
@@ -13,8 +14,64 @@ const TRIGGERS = [
   ["operator", "on operator go"],
 ];
 
+/** Patterns that repeat until retasked, so never complete: the planner's REPEATING_PATTERNS
+ * (backend/scripts_completion.py; tests/backend/test_scripts_completion.py checks they agree). */
+export const REPEATING = new Set(["square", "circle"]);
+/** localStorage key of the script being authored. */
+export const STORE_KEY = "nemesys.script";
+
 let steps = []; // [{pattern, params, trigger: {kind, t_s}}]
 let pollTimer = null;
+
+/** Why step i may not wait for the previous step to complete, or null (same text as the API). */
+export function completionRefusal(list, i) {
+  const step = list[i];
+  const prev = i > 0 ? list[i - 1] : null;
+  if (!step || !prev || step.trigger.kind !== "after_previous" || !REPEATING.has(prev.pattern)) return null;
+  const name = prev.pattern.replace(/_/g, " ");
+  return `step ${i + 1} waits for step ${i} (${name}) to complete, but a ${name} repeats until retasked, so it never completes: use a time ('at') or the operator's go`;
+}
+
+/** Keep the script in localStorage (best effort: a full or disabled storage only warns once). */
+let storeWarned = false;
+function persist() {
+  try {
+    localStorage.setItem(STORE_KEY, JSON.stringify(scriptDocument()));
+  } catch (err) {
+    if (!storeWarned) notify(`the script cannot be kept across reloads: ${err.message}`, "warn");
+    storeWarned = true;
+  }
+}
+
+/** Restore the stored script; corrupt or old data is dropped with a notice, never a crash. */
+function restore() {
+  let text = null;
+  try {
+    text = localStorage.getItem(STORE_KEY);
+  } catch {
+    return;
+  }
+  if (!text) return;
+  try {
+    const parsed = parseScript(text);
+    $("script-name").value = parsed.name;
+    steps = parsed.steps;
+    if (steps.length) notify(`restored the script ${parsed.name}: ${steps.length} step${steps.length === 1 ? "" : "s"}`);
+  } catch (err) {
+    steps = [];
+    try { localStorage.removeItem(STORE_KEY); } catch { /* nothing more to do */ }
+    notify(`the stored script could not be restored (${err.message}): starting with an empty script`, "warn");
+  }
+}
+
+function clearScript() {
+  if (!steps.length) return;
+  const n = steps.length;
+  steps = [];
+  renderSteps();
+  $("script-timeline").replaceChildren();
+  notify(`script cleared (${n} step${n === 1 ? "" : "s"})`);
+}
 
 export function scriptDocument() {
   return {
@@ -32,13 +89,18 @@ export function scriptDocument() {
 /** Add a step from the authoring form ({pattern, params}). */
 export function addStep(command) {
   if (!command || !command.pattern) return;
+  const prev = steps[steps.length - 1];
+  // on completion of the previous step, unless it repeats (it never completes): then on go
+  const afterRepeating = Boolean(prev && REPEATING.has(prev.pattern));
   steps.push({
     pattern: command.pattern,
     params: { ...command.params },
-    trigger: steps.length ? { kind: "after_previous", t_s: null } : { kind: "at", t_s: 0 },
+    trigger: !prev ? { kind: "at", t_s: 0 } : afterRepeating ? { kind: "operator", t_s: null } : { kind: "after_previous", t_s: null },
   });
   renderSteps();
-  notify(`step ${steps.length} added: ${command.pattern}`);
+  notify(afterRepeating
+    ? `step ${steps.length} added: ${command.pattern}, on the operator's go (step ${steps.length - 1}, a ${prev.pattern}, repeats until retasked: it never completes)`
+    : `step ${steps.length} added: ${command.pattern}`);
 }
 
 function move(i, by) {
@@ -67,6 +129,7 @@ function stepRow(step, i) {
       onChange: () => {
         step.params = form.read();
         summary.textContent = commandText(step);
+        persist();
       },
     });
   };
@@ -74,8 +137,7 @@ function stepRow(step, i) {
   patternSelect.addEventListener("change", () => {
     step.pattern = patternSelect.value;
     step.params = defaultParams(step.pattern);
-    build();
-    summary.textContent = commandText(step);
+    renderSteps(); // the next step's "on completion" may now be refused
   });
 
   const trigger = el("select", { id: `${prefix}trigger`, testid: `${prefix}trigger`, "aria-label": `step ${i + 1} trigger` },
@@ -87,12 +149,28 @@ function stepRow(step, i) {
   });
   time.value = step.trigger.t_s ?? 0;
   const unit = el("span", { class: "unit", hidden: step.trigger.kind !== "at" }, "s");
+  const check = el("p", { class: "step-check", testid: `${prefix}check`, hidden: true });
+  const refusal = completionRefusal(steps, i);
+  if (refusal) showCheck(check, "error", refusal);
   trigger.addEventListener("change", () => {
+    const was = step.trigger.kind;
+    const why = completionRefusal(steps.map((s, k) => (k === i ? { ...s, trigger: { kind: trigger.value } } : s)), i);
+    if (why) { // refused: the step keeps its trigger
+      trigger.value = was;
+      showCheck(check, "error", why);
+      notify(why, "warn");
+      return;
+    }
+    check.hidden = true; // accepted: a refusal or an earlier check no longer applies
     step.trigger.kind = trigger.value;
     time.hidden = unit.hidden = trigger.value !== "at";
-    if (trigger.value === "at") step.trigger.t_s = Number(time.value) || 0;
+    step.trigger.t_s = trigger.value === "at" ? Number(time.value) || 0 : null;
+    persist();
   });
-  time.addEventListener("input", () => { step.trigger.t_s = time.value === "" ? 0 : Number(time.value); });
+  time.addEventListener("input", () => {
+    step.trigger.t_s = time.value === "" ? 0 : Number(time.value);
+    persist();
+  });
 
   return el("li", { class: "script-step", id: `script-step-${i}`, testid: `script-step-${i}` },
     el("div", { class: "step-head" },
@@ -102,12 +180,19 @@ function stepRow(step, i) {
         el("button", { type: "button", class: "small down", testid: `${prefix}down`, disabled: i === steps.length - 1, "aria-label": `move step ${i + 1} down`, onclick: () => move(i, 1) }, "↓"),
         el("button", { type: "button", class: "small", testid: `${prefix}remove`, "aria-label": `remove step ${i + 1}`, onclick: () => remove(i) }, "Remove"))),
     el("details", {}, summary, formBox),
-    el("p", { class: "step-check", testid: `${prefix}check`, hidden: true }));
+    check);
+}
+
+function showCheck(box, kind, text) {
+  box.hidden = false;
+  box.className = `step-check ${kind}`;
+  box.textContent = text;
 }
 
 function renderSteps() {
   const list = $("script-steps");
   list.replaceChildren(...steps.map(stepRow)); // empty: CSS shows "no steps yet"
+  persist();
 }
 
 // ---- preview, files, export ----
@@ -119,16 +204,16 @@ function showStepErrors(err) {
     const at = loc.indexOf("steps");
     const i = at >= 0 ? Number(loc[at + 1]) : NaN;
     const box = Number.isInteger(i) ? $("script-step-" + i)?.querySelector(".step-check") : null;
-    if (box) {
-      box.hidden = false;
-      box.className = "step-check error";
-      box.textContent = `${loc.slice(at + 2).join(".") || "step"}: ${d.msg}`;
-    }
+    if (box) showCheck(box, "error", `${loc.slice(at + 2).join(".") || "step"}: ${d.msg}`);
   }
 }
 
 function clearStepChecks() {
-  for (const box of document.querySelectorAll("#script-steps .step-check")) box.hidden = true;
+  document.querySelectorAll("#script-steps .step-check").forEach((box, i) => {
+    const why = completionRefusal(steps, i);
+    if (why) showCheck(box, "error", why);
+    else box.hidden = true;
+  });
 }
 
 /** A preview timeline event ({t_s, step, text}) or a run step ({index, pattern, state, ...}). */
@@ -178,17 +263,23 @@ function saveScript() {
 
 /** Parse a saved script; throws Error with a reason. */
 export function parseScript(text) {
-  const doc = JSON.parse(text);
-  if (!doc || doc.format !== SCRIPT_FORMAT) throw new Error(`not a ${SCRIPT_FORMAT} file`);
+  let doc;
+  try {
+    doc = JSON.parse(text);
+  } catch {
+    throw new Error("not JSON");
+  }
+  if (!doc || typeof doc !== "object" || doc.format !== SCRIPT_FORMAT) throw new Error(`not a ${SCRIPT_FORMAT} file`);
   if (doc.version !== SCRIPT_VERSION) throw new Error(`version ${doc.version} is not supported (expected ${SCRIPT_VERSION})`);
   if (!Array.isArray(doc.steps)) throw new Error("steps must be a list");
   const out = doc.steps.map((s, i) => {
     if (!s || !dictionary.byName.has(s.pattern)) throw new Error(`step ${i + 1}: unknown pattern ${s && s.pattern}`);
     const kind = s.trigger && s.trigger.kind;
     if (!TRIGGERS.some(([k]) => k === kind)) throw new Error(`step ${i + 1}: unknown trigger ${kind}`);
+    if (s.params != null && (typeof s.params !== "object" || Array.isArray(s.params))) throw new Error(`step ${i + 1}: params must be an object`);
     return { pattern: s.pattern, params: { ...(s.params || {}) }, trigger: { kind, t_s: kind === "at" ? Number(s.trigger.t_s) || 0 : null } };
   });
-  return { name: String(doc.name || "mission"), steps: out };
+  return { name: String(doc.name || "mission").slice(0, 80), steps: out };
 }
 
 async function loadScript(event) {
@@ -268,7 +359,7 @@ function renderRun(run) {
   const total = run && Array.isArray(run.steps) ? run.steps.length : 0;
   const stepNo = run && run.step != null ? Number(run.step) + 1 : null;
   $("script-run-state").textContent = running
-    ? `running (${run.mode})${stepNo ? `, step ${stepNo}${total ? ` of ${total}` : ""}` : ""}${run.waiting_for ? `, waiting for ${run.waiting_for}` : ""}`
+    ? `running (${run.mode})${stepNo ? `, step ${stepNo}${total ? ` of ${total}` : ""}` : ""}${run.waiting_for ? `, waiting for ${run.waiting_for}${run.due_s != null && run.waiting_for !== "operator" ? ` (due at ${withUnit(run.due_s, "s", 1)} into the run)` : ""}` : ""}`
     : run && total ? outcomeText(run) : "not running";
   const next = running && run.next ? run.next : null;
   const proposal = $("script-next-proposal");
@@ -285,7 +376,13 @@ function renderRun(run) {
 }
 
 export function initScript() {
+  restore();
   renderSteps();
+  $("script-name").addEventListener("input", persist);
+  if (!$("script-clear")) { // a Clear button beside the export (kept out of index.html's layout)
+    $("script-export").after(el("button", { type: "button", id: "script-clear", testid: "script-clear" }, "Clear script"));
+  }
+  $("script-clear").addEventListener("click", clearScript);
   $("script-preview").addEventListener("click", previewScript);
   $("script-save").addEventListener("click", saveScript);
   $("script-load").addEventListener("change", loadScript);

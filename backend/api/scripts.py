@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import asyncio
+import time
+from collections.abc import Callable
 from typing import Any, Literal
 
 from fastapi import APIRouter, HTTPException
@@ -11,6 +13,7 @@ from pydantic import BaseModel, ConfigDict
 
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.schemas import OPERATOR, OnboardScript, RunState, errors
+from backend.api.view import ViewHeader
 from backend.console import Console
 from backend.scripts import (
     MissionScript,
@@ -18,18 +21,22 @@ from backend.scripts import (
     ScriptPreview,
     ScriptRunError,
     ScriptRunner,
+    expand,
     export_onboard,
     onboard_csv,
     preview,
 )
 from backend.store import FINAL_STATES
-from backend.telemetry import number
 from codec import encode_frame
 
 router = APIRouter(prefix="/api/scripts", tags=["scripts"])
 
-#: How often a run checks its triggers (s).
+#: How often a run checks its triggers at most (wall s); it wakes sooner for a due step.
 POLL_S = 0.2
+#: Shortest sleep of a run's loop (wall s).
+MIN_SLEEP_S = 0.005
+#: How often a due step's loop looks for the previous step's acknowledgement (wall s).
+ACK_POLL_S = 0.05
 #: The run state before any run: every key of a run's, empty.
 IDLE: dict[str, Any] = {
     "running": False,
@@ -59,9 +66,11 @@ def _plan_error(err: ScriptError) -> HTTPException:
 
 
 @router.post("/preview", responses=errors((413, 422)))
-def script_preview(script: MissionScript, console: ConsoleDep) -> ScriptPreview:
+def script_preview(
+    script: MissionScript, console: ConsoleDep, x_nemesys_view: ViewHeader = None
+) -> ScriptPreview:
     """The whole script as one path (NED) with its timeline, from where the vehicle is now;
-    drawn in the 3D view."""
+    drawn in the caller's own 3D view (``X-Nemesys-View``)."""
     mirror = console.commands.mirror if console.commands else None
     try:
         doc = preview(script, console.vehicle_state(), mirror)
@@ -73,7 +82,7 @@ def script_preview(script: MissionScript, console: ConsoleDep) -> ScriptPreview:
             (i, f"{s.index + 1}: {s.pattern}")
             for s, i in zip(doc.steps, path.step_start, strict=False)
         ]
-        console.viewer.show_script(path.x_m, path.y_m, path.z_m, labels)
+        console.viewer.show_script(x_nemesys_view, path.x_m, path.y_m, path.z_m, labels)
     return doc
 
 
@@ -132,7 +141,16 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, A
     proposes each step and waits for the operator's go (``/run/next``)."""
     if console.runner is not None and console.runner.running:
         raise HTTPException(409, "a script is already running; stop it first")
-    console.runner = ScriptRunner(body.script, body.mode)
+    mirror = console.commands.mirror if console.commands else None
+    try:  # timed by the same expansion as the preview and the export
+        expanded = expand(body.script, console.vehicle_state(), mirror)
+    except ScriptError as err:
+        raise HTTPException(
+            422, [{**e, "loc": ["body", "script", *e["loc"]]} for e in err.errors()]
+        ) from None
+    console.runner = ScriptRunner.planned(
+        body.script, expanded, body.mode, clock=run_clock(console)
+    )
     console.script_commands = {}
     console.start_script_loop(_loop(console))
     await asyncio.sleep(0)
@@ -173,6 +191,52 @@ async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
     runner.mark_sent(index)
 
 
+def _time_scale(console: Console) -> float:
+    """Vehicle seconds per wall second: the simulator's time scale in training, else 1."""
+    bridge = getattr(console, "bridge", None)
+    scale = getattr(bridge, "time_scale", 1.0) if bridge is not None else 1.0
+    return float(scale) if isinstance(scale, int | float) else 1.0
+
+
+def run_clock(console: Console) -> Callable[[], float]:
+    """The run clock: vehicle seconds since the run started.
+
+    In training it follows the simulator's own clock (``sim.t_s``: it runs at the time
+    scale and lags it under load, so the run keeps the vehicle's time, not the wall's); on a
+    real link, where a one-way modem gives no telemetry, the station's monotonic clock. It
+    only ever moves forward (a training reset does not send it back).
+    """
+    sim = getattr(console, "sim", None)
+    last_wall = time.monotonic()
+    last_sim = float(sim.t_s) if sim is not None else 0.0
+    elapsed = 0.0
+
+    def now() -> float:
+        nonlocal last_wall, last_sim, elapsed
+        wall = time.monotonic()
+        if sim is not None:
+            t = float(sim.t_s)
+            elapsed += max(0.0, t - last_sim)
+            last_sim = t
+        else:
+            elapsed += wall - last_wall
+        last_wall = wall
+        return elapsed
+
+    return now
+
+
+def _sleep_s(console: Console, runner: ScriptRunner) -> float:
+    """Wall seconds to sleep: :data:`POLL_S`, or less when a step falls due sooner."""
+    due, now = runner.due_s(), runner.now_s
+    scale = _time_scale(console)
+    if due is None or now is None or scale <= 0:
+        return POLL_S
+    if due <= now:  # due, waiting for the previous step's acknowledgement
+        return ACK_POLL_S
+    return min(POLL_S, max(MIN_SLEEP_S, (due - now) / scale))
+
+
 async def _loop(console: Console) -> None:
     runner = console.runner
     assert runner is not None and console.log is not None
@@ -188,11 +252,7 @@ async def _loop(console: Console) -> None:
             if record["state"] in ("acknowledged", "sent"):
                 runner.mark_acknowledged(index)
             elif record["state"] in FINAL_STATES:  # rejected, timed_out, failed, ...
-                runner.mark_failed(
-                    index, f"step {index + 1}: {record['state']}: {record['reason']}"
-                )
-        status = console.hub.status or {}
-        now = number(status.get("t_s")) or 0.0
-        for index in runner.poll(now, str(status.get("mode", "")), status.get("pattern")):
+                runner.mark_failed(index, f"{record['state']}: {record['reason']}")
+        for index in runner.poll():
             await _send(console, runner, index)
-        await asyncio.sleep(POLL_S)
+        await asyncio.sleep(_sleep_s(console, runner))

@@ -1,10 +1,9 @@
 """Mission scripts: validation naming the place at fault, preview as the vehicle flies it,
-the onboard export, and the run's state machine."""
+and the onboard export (the run: test_scripts_runner.py; completion: test_scripts_completion.py)."""
 
 from __future__ import annotations
 
 import copy
-import json
 import math
 from typing import Any
 
@@ -15,8 +14,6 @@ from backend.scripts import (
     PREVIEW_MAX_POINTS,
     MissionScript,
     ScriptError,
-    ScriptRunError,
-    ScriptRunner,
     expand,
     export_onboard,
     onboard_csv,
@@ -84,7 +81,8 @@ def test_round_trip_json() -> None:
     s = script(
         step("square", SQUARE, "at", 0),
         step("circle", CIRCLE, "operator"),
-        step("surface", {}, "after_previous"),
+        step("surface", {}, "at", 500),
+        step("hover", HOVER, "after_previous"),
     )
     again = MissionScript.model_validate_json(s.model_dump_json())
     assert again == s
@@ -161,13 +159,13 @@ def test_negative_time_and_unknown_kind() -> None:
 
 def test_at_times_must_not_decrease() -> None:
     data = doc(
-        step("square", SQUARE, "at", 100),
+        step("straight", STRAIGHT, "at", 100),
         step("hover", HOVER, "after_previous"),
         step("circle", CIRCLE, "at", 50),
     )
     errors = errors_of(data)
     assert list(errors) == ["steps.2.trigger.t_s"]
-    assert "step 0" in errors["steps.2.trigger.t_s"]
+    assert "before step 1's 100 s" in errors["steps.2.trigger.t_s"]  # numbered as the page
     # equal times are allowed
     data["steps"][2]["trigger"]["t_s"] = 100
     MissionScript.model_validate(data)
@@ -334,21 +332,21 @@ def test_after_previous_on_finite_patterns_triggers_at_their_end() -> None:
     assert [e.t_s for e in pv.timeline] == sorted(e.t_s for e in pv.timeline)
 
 
-def test_after_previous_on_repeating_pattern_warns() -> None:
-    s = script(step("circle", CIRCLE, "at", 10), step("straight", STRAIGHT, "after_previous"))
+def test_operator_go_after_repeating_pattern_assumes_one_lap() -> None:
+    s = script(step("circle", CIRCLE, "at", 10), step("straight", STRAIGHT, "operator"))
     pv = preview(s, START)
     ci, line = pv.steps
-    assert ci.repeats
+    assert ci.repeats and ci.completion_s is None
     assert ci.warnings == []
     assert len(line.warnings) == 1
-    assert "never trigger" in line.warnings[0]
+    assert "no completion to wait for" in line.warnings[0]
     assert "one lap" in line.warnings[0]
     assert line.t_start_s == pytest.approx(10.0 + ci.duration_s)
     # one lap flown: the straight starts where the lap ends
     lap = expand(s, START)[0].plan.path
     assert (line.start.x_m, line.start.y_m) == pytest.approx((lap.xs[-1], lap.ys[-1]))
     assert line.start.speed_mps > 0.0  # still circling
-    assert pv.warnings == [f"step 1: {line.warnings[0]}"]
+    assert pv.warnings == [f"step 2: {line.warnings[0]}"]
 
 
 def test_operator_step_assumes_previous_completes_and_warns() -> None:
@@ -367,7 +365,7 @@ def test_at_before_previous_start_is_sent_right_after_it() -> None:
     )
     pv = preview(s, START)
     assert pv.steps[2].t_start_s == pv.steps[1].t_start_s > 10.0
-    assert any("as soon as step 1" in w for w in pv.steps[2].warnings)
+    assert any("as soon as step 2" in w for w in pv.steps[2].warnings)
 
 
 def test_first_step_later_waits_at_start() -> None:
@@ -448,7 +446,7 @@ def test_export_frames_match_encoder_and_times() -> None:
     assert [f["t_s"] for f in frames[:2]] == [0.0, 120.0]
     assert "note" not in frames[0]
     assert "operator" in frames[2]["note"]
-    assert "after step 2" in frames[3]["note"]
+    assert "after step 3 completes" in frames[3]["note"]  # numbered as the page
 
 
 def test_onboard_csv() -> None:
@@ -458,235 +456,3 @@ def test_onboard_csv() -> None:
     assert lines[1] == f"0.000,square,{encode_frame('square', SQUARE).frame.hex}"
     assert lines[2] == f"120.000,circle,{encode_frame('circle', CIRCLE).frame.hex}"
     assert len(lines) == 3
-
-
-# --- the run ----------------------------------------------------------------------------
-
-
-def three_step() -> MissionScript:
-    return script(
-        step("straight", STRAIGHT, "at", 0),
-        step("lawnmower", LAWNMOWER, "at", 60),
-        step("hover", HOVER, "after_previous"),
-    )
-
-
-def test_auto_sends_first_step_immediately_once() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    assert r.state()["waiting_for"] == "time"
-    assert r.poll(1000.0, "idle") == [0]
-    assert r.poll(1000.0, "idle") == []
-    assert r.poll(1001.0, "running", "straight") == []
-    st = r.state()
-    assert st["waiting_for"] == "acknowledgement"
-    assert st["steps"][0]["state"] == "sent"
-    assert st["step"] == 1
-
-
-def test_auto_at_step_waits_for_time_and_acknowledgement() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    assert r.poll(1000.0, "idle") == [0]
-    r.mark_sent(0)
-    # at 60 s into the run, but step 0 not acknowledged yet: nothing
-    assert r.poll(1070.0, "running", "straight") == []
-    assert r.state()["waiting_for"] == "acknowledgement"
-    r.mark_acknowledged(0)
-    assert r.state()["steps"][0]["state"] == "acknowledged"
-    # late: due at once after the ack
-    assert r.poll(1071.0, "running", "straight") == [1]
-
-
-def test_auto_at_step_not_before_its_time() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    assert r.poll(1000.0, "idle") == [0]
-    r.mark_acknowledged(0)
-    assert r.poll(1030.0, "running", "straight") == []
-    st = r.state()
-    assert st["waiting_for"] == "time"
-    assert st["due_s"] == 1060.0
-    assert st["elapsed_s"] == 30.0
-    assert r.poll(1059.9, "running", "straight") == []
-    assert r.poll(1060.0, "running", "straight") == [1]
-    assert r.poll(1061.0, "running", "straight") == []
-
-
-def test_explicit_start_time() -> None:
-    r = ScriptRunner(three_step(), "auto", start_s=900.0)
-    assert r.poll(950.0, "idle") == [0]
-    r.mark_acknowledged(0)
-    assert r.poll(960.0, "running", "straight") == [1]
-
-
-def test_auto_after_previous_waits_for_holding() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    assert r.poll(0.0, "idle") == [0]
-    r.mark_acknowledged(0)
-    assert r.poll(60.0, "running", "straight") == [1]
-    # the vehicle still reports the straight holding (stale telemetry): not ours
-    assert r.poll(61.0, "holding", "straight") == []
-    r.mark_sent(1)
-    r.mark_acknowledged(1)
-    # holding before the lawnmower was seen running: the report predates the retask
-    assert r.poll(62.0, "holding", "lawnmower") == []
-    assert r.state()["waiting_for"] == "completion"
-    assert r.poll(63.0, "running", "lawnmower") == []
-    assert r.poll(200.0, "running", "lawnmower") == []
-    assert r.poll(300.0, "holding", "lawnmower") == [2]
-    assert r.poll(301.0, "holding", "lawnmower") == []
-    r.mark_acknowledged(2)
-    st = r.state()
-    assert not st["running"]
-    assert st["outcome"] == "completed"
-    assert st["waiting_for"] is None
-    assert st["step"] is None
-    assert [x["state"] for x in st["steps"]] == ["acknowledged"] * 3
-
-
-def test_after_previous_ignores_another_patterns_holding() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    r.poll(0.0, "idle")
-    r.mark_acknowledged(0)
-    r.poll(60.0, "running", "straight")
-    r.mark_acknowledged(1)
-    assert r.poll(61.0, "running", "lawnmower") == []
-    assert r.poll(62.0, "holding", "hover") == []
-    assert r.poll(63.0, "holding", None) == [2]  # pattern unknown: the mode decides
-
-
-def test_after_surface_waits_for_surfaced() -> None:
-    s = script(step("surface", {}, "at", 0), step("hover", HOVER, "after_previous"))
-    r = ScriptRunner(s, "auto")
-    assert r.poll(0.0, "running", "circle") == [0]
-    r.mark_acknowledged(0)
-    assert r.poll(1.0, "surfacing", "surface") == []
-    assert r.poll(40.0, "surfaced", "surface") == [1]
-
-
-def test_auto_operator_step_waits_for_go() -> None:
-    s = script(step("straight", STRAIGHT, "at", 0), step("hover", HOVER, "operator"))
-    r = ScriptRunner(s, "auto")
-    assert r.proposed() is None
-    assert r.poll(0.0, "idle") == [0]
-    with pytest.raises(ScriptRunError, match="acknowledgement"):
-        r.go()
-    r.mark_acknowledged(0)
-    assert r.proposed() == 1
-    st = r.state()
-    assert st["waiting_for"] == "operator"
-    assert st["next"]["index"] == 1
-    assert st["next"]["pattern"] == "hover"
-    # poll never releases an operator step, even when the vehicle is holding
-    assert r.poll(100.0, "running", "straight") == []
-    assert r.poll(200.0, "holding", "straight") == []
-    assert r.go() == 1
-    assert r.proposed() is None
-    with pytest.raises(ScriptRunError):
-        r.go()
-
-
-def test_auto_go_refused_for_timed_step() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    with pytest.raises(ScriptRunError, match="time"):
-        r.go()
-    assert r.state()["next"] is None
-
-
-def test_step_mode_proposes_each_and_only_go_releases() -> None:
-    r = ScriptRunner(three_step(), "step")
-    for i in range(3):
-        assert r.proposed() == i
-        assert r.state()["waiting_for"] == "operator"
-        assert r.state()["next"]["index"] == i
-        # time passing and a completed pattern release nothing in step mode
-        assert r.poll(1000.0 * (i + 1), "holding") == []
-        assert r.poll(1000.0 * (i + 1) + 1, "running") == []
-        assert r.go() == i
-        assert r.proposed() is None
-        assert r.state()["waiting_for"] == "acknowledgement"
-        with pytest.raises(ScriptRunError):
-            r.go()
-        r.mark_sent(i)
-        assert r.state()["steps"][i]["transmitted"]
-        r.mark_acknowledged(i)
-    assert r.state()["outcome"] == "completed"
-
-
-def test_failure_stops_the_run() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    assert r.poll(0.0, "idle") == [0]
-    r.mark_sent(0)
-    r.mark_failed(0, "timed out: no acknowledgement")
-    st = r.state()
-    assert not st["running"]
-    assert st["outcome"] == "failed"
-    assert "timed out" in st["reason"]
-    assert "step 0" in st["reason"]
-    assert st["steps"][0]["state"] == "failed"
-    assert st["waiting_for"] is None
-    assert r.poll(100.0, "holding") == []
-    assert r.proposed() is None
-    with pytest.raises(ScriptRunError):
-        r.go()
-    # a late acknowledgement does not revive the failed step
-    r.mark_acknowledged(0)
-    assert r.state()["steps"][0]["state"] == "failed"
-
-
-def test_stop() -> None:
-    r = ScriptRunner(three_step(), "step")
-    assert r.go() == 0
-    r.stop()
-    st = r.state()
-    assert not st["running"]
-    assert st["outcome"] == "stopped"
-    assert st["reason"] == "stopped by the operator"
-    assert r.proposed() is None
-    r.mark_acknowledged(0)  # the vehicle still answers for what was sent
-    assert r.state()["steps"][0]["state"] == "acknowledged"
-    assert r.poll(100.0, "holding") == []
-
-
-def test_never_sends_a_step_twice() -> None:
-    s = script(
-        step("straight", STRAIGHT, "at", 0),
-        step("straight", STRAIGHT, "at", 0),
-        step("straight", STRAIGHT, "after_previous"),
-    )
-    r = ScriptRunner(s, "auto")
-    sent: list[int] = []
-    modes = ["idle", "running", "holding", "running", "holding", "holding"]
-    for k in range(200):
-        due = r.poll(float(k), modes[k % len(modes)], "straight")
-        sent += due
-        for i in due:
-            r.mark_sent(i)
-            r.mark_acknowledged(i)
-            r.mark_acknowledged(i)  # a duplicate acknowledgement changes nothing
-    assert sent == [0, 1, 2]
-    assert r.state()["outcome"] == "completed"
-
-
-def test_marks_for_steps_not_handed_out_are_refused() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    with pytest.raises(ScriptRunError, match="not been handed out"):
-        r.mark_sent(0)
-    with pytest.raises(ScriptRunError, match="not been handed out"):
-        r.mark_acknowledged(1)
-    with pytest.raises(ScriptRunError, match="no step 7"):
-        r.mark_failed(7, "x")
-    with pytest.raises(ValueError, match="auto"):
-        ScriptRunner(three_step(), "manual")  # type: ignore[arg-type]
-
-
-def test_state_is_json_ready() -> None:
-    r = ScriptRunner(three_step(), "auto")
-    r.poll(5.0, "idle")
-    st = json.loads(json.dumps(r.state()))
-    assert set(st) >= {"running", "mode", "step", "next", "waiting_for", "steps", "reason"}
-    assert st["steps"][0] == {
-        "index": 0,
-        "pattern": "straight",
-        "trigger": "at",
-        "state": "sent",
-        "transmitted": False,
-    }

@@ -12,7 +12,10 @@ from backend.scripts import RunMode, StepState, Trigger, TriggerKind, WaitingFor
 
 
 class OnboardFrame(BaseModel):
-    t_s: float = Field(description="s from the start of the run")
+    t_s: float = Field(
+        description="s from the start of the run; an after_previous step: the previous "
+        "step's start plus its completion time"
+    )
     pattern: str
     hex: str
     bits: str
@@ -43,6 +46,13 @@ class RunStep(BaseModel):
     trigger: TriggerKind
     state: StepState
     transmitted: bool
+    sent_s: float | None = Field(
+        description="s from the run's start when the step was handed out for sending"
+    )
+    completion_s: float | None = Field(
+        description="planned completion, s after the step takes effect (the end of its path; "
+        "a hover: its duration); null: it repeats until retasked"
+    )
 
 
 class RunState(BaseModel):
@@ -55,8 +65,11 @@ class RunState(BaseModel):
     step: int | None = Field(description="the next step to hand out")
     next: ProposedStep | None
     waiting_for: WaitingFor | None
-    due_s: float | None
-    elapsed_s: float | None
+    due_s: float | None = Field(
+        description="when the next step is due, s from the run's start (at: its time; "
+        "after_previous: the previous step's send time plus its planned completion)"
+    )
+    elapsed_s: float | None = Field(description="run clock: vehicle s since the run started")
     steps: list[RunStep]
     reason: str | None
     commands: dict[int, int] = Field(description="step index -> command id, steps sent so far")
