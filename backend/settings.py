@@ -159,6 +159,14 @@ class Settings(BaseSettings):
         open_transmitter(value).close()
         return value
 
+    @field_validator("gps")
+    @classmethod
+    def _gps(cls, value: str) -> str:
+        from backend.gps import parse_gps
+
+        parse_gps(value)  # raises ValueError naming the allowed forms; nothing is opened
+        return value
+
     @property
     def training(self) -> bool:
         return self.target == SIM_TARGET
