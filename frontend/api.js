@@ -2,6 +2,30 @@
 // ApiError with a sentence an operator can act on.
 
 const TOKEN_KEY = "nemesys.token";
+
+/**
+ * This page's own 3D view: a random id made when the page loads. The page opens viser's client
+ * with it (the websocket URL ws://host:port/view/<id>, see withView) and sends it as
+ * X-Nemesys-View on every API call, so its previews and replays are drawn in its view only.
+ * crypto.getRandomValues, not randomUUID: the latter exists only in secure contexts (a console
+ * opened over the LAN by plain http is not one).
+ */
+export const VIEW_ID = Array.from(crypto.getRandomValues(new Uint8Array(16)), (b) => b.toString(16).padStart(2, "0")).join("");
+
+/** The session's viewer_url with this page's view in its websocket URL (.../view/<VIEW_ID>). */
+export function withView(viewerUrl) {
+  return viewerUrl.replace(/([?&]websocket=)([^&#]*)/, (_, key, value) => {
+    let ws = decodeURIComponent(value);
+    try {
+      const u = new URL(ws);
+      u.pathname = `/view/${VIEW_ID}`;
+      ws = u.href;
+    } catch {
+      ws = `${ws.replace(/\/+$/, "")}/view/${VIEW_ID}`;
+    }
+    return key + ws;
+  });
+}
 let memoryToken = ""; // used when sessionStorage is unavailable
 
 export function getToken() {
@@ -93,7 +117,7 @@ function describe(status, detail, retryAfter) {
  * text); rejects with ApiError (status 0 for network failures). AbortError passes through.
  */
 export async function api(path, { method = "GET", body, signal } = {}) {
-  const headers = { Accept: "application/json" };
+  const headers = { Accept: "application/json", "X-Nemesys-View": VIEW_ID };
   if (body !== undefined) headers["Content-Type"] = "application/json";
   const token = currentToken();
   if (token) headers.Authorization = `Bearer ${token}`;

@@ -1,5 +1,7 @@
 """The 3D viewer: NED -> view conversion, the vehicle's attitude quaternion, and a real viser
-server on an OS-chosen port whose scene nodes are checked through their handle properties."""
+server on an OS-chosen port whose scene nodes are checked through their handle properties.
+Previews, scripts and replays are drawn in a page's own view: here one connected page
+(:class:`tests.backend.test_viewer_views.FakePage`), its nodes looked up through :class:`In`."""
 
 from __future__ import annotations
 
@@ -9,6 +11,8 @@ import socket
 import threading
 import time
 from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -17,6 +21,12 @@ import viser
 import viser.transforms as vtf
 
 import backend.viewer
+import backend.viewer_draw
+import backend.viewer_labels
+import backend.viewer_paths
+import backend.viewer_scene
+import backend.viewer_track
+import backend.viewer_views
 from backend.viewer import (
     ACTIVE_RGB,
     PREVIEW_BODY_RGB,
@@ -30,6 +40,10 @@ from backend.viewer import (
     client_html_path,
     ned_to_view,
 )
+
+from .test_viewer_views import FakePage
+
+VIEW = "unit-test-view-01"
 
 # --- frames -------------------------------------------------------------------------------
 
@@ -111,25 +125,52 @@ def viewer() -> Iterator[Viewer]:
         v.stop()
 
 
-def lines(v: Viewer, name: str) -> viser.LineSegmentsHandle:
+class Nodes(Protocol):
+    def node(self, name: str) -> viser.SceneNodeHandle | None: ...
+
+
+@dataclass
+class In:
+    """One page's own view of the viewer (its preview, script, replay)."""
+
+    viewer: Viewer
+    view: str
+
+    def node(self, name: str) -> viser.SceneNodeHandle | None:
+        return self.viewer.view_node(self.view, name)
+
+    def node_names(self, prefix: str = "/") -> list[str]:
+        return self.viewer.view_node_names(self.view, prefix)
+
+
+@pytest.fixture
+def page(viewer: Viewer) -> Iterator[In]:
+    p = FakePage(viewer, VIEW)
+    try:
+        yield In(viewer, VIEW)
+    finally:
+        p.close()
+
+
+def lines(v: Nodes, name: str) -> viser.LineSegmentsHandle:
     h = v.node(name)
     assert isinstance(h, viser.LineSegmentsHandle), name
     return h
 
 
-def cloud(v: Viewer, name: str) -> viser.PointCloudHandle:
+def cloud(v: Nodes, name: str) -> viser.PointCloudHandle:
     h = v.node(name)
     assert isinstance(h, viser.PointCloudHandle), name
     return h
 
 
-def label(v: Viewer, name: str) -> str:
+def label(v: Nodes, name: str) -> str:
     h = v.node(name)
     assert isinstance(h, viser.LabelHandle), name
     return h.text
 
 
-def position(v: Viewer, name: str) -> npt.NDArray[np.float64]:
+def position(v: Nodes, name: str) -> npt.NDArray[np.float64]:
     h = v.node(name)
     assert h is not None, name
     return h.position
@@ -174,14 +215,15 @@ def test_stop_frees_the_port_and_threads() -> None:
     v.update_pose(0.0, 1.0, 1.0, 1.0, 0.0, 0.0)  # ignored once stopped
 
 
-def test_show_preview_draws_join_body_waypoints_and_depth(viewer: Viewer) -> None:
+def test_show_preview_draws_join_body_waypoints_and_depth(viewer: Viewer, page: In) -> None:
     xs = (0.0, 2.0, 4.0, 4.0, 8.0, 8.0)
     ys = (0.0, 0.0, 1.0, 5.0, 5.0, 1.0)
     zs = (0.0, 1.0, 2.0, 2.0, 3.0, 3.0)
-    viewer.show_preview(xs, ys, zs, body_start=2, label="square")
+    viewer.show_preview(VIEW, xs, ys, zs, body_start=2, label="square")
     view = ned_to_view(xs, ys, zs).astype(np.float32)
+    assert viewer.node_names("/preview") == []  # not in the shared scene
 
-    join, body = lines(viewer, "/preview/join"), lines(viewer, "/preview/body")
+    join, body = lines(page, "/preview/join"), lines(page, "/preview/body")
     assert join.points.dtype == np.float32 and join.points.shape == (2, 2, 3)
     assert body.points.shape == (3, 2, 3)
     np.testing.assert_array_equal(polyline(join), view[:3])
@@ -190,53 +232,55 @@ def test_show_preview_draws_join_body_waypoints_and_depth(viewer: Viewer) -> Non
     assert join.thickness_units == "screen" and body.thickness_units == "screen"
     assert 2.0 <= body.thickness <= 4.0
 
-    wp = cloud(viewer, "/preview/waypoints")
+    wp = cloud(page, "/preview/waypoints")
     assert wp.precision == "float32" and wp.points.dtype == np.float32
     np.testing.assert_array_equal(wp.points, view)
     assert tuple(wp.colors[0]) == PREVIEW_JOIN_RGB and tuple(wp.colors[-1]) == PREVIEW_BODY_RGB
 
     # drop lines from the surface to every waypoint below it (a short path: all of them)
-    drops = lines(viewer, "/preview/drops").points
+    drops = lines(page, "/preview/drops").points
     assert len(drops) == 5
     np.testing.assert_array_equal(drops[:, 0, 2], 0.0)
     np.testing.assert_array_equal(drops[:, 1], view[1:])
 
-    assert label(viewer, "/preview/start") == "square start, depth 0.0 m"
-    assert label(viewer, "/preview/end") == "square end, depth 3.0 m (range 0.0-3.0 m)"
-    assert "2.0 m" in label(viewer, "/preview/pattern")
-    np.testing.assert_array_equal(position(viewer, "/preview/end"), view[-1])
+    # labels 3 m apart at least (no vehicle yet: the start keeps its own)
+    assert label(page, "/preview/start") == "square start, depth 0.0 m"
+    assert label(page, "/preview/end") == "square end, depth 3.0 m"
+    assert label(page, "/preview/pattern") == "pattern, depth 2.0 m"
+    np.testing.assert_array_equal(position(page, "/preview/end"), view[-1])
 
 
-def test_preview_is_replaced_and_cleared(viewer: Viewer) -> None:
-    viewer.show_preview((0.0, 1.0, 2.0), (0.0, 0.0, 0.0), (1.0, 1.0, 1.0), body_start=1)
-    assert viewer.node("/preview/join") is not None
+def test_preview_is_replaced_and_cleared(viewer: Viewer, page: In) -> None:
+    viewer.show_preview(VIEW, (0.0, 1.0, 2.0), (0.0, 0.0, 0.0), (1.0, 1.0, 1.0), body_start=1)
+    assert page.node("/preview/join") is not None
     # no join this time: the old join and pattern label must not survive
     many = np.linspace(0.0, 99.0, 100)
-    viewer.show_preview(many, np.zeros(100), np.full(100, 2.0), body_start=0, label="line")
-    assert viewer.node("/preview/join") is None
-    assert viewer.node("/preview/pattern") is None
-    assert lines(viewer, "/preview/body").points.shape == (99, 2, 3)
-    assert cloud(viewer, "/preview/waypoints").points.shape == (100, 3)
-    assert len(lines(viewer, "/preview/drops").points) <= 25  # decimated
-    body = viewer.node("/preview/body")
-    viewer.clear_preview()
-    assert viewer.node_names("/preview") == []
+    viewer.show_preview(VIEW, many, np.zeros(100), np.full(100, 2.0), body_start=0, label="line")
+    assert page.node("/preview/join") is None
+    assert page.node("/preview/pattern") is None
+    assert lines(page, "/preview/body").points.shape == (99, 2, 3)
+    assert cloud(page, "/preview/waypoints").points.shape == (100, 3)
+    assert len(lines(page, "/preview/drops").points) <= 25  # decimated
+    body = page.node("/preview/body")
+    assert viewer.clear_preview(VIEW) is True
+    assert page.node_names("/preview") == []
     assert body is not None
-    viewer.clear_preview()  # nothing left: a no-op
+    assert viewer.clear_preview(VIEW) is False  # nothing left: a no-op
 
 
-def test_preview_rejects_bad_input(viewer: Viewer) -> None:
+def test_preview_rejects_bad_input(viewer: Viewer, page: In) -> None:
     with pytest.raises(ValueError, match="equal length"):
-        viewer.show_preview((0.0, 1.0), (0.0,), (0.0, 0.0))
+        viewer.show_preview(VIEW, (0.0, 1.0), (0.0,), (0.0, 0.0))
     with pytest.raises(ValueError, match="equal length"):
-        viewer.show_preview((), (), ())
+        viewer.show_preview(VIEW, (), (), ())
     with pytest.raises(ValueError, match="finite"):
-        viewer.show_preview((0.0, math.nan), (0.0, 0.0), (0.0, 0.0))
+        viewer.show_preview(VIEW, (0.0, math.nan), (0.0, 0.0), (0.0, 0.0))
     with pytest.raises(ValueError, match="body_start"):
-        viewer.show_preview((0.0, 1.0), (0.0, 0.0), (0.0, 0.0), body_start=2)
-    viewer.show_preview((5.0,), (5.0,), (1.0,))  # one waypoint: a marker, no line
-    assert viewer.node("/preview/body") is None
-    assert cloud(viewer, "/preview/waypoints").points.shape == (1, 3)
+        viewer.show_preview(VIEW, (0.0, 1.0), (0.0, 0.0), (0.0, 0.0), body_start=2)
+    assert page.node_names() == []  # nothing drawn by a refused preview
+    viewer.show_preview(VIEW, (5.0,), (5.0,), (1.0,))  # one waypoint: a marker, no line
+    assert page.node("/preview/body") is None
+    assert cloud(page, "/preview/waypoints").points.shape == (1, 3)
 
 
 def test_show_active(viewer: Viewer) -> None:
@@ -354,55 +398,71 @@ def test_concurrent_poses_are_safe(viewer: Viewer) -> None:
     assert drawn == len(viewer.track_ned_m) - 1
 
 
-def test_show_replay(viewer: Viewer) -> None:
+def test_show_replay(viewer: Viewer, page: In) -> None:
     track = [(float(t), float(t), 2.0, 3.0, 0.0) for t in range(30)]
     commands = [(5.0, 5.0, 2.0, 3.0, "square"), (20.0, 20.0, 2.0, 3.0, "surface")]
-    viewer.show_replay(track, commands)
-    line = lines(viewer, "/replay/track")
+    viewer.show_replay(VIEW, track, commands)
+    line = lines(page, "/replay/track")
     assert line.points.shape == (29, 2, 3) and tuple(line.colors) == REPLAY_RGB
-    markers = cloud(viewer, "/replay/commands")
+    markers = cloud(page, "/replay/commands")
     assert markers.points.dtype == np.float32 and tuple(markers.colors) == REPLAY_COMMAND_RGB
     np.testing.assert_array_equal(markers.points, [(2.0, 5.0, -3.0), (2.0, 20.0, -3.0)])
-    assert label(viewer, "/replay/cmd_000") == "square @ 5 s"
-    assert label(viewer, "/replay/cmd_001") == "surface @ 20 s"
-    viewer.show_replay(track[:2])  # replaces: no commands this time
-    assert viewer.node("/replay/commands") is None and viewer.node("/replay/cmd_000") is None
-    viewer.clear_replay()
-    assert viewer.node_names("/replay") == []
+    assert label(page, "/replay/cmd_000") == "square @ 5 s"
+    assert label(page, "/replay/cmd_001") == "surface @ 20 s"
+    assert label(page, "/replay/end") == "replay end, 29 s"
+    viewer.show_replay(VIEW, track[:2])  # replaces: no commands this time
+    assert page.node("/replay/commands") is None and page.node("/replay/cmd_000") is None
+    assert viewer.clear_replay(VIEW) is True
+    assert page.node_names("/replay") == []
 
 
 def test_long_replay_is_subsampled() -> None:
     with Viewer(max_track_points=100) as v:
-        v.show_replay([(float(t), float(t), 0.0, 1.0, 0.0) for t in range(1000)])
-        pts = polyline(lines(v, "/replay/track"))
+        p = FakePage(v, VIEW)
+        v.show_replay(VIEW, [(float(t), float(t), 0.0, 1.0, 0.0) for t in range(1000)])
+        pts = polyline(lines(In(v, VIEW), "/replay/track"))
+        p.close()
         assert len(pts) == 100
         np.testing.assert_array_equal(pts[0], (0.0, 0.0, -1.0))
         np.testing.assert_array_equal(pts[-1], (0.0, 999.0, -1.0))
 
 
-def test_show_script(viewer: Viewer) -> None:
+def test_show_script(viewer: Viewer, page: In) -> None:
     viewer.show_script(
-        (0.0, 10.0, 10.0, 0.0), (0.0, 0.0, 10.0, 10.0), (1.0, 1.0, 4.0, 4.0),
+        VIEW, (0.0, 10.0, 10.0, 0.0), (0.0, 0.0, 10.0, 10.0), (1.0, 1.0, 4.0, 4.0),
         [(0, "1 straight"), (2, "2 hover")],
     )  # fmt: skip
-    assert tuple(lines(viewer, "/script/path").colors) == SCRIPT_RGB
+    assert tuple(lines(page, "/script/path").colors) == SCRIPT_RGB
     np.testing.assert_array_equal(
-        cloud(viewer, "/script/steps").points, [(0.0, 0.0, -1.0), (10.0, 10.0, -4.0)]
+        cloud(page, "/script/steps").points, [(0.0, 0.0, -1.0), (10.0, 10.0, -4.0)]
     )
-    assert label(viewer, "/script/step_000") == "1 straight (1.0 m)"
-    assert label(viewer, "/script/step_001") == "2 hover (4.0 m)"
+    assert label(page, "/script/step_000") == "1 straight (1.0 m)"
+    assert label(page, "/script/step_001") == "2 hover (4.0 m)"
     with pytest.raises(ValueError, match="step start"):
-        viewer.show_script((0.0,), (0.0,), (0.0,), [(3, "x")])
-    viewer.clear_script()
-    assert viewer.node_names("/script") == []
+        viewer.show_script(VIEW, (0.0,), (0.0,), (0.0,), [(3, "x")])
+    assert viewer.clear_script(VIEW) is True
+    assert page.node_names("/script") == []
 
 
-def test_the_viewer_registers_no_callbacks() -> None:
-    """Display only (viser's port has no authentication): a guard on the module's source."""
-    source = inspect.getsource(backend.viewer)
-    for forbidden in (
+VIEWER_MODULES = (
+    backend.viewer, backend.viewer_draw, backend.viewer_labels, backend.viewer_paths,
+    backend.viewer_scene, backend.viewer_track, backend.viewer_views,
+)  # fmt: skip
+
+
+@pytest.mark.parametrize("module", VIEWER_MODULES, ids=lambda m: m.__name__)
+def test_the_viewer_registers_no_callbacks(module: object) -> None:
+    """Display only (viser's port has no authentication): a guard on the modules' source. Only
+    viewer_views hears of clients connecting and leaving (to know which page is which view)."""
+    source = inspect.getsource(module)  # type: ignore[arg-type]
+    forbidden = [
         "on_click", "on_update", "on_drag", "on_client_connect", "on_client_disconnect",
         "add_button", "add_transform_controls", "add_text(", "add_number", "add_checkbox",
-        "add_slider", "add_dropdown", "add_upload", "request_share_url",
-    ):  # fmt: skip
-        assert forbidden not in source, forbidden
+        "add_slider", "add_dropdown", "add_upload", "request_share_url", "on_camera_update",
+        "on_scene_pointer", "register_handler",
+    ]  # fmt: skip
+    if module is backend.viewer_views:
+        forbidden.remove("on_client_connect")
+        forbidden.remove("on_client_disconnect")
+    for word in forbidden:
+        assert word not in source, word
