@@ -6,8 +6,11 @@ STAMP  := $(VENV)/.installed
 # roslibjs and ws for the interop tests (tests/sim_bridge/test_roslibjs.py): node >= 20, npm.
 NODE_DIR   := tests/node
 NODE_STAMP := $(NODE_DIR)/node_modules/.installed
+# The page's chart (Leaflet) and plots (uPlot), served by the console at /vendor/: no CDN at sea.
+VENDOR_DIR   := frontend/vendor
+VENDOR_STAMP := $(VENDOR_DIR)/node_modules/.installed
 
-.PHONY: test lint node-deps run demo bench results clean
+.PHONY: test lint node-deps vendor vendor-optional run demo bench results clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -21,15 +24,28 @@ $(NODE_STAMP): $(NODE_DIR)/package.json $(NODE_DIR)/package-lock.json
 
 node-deps: $(NODE_STAMP)
 
+$(VENDOR_STAMP): $(VENDOR_DIR)/package.json $(VENDOR_DIR)/package-lock.json
+	npm ci --prefix $(VENDOR_DIR) --no-audit --no-fund
+	touch $(VENDOR_STAMP)
+
+vendor: $(VENDOR_STAMP)
+
+# `make run` starts the console without them (no npm, no network): the page says why the
+# chart and the plots are missing.
+vendor-optional:
+	@if command -v npm >/dev/null 2>&1 && $(MAKE) --no-print-directory $(VENDOR_STAMP); then :; else \
+	  echo "WARNING: the chart and the telemetry plots are unavailable: 'npm ci --prefix $(VENDOR_DIR)'" \
+	       "needs npm (node >= 20) and the npm registry once; the console starts without them." >&2; fi
+
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 
-test: lint $(NODE_STAMP)
+test: lint $(NODE_STAMP) $(VENDOR_STAMP)
 	$(BIN)/pytest
 
-run: $(STAMP)
+run: $(STAMP) vendor-optional
 	$(BIN)/nemesys console
 
 demo: $(STAMP)
@@ -43,4 +59,4 @@ results: $(STAMP)
 	$(BIN)/nemesys results
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache $(NODE_DIR)/node_modules
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache $(NODE_DIR)/node_modules $(VENDOR_DIR)/node_modules
