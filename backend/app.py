@@ -16,8 +16,11 @@ from pathlib import Path
 from fastapi import FastAPI, Request
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException
+from starlette.types import Scope
 
-from backend.api import authoring, commands, errors_db, live, scripts, training
+from backend.api import authoring, chart, commands, errors_db, live, predict, scripts, training
+from backend.api import view as view_api
 from backend.api.openapi import security_schemes
 from backend.bounded_input import BodyLimit, shorten, validation_errors
 from backend.commands import RateLimited
@@ -28,6 +31,12 @@ from codec import EncodeError
 from planner import PlanError
 
 FRONTEND = Path(__file__).resolve().parent.parent / "frontend"
+#: The page's chart and plot libraries, installed from npm by the Makefile (no CDN at sea):
+#: only their ``dist`` directories are served, at /vendor/<name>.
+VENDOR = {
+    "leaflet": FRONTEND / "vendor" / "node_modules" / "leaflet" / "dist",
+    "uplot": FRONTEND / "vendor" / "node_modules" / "uplot" / "dist",
+}
 
 
 def create_app(settings: Settings | None = None, *, viewer: bool = True) -> FastAPI:
@@ -64,8 +73,11 @@ def create_app(settings: Settings | None = None, *, viewer: bool = True) -> Fast
         training.router,
         scripts.router,
         live.router,
+        chart.router,
+        predict.router,
     ):
         app.include_router(router)
+    app.include_router(view_api.router)  # a page's own 3D view
     _errors(app)
     _static(app)
     security_schemes(app)
@@ -113,4 +125,19 @@ def _static(app: FastAPI) -> None:
 
         return FileResponse(client_html_path())
 
-    app.mount("/static", StaticFiles(directory=FRONTEND), name="static")
+    for name, directory in VENDOR.items():
+        # not installed (no npm): no mount; the page then says the chart is unavailable
+        if directory.is_dir():
+            app.mount(f"/vendor/{name}", StaticFiles(directory=directory), name=f"vendor-{name}")
+    app.mount("/static", _Frontend(directory=FRONTEND), name="static")
+
+
+class _Frontend(StaticFiles):
+    """frontend/ without frontend/vendor/ (npm's tree: package files and sources that are
+    not the page's; its ``dist`` directories are served at /vendor/ instead)."""
+
+    def get_path(self, scope: Scope) -> str:
+        path = super().get_path(scope)
+        if Path(path).parts[:1] == ("vendor",):
+            raise HTTPException(status_code=404)
+        return path

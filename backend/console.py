@@ -19,13 +19,17 @@ from typing import Any
 
 from backend.commands import CommandManager
 from backend.geo import Datum, initial_datum
+from backend.gps import GpsFix, GpsReader, Station, parse_gps, station_of
 from backend.health import UNKNOWN_VALUES_RECENT_S, LinkHealth, assess
 from backend.link import Link, RosbridgeLink, open_link
 from backend.preview import frame_doc, plan_doc
+from backend.profile import VehicleProfile, profile_for
+from backend.reach import add_geo, with_lat_lon
 from backend.settings import Settings
 from backend.store import LogWriteError, MissionLog
 from backend.store_open import open_checked
 from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
+from backend.tiles import TileSource, open_tiles
 from codec import (
     Encoded,
     airtime_s,
@@ -53,6 +57,10 @@ class Console:
         self.limits = Limits(max_depth_m=settings.max_depth_m, max_speed_mps=settings.max_speed_mps)
         #: The NED origin's latitude and longitude (None: not known, positions in metres only).
         self.datum: Datum | None = initial_datum(settings)
+        #: What the vehicle can do (the twin's figures in training, the settings' otherwise).
+        self.profile: VehicleProfile = profile_for(settings)
+        self.gps: GpsReader | None = None  # the surface GPS (``gps`` setting)
+        self.tiles: TileSource | None = None  # local map tiles (``tiles`` setting)
         self.log: MissionLog | None = None
         self.dive = 0
         self.sim: Any = None  # sim_bridge.sim.Simulation in training mode
@@ -64,7 +72,7 @@ class Console:
         self.runner: Any = None  # backend.scripts.ScriptRunner while a script runs
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
-        self._pending_preview: tuple[Any, ...] | None = None
+        self._pending_previews: dict[str, tuple[Any, ...]] = {}  # view id -> latest preview
         self._preview_ready = asyncio.Event()
         self._drawer: asyncio.Task[None] | None = None
         self._health_task: asyncio.Task[None] | None = None
@@ -77,6 +85,11 @@ class Console:
 
     async def start(self, *, viewer: bool = True) -> None:
         s = self.settings
+        self.tiles = open_tiles(s.tiles)  # ValueError naming the setting
+        gps = parse_gps(s.gps)
+        if gps is not None:
+            self.gps = GpsReader(gps, on_fix=self._on_fix)
+            await self.gps.start()
         # checked (quick_check, not locked, writable): a LogError names the file and the fix
         self.log = open_checked(s.db_path)
         # ``nemesys console`` already did this before printing its URL; an app built otherwise
@@ -152,6 +165,10 @@ class Console:
             self.viewer.stop()
         if self.log is not None:
             self.log.close()
+        if self.gps is not None:
+            await self.gps.stop()
+        if self.tiles is not None:
+            self.tiles.close()
 
     def start_script_loop(self, coro: Coroutine[Any, Any, None]) -> None:
         """Run a mission script's trigger loop (replacing a finished one)."""
@@ -197,8 +214,17 @@ class Console:
         logger.warning("echo mismatch: %s", detail)
         self.hub.publish({"type": "event", "event": event})
 
+    def _on_fix(self, fix: GpsFix) -> None:
+        if self.datum is None:  # a real vehicle without a datum setting: the first fix
+            self.datum = Datum(fix.lat_deg, fix.lon_deg)
+
+    def station(self) -> Station:
+        """The ME transmitter: the GPS fix, else the station settings, else the datum."""
+        s, fix = self.settings, self.gps.fix if self.gps is not None else None
+        return station_of(self.datum, fix, s.station_lat_deg, s.station_lon_deg)
+
     def _on_pose(self, msg: dict[str, Any]) -> None:
-        pose = pose_from_message(msg)
+        pose = with_lat_lon(pose_from_message(msg), self.datum)
         self.hub.set_pose(pose)
         t_s, x, y, z = pose["t_s"], pose["x_m"], pose["y_m"], pose["z_m"]
         heading, roll = pose["heading_deg"], pose["roll_deg"]
@@ -326,20 +352,23 @@ class Console:
         enc = encode_frame(pattern, params)
         return enc, frame_doc(enc, self.settings.bitrate_bps)
 
-    def preview(self, pattern: str, params: dict[str, Any], *, show: bool = True) -> dict[str, Any]:
-        """The frame and the path the vehicle would fly from where it is now.
+    def preview(
+        self, pattern: str, params: dict[str, Any], *, show: bool = True, view: str | None = None
+    ) -> dict[str, Any]:
+        """The frame and the path the vehicle would fly from where it is now; drawn (``show``)
+        in the 3D view of page ``view`` only (None: in none).
 
         Raises:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
-        return self._preview(pattern, params, show=show)[1]
+        return self._preview(pattern, params, show=show and view is not None, view=view)[1]
 
     def prepare(self, pattern: str, params: dict[str, Any]) -> tuple[Encoded, dict[str, Any]]:
         """For a send: the frame, and its preview (not drawn) to check the limits on."""
         return self._preview(pattern, params, show=False)
 
     def _preview(
-        self, pattern: str, params: dict[str, Any], *, show: bool
+        self, pattern: str, params: dict[str, Any], *, show: bool, view: str | None = None
     ) -> tuple[Encoded, dict[str, Any]]:
         enc, doc = self.encode(pattern, params)
         cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
@@ -347,7 +376,9 @@ class Console:
         current = self.commands.mirror if self.commands else None
         new = plan(cmd, state, current)
         path = new.path
-        doc.update(plan_doc(new, current, self.limits))
+        soc = number((self.hub.status or {}).get("battery_pct"))
+        doc.update(plan_doc(new, current, self.limits, self.profile, soc))
+        add_geo(doc, self.datum, self.station(), self.settings.me_range_m)  # lat/lon, reach
         doc["from"] = state.as_dict()
         if self.commands is not None:
             # what sending it now would do: copies chosen from the link, and their odds
@@ -356,25 +387,27 @@ class Console:
             doc["two_way"] = self.commands.link.acknowledges
             doc["copies"] = copies
             doc["p_delivered"] = delivery_probability(ber, copies, loss=loss)
-        if show and self.viewer is not None:
+        if show and view is not None and self.viewer is not None:
             self._draw_later(
-                path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
+                view, path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
             )
         return enc, doc
 
-    def _draw_later(self, *preview: Any) -> None:
-        """Draw a preview in the 3D view off the request path, latest wins: a burst of
-        previews (an operator typing, twenty clients) costs one drawing per interval."""
-        self._pending_preview = preview
+    def _draw_later(self, view: str, *preview: Any) -> None:
+        """Draw a preview in page ``view``'s 3D view off the request path, latest wins per
+        view: a burst of previews (an operator typing, twenty clients) costs one drawing per
+        view per interval."""
+        self._pending_previews[view] = preview
         self._preview_ready.set()
 
     async def _draw_loop(self) -> None:
         while True:
             await self._preview_ready.wait()
             self._preview_ready.clear()
-            preview, self._pending_preview = self._pending_preview, None
-            if preview is not None and self.viewer is not None:
-                self.viewer.show_preview(*preview)
+            pending, self._pending_previews = self._pending_previews, {}
+            for view, preview in pending.items():
+                if self.viewer is not None:
+                    self.viewer.show_preview(view, *preview)
             await asyncio.sleep(PREVIEW_DRAW_INTERVAL_S)
 
     # --- training ------------------------------------------------------------------------

@@ -7,10 +7,11 @@ from __future__ import annotations
 
 from typing import Any
 
+from backend.profile import VehicleProfile, battery_use_pct
 from codec import FRAME_BITS, Encoded, airtime_s, sections
 from planner import Limits, Plan, compare, estimate, validate
+from planner._limits import top_speed
 from sim_bridge.agent import command_json
-from sim_bridge.environment import SOC_LINEAR_PCT_PER_H
 
 
 def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
@@ -48,17 +49,39 @@ def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
     }
 
 
-def plan_doc(new: Plan, current: Plan | None, limits: Limits) -> dict[str, Any]:
-    """The plan: path (NED, m; arrival times, s), estimates, violations, diff from ``current``."""
-    est = estimate(new)
+def plan_doc(
+    new: Plan,
+    current: Plan | None,
+    limits: Limits,
+    profile: VehicleProfile | None = None,
+    soc_pct: float | None = None,
+) -> dict[str, Any]:
+    """The plan: path (NED, m; arrival times, s), estimates, violations, diff from ``current``.
+
+    With the vehicle's ``profile``, durations are at the speed it can fly (the planned ones
+    beside them), a speed above its top speed is a violation, and the checks its unknown
+    figures prevent are listed; the battery use starts from ``soc_pct`` (None: full).
+    """
+    top = profile.top_speed_mps if profile is not None else None
+    heave = profile.heave_rate_mps if profile is not None else None
+    est = estimate(new, top, heave)
     path = new.path
+    violations = list(validate(new, limits))
+    # below the maximum speed only: above it the vehicle refuses the command onboard, so it
+    # would not fly it at top speed either (the maximum's violation says enough)
+    too_fast = None if any(v.param == "speed" for v in violations) else top_speed(new, top)
+    if too_fast is not None:
+        violations.append(too_fast)
     diff = None
     if current is not None:
-        d = compare(current, new)
+        d = compare(current, new, top, heave)
         diff = {
             "active": current.pattern,
+            # only real changes: a new pattern's parameter equal to the old one's is not one
             "changes": [
-                {"param": c.param, "old": c.old, "new": c.new, "unit": c.unit} for c in d.changes
+                {"param": c.param, "old": c.old, "new": c.new, "unit": c.unit}
+                for c in d.changes
+                if c.old != c.new
             ],
             "pattern_changed": d.pattern_changed,
             "duration_delta_s": d.delta("duration_s"),
@@ -78,8 +101,8 @@ def plan_doc(new: Plan, current: Plan | None, limits: Limits) -> dict[str, Any]:
             **{k: v for k, v in est.as_dict().items() if isinstance(v, int | float | None)},
             "join_length_m": est.transit_length_m,
             "join_duration_s": est.transit_duration_s,
-            # the paper's battery fit: 9.23 % an hour at nominal load, beyond the first hour
-            "battery_pct": est.duration_s / 3600.0 * SOC_LINEAR_PCT_PER_H,
+            # the whole battery fit, from the charge now, over the flyable duration
+            "battery_pct": battery_use_pct(est.duration_s, soc_pct),
         },
         "violations": [
             {
@@ -90,7 +113,8 @@ def plan_doc(new: Plan, current: Plan | None, limits: Limits) -> dict[str, Any]:
                 "message": v.message,
                 "overridable": v.overridable,
             }
-            for v in validate(new, limits)
+            for v in violations
         ],
+        "skipped_checks": profile.skipped_checks() if profile is not None else [],
         "diff": diff,
     }

@@ -1,10 +1,26 @@
 // The parameter form of one pattern, built from the dictionary's field descriptions, so a new
 // pattern or field needs no change here. Used by the authoring column and by script steps.
 
-import { el, withUnit } from "./ui.js";
+import { el, on, withUnit } from "./ui.js";
 
 /** The dictionary as returned by GET /api/dictionary, indexed by pattern name. */
 export const dictionary = { list: [], byName: new Map() };
+
+/** The vehicle's top speed (m/s) from the session's profile; null: unknown. */
+let topSpeed = null;
+
+/** A field's default: the dictionary's, but a speed no faster than the vehicle can fly
+ * (floored to the centimetre per second, so it never exceeds the top speed). */
+export function defaultOf(field) {
+  const d = field.default;
+  if (field.name !== "speed" || topSpeed === null || typeof d !== "number") return d;
+  return Math.min(d, Math.floor(topSpeed * 100) / 100);
+}
+
+on("session", ({ session }) => {
+  const top = session && session.profile ? session.profile.top_speed_mps : null;
+  topSpeed = typeof top === "number" && top > 0 ? top : null;
+});
 
 export function setDictionary(list) {
   dictionary.list = Array.isArray(list) ? list : [];
@@ -40,7 +56,7 @@ export function fillPatternSelect(select, selected) {
 export function defaultParams(pattern) {
   const p = dictionary.byName.get(pattern);
   const out = {};
-  for (const f of (p && p.fields) || []) out[f.name] = f.default;
+  for (const f of (p && p.fields) || []) out[f.name] = defaultOf(f);
   return out;
 }
 
@@ -69,7 +85,7 @@ function fieldRow(field, value, prefix, onChange) {
     });
     if (field.period === undefined && field.min !== undefined) control.min = field.min;
     if (field.period === undefined && field.max !== undefined) control.max = field.max;
-    control.value = value ?? field.default ?? "";
+    control.value = value ?? defaultOf(field) ?? "";
   }
   control.addEventListener("input", onChange);
   control.addEventListener("change", onChange);

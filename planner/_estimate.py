@@ -1,4 +1,10 @@
-"""Estimates for the console's confirm step: what a plan costs and what a retask changes."""
+"""Estimates for the console's confirm step: what a plan costs and what a retask changes.
+
+Durations are at the speed the vehicle can fly: given its top speed through the water (and
+its heave rate), a segment the path asks to fly faster takes as long as the vehicle needs
+(:func:`flyable_times`); the path's own times stay in ``planned_duration_s``. The path itself
+(shared with the vehicle) is never changed: guidance follows its geometry, not its clock.
+"""
 
 from __future__ import annotations
 
@@ -9,16 +15,75 @@ from codec._record import Record, init
 TYPE_CHECKING = False
 if TYPE_CHECKING:
     from codec import ParamValue
+    from planner._path import Path
     from planner._plan import Plan
+
+
+#: The fastest vertical rate the planner ever asks for (m/s): the surface command's ascent
+#: at the paper's measured heave (depth ramps are slower, 0.05 m/s). A vehicle at least this
+#: fast, within the 1 % the figure is measured to, never needs a segment stretched vertically.
+_PLANNER_HEAVE_MPS = 0.0731
+_MEASURED_WITHIN = 0.99
+
+
+def flyable_times(
+    path: Path, top_speed_mps: float | None = None, heave_rate_mps: float | None = None
+) -> tuple[float, ...]:
+    """Arrival time at each waypoint (s) for a vehicle no faster than ``top_speed_mps``
+    horizontally and ``heave_rate_mps`` vertically (``None``: unknown, not limited).
+
+    Each segment takes ``max(planned, horizontal / top speed, |depth change| / heave rate)``.
+    The path's own times when it never asks for more (the usual case: no loop at all).
+    """
+    times = path.times
+    top = top_speed_mps if top_speed_mps is not None and top_speed_mps > 0 else None
+    heave = heave_rate_mps if heave_rate_mps is not None and heave_rate_mps > 0 else None
+    if heave is not None and heave >= _PLANNER_HEAVE_MPS * _MEASURED_WITHIN:
+        heave = None
+    if top is not None and max(path.speeds, default=0.0) <= top:
+        top = None
+    if top is None and heave is None:
+        return times
+    xs, ys, zs = path.xs, path.ys, path.zs
+    inv_top = 0.0 if top is None else 1.0 / top
+    inv_heave = 0.0 if heave is None else 1.0 / heave
+    out = [times[0]]
+    t = times[0]
+    hypot = math.hypot
+    for i in range(len(times) - 1):
+        dt = times[i + 1] - times[i]
+        need = max(
+            hypot(xs[i + 1] - xs[i], ys[i + 1] - ys[i]) * inv_top,
+            abs(zs[i + 1] - zs[i]) * inv_heave,
+        )
+        t += dt if dt >= need else need
+        out.append(t)
+    return tuple(out)
+
+
+def planned_speed_mps(plan: Plan) -> float | None:
+    """The cruise speed the plan asks for (m/s): the command's ``speed``, or for a pattern
+    without one the fastest its path moves (hover's approach); ``None`` if it never moves."""
+    speed = plan.command.params.get("speed")
+    if isinstance(speed, int | float):
+        return float(speed)
+    fastest = max(plan.path.speeds, default=0.0)
+    return fastest if fastest > 0.0 else None
 
 
 class Estimate(Record):
     """Size and cost of a plan, all from its waypoints.
 
+    Durations are at the speed the vehicle can fly (see the module doc); with no top speed
+    or heave rate given they are the path's own.
+
     Attributes:
         waypoints: number of waypoints.
         length_m: 3D path length (for a repeating pattern: the join and one lap).
-        duration_s: time to fly it (same convention).
+        duration_s: time to fly it (same convention), at the flyable speed.
+        planned_duration_s: the same at the planned (commanded) speed: the path's own times.
+        planned_speed_mps: the cruise speed the plan asks for (``None``: it does not move).
+        flyable_speed_mps: the speed the vehicle will fly it at, ``min(planned, top)``.
         transit_length_m, transit_duration_s: the join, before the pattern starts.
         lap_length_m, lap_duration_s: the repeated lap, or ``None`` for a finite path.
         depth_min_m, depth_max_m: depth range (m, down).
@@ -29,9 +94,12 @@ class Estimate(Record):
         "depth_max_m",
         "depth_min_m",
         "duration_s",
+        "flyable_speed_mps",
         "lap_duration_s",
         "lap_length_m",
         "length_m",
+        "planned_duration_s",
+        "planned_speed_mps",
         "transit_duration_s",
         "transit_length_m",
         "waypoints",
@@ -43,6 +111,9 @@ class Estimate(Record):
     waypoints: int
     length_m: float
     duration_s: float
+    planned_duration_s: float
+    planned_speed_mps: float | None
+    flyable_speed_mps: float | None
     transit_length_m: float
     transit_duration_s: float
     lap_length_m: float | None
@@ -54,16 +125,26 @@ class Estimate(Record):
     y_min_m: float
     y_max_m: float
 
-    def __init__(self, plan: Plan) -> None:
+    def __init__(
+        self, plan: Plan, top_speed_mps: float | None = None, heave_rate_mps: float | None = None
+    ) -> None:
         path = plan.path
+        times = flyable_times(path, top_speed_mps, heave_rate_mps)
+        speed = planned_speed_mps(plan)
+        flyable = speed
+        if speed is not None and top_speed_mps is not None:
+            flyable = min(speed, top_speed_mps)
         init(self, "waypoints", len(path))
         init(self, "length_m", path.length_m())
-        init(self, "duration_s", path.duration_s)
+        init(self, "duration_s", times[-1])
+        init(self, "planned_duration_s", path.duration_s)
+        init(self, "planned_speed_mps", speed)
+        init(self, "flyable_speed_mps", flyable)
         init(self, "transit_length_m", path.length_m(0, path.body_start))
-        init(self, "transit_duration_s", path.times[path.body_start])
+        init(self, "transit_duration_s", times[path.body_start])
         loop = path.loop_start
         init(self, "lap_length_m", None if loop is None else path.length_m(loop))
-        init(self, "lap_duration_s", None if loop is None else path.duration_s - path.times[loop])
+        init(self, "lap_duration_s", None if loop is None else times[-1] - times[loop])
         init(self, "depth_min_m", min(path.zs))
         init(self, "depth_max_m", max(path.zs))
         init(self, "x_min_m", min(path.xs))
@@ -77,9 +158,12 @@ class Estimate(Record):
         return self.lap_length_m is not None
 
 
-def estimate(plan: Plan) -> Estimate:
-    """Length, duration, depth range and bounding box of ``plan``."""
-    return Estimate(plan)
+def estimate(
+    plan: Plan, top_speed_mps: float | None = None, heave_rate_mps: float | None = None
+) -> Estimate:
+    """Length, duration (at the speed a vehicle of ``top_speed_mps`` and ``heave_rate_mps``
+    can fly; unknown: as planned), depth range and bounding box of ``plan``."""
+    return Estimate(plan, top_speed_mps, heave_rate_mps)
 
 
 class ParamChange(Record):
@@ -107,7 +191,8 @@ class PlanDiff(Record):
         old_pattern: the running pattern (``None`` if none).
         new_pattern: the commanded one.
         changes: parameters that differ (all of them when the pattern changes).
-        old, new: estimates of both plans (``old`` is ``None`` with no running plan).
+        old, new: estimates of both plans (``old`` is ``None`` with no running plan), at
+            the flyable speed when a top speed is given.
         anchor_moved_m: how far the mission anchor moves (m).
     """
 
@@ -119,7 +204,13 @@ class PlanDiff(Record):
     new: Estimate
     anchor_moved_m: float
 
-    def __init__(self, current: Plan | None, new: Plan) -> None:
+    def __init__(
+        self,
+        current: Plan | None,
+        new: Plan,
+        top_speed_mps: float | None = None,
+        heave_rate_mps: float | None = None,
+    ) -> None:
         init(self, "old_pattern", None if current is None else current.pattern)
         init(self, "new_pattern", new.pattern)
         old_params = {} if current is None else current.command.params
@@ -134,8 +225,9 @@ class PlanDiff(Record):
             if old_params.get(name) != new_params.get(name) or self.pattern_changed
         ]
         init(self, "changes", tuple(changes))
-        init(self, "old", None if current is None else Estimate(current))
-        init(self, "new", Estimate(new))
+        rates = (top_speed_mps, heave_rate_mps)
+        init(self, "old", None if current is None else Estimate(current, *rates))
+        init(self, "new", Estimate(new, *rates))
         moved = 0.0 if current is None else math.dist(current.anchor, new.anchor)
         init(self, "anchor_moved_m", moved)
 
@@ -153,6 +245,12 @@ class PlanDiff(Record):
         return float(b) - float(a)
 
 
-def compare(current: Plan | None, new: Plan) -> PlanDiff:
-    """What replacing ``current`` by ``new`` changes (parameters, estimates, anchor)."""
-    return PlanDiff(current, new)
+def compare(
+    current: Plan | None,
+    new: Plan,
+    top_speed_mps: float | None = None,
+    heave_rate_mps: float | None = None,
+) -> PlanDiff:
+    """What replacing ``current`` by ``new`` changes (parameters, estimates at the flyable
+    speed, anchor)."""
+    return PlanDiff(current, new, top_speed_mps, heave_rate_mps)

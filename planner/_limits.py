@@ -7,7 +7,11 @@ Checks, each reported as a :class:`Violation` naming the parameter, its value an
 * the tightest circle the vehicle can hold at the commanded speed (radius >= the turn
   radius :func:`planner.turn_radius_m` gives at that speed);
 * an optional geofence, a circle or a polygon fixed in the NED frame (the mission origin is
-  ``(0, 0)``), which every waypoint of the plan, join included, must stay inside.
+  ``(0, 0)``), which every waypoint of the plan, join included, must stay inside;
+* the vehicle's top speed through the water (:func:`top_speed`, overridable): a command
+  faster than the vehicle can fly is flown at top speed, slower than planned. The console
+  checks it from its vehicle profile; it is not one of the onboard :class:`Limits`, so an
+  operator's override reaches the vehicle.
 
 :func:`check` raises :class:`LimitError` unless every violation is overridable and the
 operator overrides explicitly.
@@ -272,6 +276,32 @@ def validate(plan: Plan, limits: Limits) -> tuple[Violation, ...]:
     if limits.geofence is not None:
         out.extend(_fence(plan, limits.geofence))
     return tuple(out)
+
+
+def top_speed(plan: Plan, top_speed_mps: float | None) -> Violation | None:
+    """The violation of a plan asking for more than the vehicle's top speed (m/s), or
+    ``None`` (also when the top speed is unknown, or the plan never moves horizontally).
+
+    The speed is the command's ``speed``; a pattern without one (hover) is checked at the
+    fastest its path moves. Overridable: the vehicle flies it at top speed, only slower.
+    """
+    from planner._estimate import estimate, planned_speed_mps
+
+    speed = planned_speed_mps(plan)
+    if top_speed_mps is None or speed is None or speed <= top_speed_mps:
+        return None
+    est = estimate(plan, top_speed_mps)
+    planned = est.planned_duration_s
+    ratio = est.duration_s / planned if planned > 0 else speed / top_speed_mps
+    top = f"{round(top_speed_mps, 2):g}"
+    return Violation(
+        "speed",
+        speed,
+        top_speed_mps,
+        "m/s",
+        f"speed {round(speed, 3):g} m/s exceeds the vehicle's {top} m/s top speed: it will "
+        f"fly at {top} m/s, {ratio:.1f}x the planned duration",
+    )
 
 
 def _fence(plan: Plan, fence: CircleFence | PolygonFence) -> list[Violation]:

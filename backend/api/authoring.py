@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import asdict
 from typing import Any
 
 from fastapi import APIRouter, HTTPException, Request
@@ -19,6 +20,7 @@ from backend.api.schemas import (
     ValidationErrorResponse,
     errors,
 )
+from backend.api.view import ViewHeader
 from codec import DecodeError, decode_frame, describe_dictionary
 from sim_bridge.agent import command_json
 
@@ -28,7 +30,7 @@ router = APIRouter(prefix="/api", tags=["authoring"])
 @router.get("/session", response_model=Session)
 def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
     """Mode, target, where the 3D view is, and whether the caller holds the operator token."""
-    s = console.settings
+    s, d = console.settings, console.datum
     token = token_from(request.headers.get("authorization"), request.headers.get("x-nemesys-token"))
     viewer_url = None
     if console.viewer is not None:
@@ -45,6 +47,8 @@ def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
         "version": request.app.version,
         "limits": {"max_depth_m": s.max_depth_m, "max_speed_mps": s.max_speed_mps},
         "link": _link_capability(console),
+        "profile": asdict(console.profile),
+        "datum": None if d is None else {"lat_deg": d.lat_deg, "lon_deg": d.lon_deg},
     }
 
 
@@ -77,11 +81,13 @@ def dictionary() -> list[dict[str, Any]]:
     response_model=PreviewDoc,
     responses=errors((413, 422)),
 )
-def preview(body: CommandIn, console: ConsoleDep) -> JSONResponse:
+def preview(
+    body: CommandIn, console: ConsoleDep, x_nemesys_view: ViewHeader = None
+) -> JSONResponse:
     """The frame (bits, sections, hex, airtime) and the path the vehicle would fly from where it
     is now, expanded from the decoded packet, with estimates, limit violations and the diff
-    against the active pattern. Also drawn in the 3D view."""
-    return JSONResponse(console.preview(body.pattern, dict(body.params)))
+    against the active pattern. Also drawn in the caller's own 3D view (``X-Nemesys-View``)."""
+    return JSONResponse(console.preview(body.pattern, dict(body.params), view=x_nemesys_view))
 
 
 @router.post(

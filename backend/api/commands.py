@@ -23,8 +23,10 @@ from backend.api.schemas import (
     VehicleView,
     errors,
 )
+from backend.api.view import ViewHeader
 from backend.commands import CommandManager, NotRetryable
 from backend.health import LinkHealth
+from backend.reach import track_lat_lon
 from backend.store import STATES
 from backend.store_csv import csv_rows
 
@@ -210,7 +212,7 @@ def _dive(console: ConsoleDep, dive: int) -> dict[str, Any]:
         raise HTTPException(404, f"no dive {dive}")
     return {
         "dive": dive,
-        "track": console.log.track(dive),
+        "track": track_lat_lon(console.log.track(dive), console.datum),
         "commands": console.log.commands(dive=dive, limit=100_000, oldest_first=True),
     }
 
@@ -229,8 +231,11 @@ def dive(dive: IdPath, console: ConsoleDep) -> dict[str, Any]:
 @router.post(
     "/dives/{dive}/replay", response_model=ReplayResult, responses=errors((*OPERATOR, 404, 422))
 )
-def replay(dive: IdPath, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
-    """Draw a dive's track and its acknowledged commands in the 3D view."""
+def replay(
+    dive: IdPath, console: ConsoleDep, _op: OperatorDep, x_nemesys_view: ViewHeader = None
+) -> dict[str, Any]:
+    """Draw a dive's track and its acknowledged commands in the caller's own 3D view
+    (``X-Nemesys-View``; without it, in none). ``DELETE /api/replay`` clears it."""
     doc = _dive(console, dive)
     if console.viewer is not None:
         track = [(p["t_s"], p["x_m"], p["y_m"], p["z_m"], p["heading_deg"]) for p in doc["track"]]
@@ -242,7 +247,7 @@ def replay(dive: IdPath, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any
                 marks.append(
                     (origin["t_s"], origin["x_m"], origin["y_m"], origin["z_m"], c["pattern"])
                 )
-        console.viewer.show_replay(track, marks)
+        console.viewer.show_replay(x_nemesys_view, track, marks)
     return {"dive": dive, "track_points": len(doc["track"]), "commands": len(doc["commands"])}
 
 

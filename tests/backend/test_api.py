@@ -75,6 +75,11 @@ API_PATHS = {
     "/api/scripts/run",
     "/api/scripts/run/next",
     "/api/scripts/run/stop",
+    "/api/chart",
+    "/api/datum",
+    "/api/tiles/{z}/{x}/{y}",
+    "/api/replay",
+    "/api/predict",
 }
 SCRIPT: dict[str, Any] = {
     "format": "nemesys-mission-script",
@@ -731,7 +736,8 @@ def test_dives_and_track(client: TestClient) -> None:
     t = [p["t_s"] for p in dive["track"]]
     assert t == sorted(t)
     assert all(b - a >= 1.0 - 1e-6 for a, b in itertools.pairwise(t))  # 1 Hz (sim time)
-    assert set(dive["track"][0]) == {"t_s", "x_m", "y_m", "z_m", "heading_deg"}
+    keys = {"t_s", "x_m", "y_m", "z_m", "heading_deg", "lat_deg", "lon_deg"}
+    assert set(dive["track"][0]) == keys
     r = client.get("/api/dives/99")
     assert r.status_code == 404 and "99" in r.json()["detail"]
 

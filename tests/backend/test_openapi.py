@@ -43,13 +43,14 @@ from .conftest import (
     wait_state,
     wait_until,
 )
+from .test_tiles import tile_dir
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "api.md"
 SPEC_URI = "urn:nemesys:console:openapi"
 #: Models whose shape is the vehicle's, open by design (fields outside the contract kept).
 OPEN_MODELS = {"Ack", "VehicleStatus"}
 #: Path parameters that name something that exists, for calls that must reach the handler.
-PATH_VALUES = {"command_id": "1", "dive": "1", "name": "wreck"}
+PATH_VALUES = {"command_id": "1", "dive": "1", "name": "wreck", "z": "3", "x": "2", "y": "5"}
 #: The operator's endpoints (docs/api.md marks them 🔒).
 OPERATOR_OPS = {
     ("POST", "/api/commands"),
@@ -57,6 +58,7 @@ OPERATOR_OPS = {
     ("POST", "/api/surface"),
     ("POST", "/api/dives/{}/replay"),
     ("PUT", "/api/link"),
+    ("PUT", "/api/datum"),
     ("PUT", "/api/training/channel"),
     ("PUT", "/api/training/current"),
     ("PUT", "/api/training/time_scale"),
@@ -291,12 +293,15 @@ def test_operator_calls_answer_401_and_403_and_the_rest_no_token_error(
 # --- the answers, checked against the document ----------------------------------------------
 
 
-def test_a_tour_of_every_operation_validates(make_client: MakeClient) -> None:
+def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: Path) -> None:
     """A successful call of every operation, each response checked against its schema."""
-    client = make_client()
+    client = make_client(tiles=tile_dir(tmp_path))
     c = contract(client)
     first_pose(client)
     c.call("GET", "/api/session")
+    c.call("GET", "/api/chart")
+    c.call("GET", "/api/tiles/3/2/5")
+    c.call("PUT", "/api/datum", json={"lat_deg": 29.53, "lon_deg": -82.30}, headers=AUTH)
     assert c.call("GET", "/api/session", headers=AUTH).json()["authenticated"] is True
     c.call("GET", "/api/dictionary")
     body = {"pattern": "circle", "params": CIRCLE}
@@ -318,7 +323,9 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient) -> None:
     wait_state(client, surface["id"])
     c.call("GET", "/api/dives")
     c.call("GET", "/api/dives/1")
-    c.call("POST", "/api/dives/1/replay", headers=AUTH)
+    view = {"X-Nemesys-View": "tour-view-0001"}  # a page's own 3D view (none in this app)
+    c.call("POST", "/api/dives/1/replay", headers={**AUTH, **view})
+    c.call("DELETE", "/api/replay", headers=view)
     c.call("PUT", "/api/link", json={"delivery_target": 0.99}, headers=AUTH)
     c.call("GET", "/api/training")
     c.call("PUT", "/api/training/channel", json={"range_m": None}, headers=AUTH)
@@ -412,7 +419,9 @@ def test_422s(client: TestClient) -> None:
         elif "{" in path:
             r = c.call(method, re.sub(r"\{[^}]*\}", "x", path), headers=AUTH)
         else:
-            r = c.call(method, path, params={"limit": 0}, headers=AUTH)
+            # a bad query, or a bad view id (DELETE /api/replay takes only that)
+            bad_view = {"X-Nemesys-View": "not a view id"}
+            r = c.call(method, path, params={"limit": 0}, headers={**AUTH, **bad_view})
         assert r.status_code == 422, f"{method} {path}: {r.status_code}"
     beyond = {"pattern": "circle", "params": {**CIRCLE, "depth": 105}, "override": True}
     r = c.call("POST", "/api/commands", json=beyond, headers=AUTH)

@@ -3,7 +3,7 @@
 They mirror the handlers' output exactly (a field missing here would be dropped from the
 response): ``common`` (parameters, a command, limit violations), ``errors`` (error bodies and
 each route's ``responses``), ``records`` (the mission log, dives, the vehicle),
-``authoring``, ``training`` and ``scripts``. Shapes the vehicle sends (its status, its
+``authoring``, ``chart``, ``training`` and ``scripts``. Shapes the vehicle sends (its status, its
 acknowledgements) stay open: fields outside the contract are kept.
 """
 
@@ -14,6 +14,7 @@ from backend.api.schemas.authoring import (
     PreviewDoc,
     Session,
 )
+from backend.api.schemas.chart import ChartDoc, DatumIn, LinkReach
 from backend.api.schemas.common import CommandJson, LimitViolation, Params, ParamValue
 from backend.api.schemas.errors import (
     OPERATOR,
@@ -46,9 +47,11 @@ __all__ = [
     "OPERATOR",
     "Ack",
     "ChannelSettings",
+    "ChartDoc",
     "CommandJson",
     "CommandRecord",
     "CurrentSettings",
+    "DatumIn",
     "DecodeFailure",
     "DecodeResult",
     "DiveDetail",
@@ -57,6 +60,7 @@ __all__ = [
     "ErrorDetail",
     "LimitViolation",
     "LimitViolationError",
+    "LinkReach",
     "NewDive",
     "OnboardScript",
     "ParamValue",

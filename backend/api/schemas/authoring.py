@@ -6,6 +6,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field
 
+from backend.api.schemas.chart import DatumDoc, LinkReach
 from backend.api.schemas.common import (
     CommandJson,
     LimitViolation,
@@ -32,6 +33,18 @@ class LinkCapability(BaseModel):
     telemetry: bool
 
 
+class VehicleProfileDoc(BaseModel):
+    """What the vehicle can do (``backend/profile.py``): the twin's figures in training, the
+    settings' for a real vehicle; null: unknown (the checks needing it are skipped)."""
+
+    top_speed_mps: float | None = Field(description="top speed through the water (m/s)")
+    heave_rate_mps: float | None = Field(description="largest vertical speed (m/s)")
+    yaw_rate_dps: float | None = Field(description="largest turn rate (deg/s)")
+    max_depth_m: float = Field(description="deepest allowed depth (m)")
+    endurance_s: float | None = Field(description="time on a full battery at cruise (s)")
+    source: Literal["twin", "settings"]
+
+
 class Session(BaseModel):
     """Mode, target, where the 3D view is, and whether the caller holds the operator token."""
 
@@ -45,6 +58,10 @@ class Session(BaseModel):
     version: str
     limits: SessionLimits
     link: LinkCapability
+    profile: VehicleProfileDoc
+    datum: DatumDoc | None = Field(
+        description="the NED origin's lat/lon (deg, WGS84); null: none yet (metres only)"
+    )
 
 
 # --- dictionary ---------------------------------------------------------------------------
@@ -138,8 +155,8 @@ class EncodeDoc(CommandJson):
 
 
 class PlannedPath(BaseModel):
-    """The path (NED m, s from the command's start); ``body_start``: the index where the
-    pattern begins after the join; ``repeats``: the pattern loops."""
+    """The path (NED m, s from the command's start; lat/lon deg); ``body_start``: the index
+    where the pattern begins after the join; ``repeats``: the pattern loops."""
 
     x_m: list[float]
     y_m: list[float]
@@ -147,14 +164,26 @@ class PlannedPath(BaseModel):
     t_s: list[float]
     body_start: int
     repeats: bool
+    lat_deg: list[float] | None = Field(description="from the datum; null without one")
+    lon_deg: list[float] | None
 
 
 class PlanEstimate(BaseModel):
-    """Size and cost of the path (a repeating pattern: the join and one lap)."""
+    """Size and cost of the path (a repeating pattern: the join and one lap). Durations
+    (``duration_s``, ``transit_duration_s``/``join_duration_s``, ``lap_duration_s``) and
+    ``battery_pct`` are at the speed the vehicle can fly (its profile's top speed);
+    ``planned_duration_s`` is the path's own, at the commanded speed."""
 
     waypoints: int
     length_m: float
-    duration_s: float
+    duration_s: float = Field(description="at the flyable speed (s)")
+    planned_duration_s: float = Field(description="at the commanded speed: the path's times (s)")
+    planned_speed_mps: float | None = Field(
+        description="the speed the plan asks for (m/s); null: it does not move horizontally"
+    )
+    flyable_speed_mps: float | None = Field(
+        description="the speed the vehicle will fly: min(planned, top speed) (m/s)"
+    )
     transit_length_m: float
     transit_duration_s: float
     lap_length_m: float | None
@@ -167,7 +196,9 @@ class PlanEstimate(BaseModel):
     y_max_m: float
     join_length_m: float
     join_duration_s: float
-    battery_pct: float
+    battery_pct: float = Field(
+        description="charge used (percentage points): the whole battery fit from the charge now"
+    )
 
 
 class ParamChange(BaseModel):
@@ -196,11 +227,18 @@ class PreviewDoc(EncodeDoc):
     path: PlannedPath
     estimate: PlanEstimate
     violations: list[LimitViolation]
+    skipped_checks: list[str] = Field(
+        description="checks and estimates the vehicle profile's unknown figures prevent"
+    )
     diff: PlanDiff | None = Field(description="null when no pattern is active")
     from_: VehicleStateOut = Field(alias="from", description="where the path starts")
     two_way: bool | None = None
     copies: int | None = None
     p_delivered: float | None = None
+    link_reach: LinkReach | None = Field(
+        description="the path's range from the ME transmitter; null: the transmitter is not "
+        "placed (its lat/lon without a datum)"
+    )
 
 
 class DecodeResult(BaseModel):

@@ -85,11 +85,15 @@ class DiveSummary(BaseModel):
 
 
 class TrackPoint(BaseModel):
+    """A track point (NED m); ``lat_deg``/``lon_deg`` from the current datum (null: none)."""
+
     t_s: float
     x_m: float
     y_m: float
     z_m: float
     heading_deg: float
+    lat_deg: float | None
+    lon_deg: float | None
 
 
 class DiveDetail(BaseModel):
@@ -107,7 +111,8 @@ class ReplayResult(BaseModel):
 
 
 class Pose(BaseModel):
-    """The vehicle's last pose (NED); a number it did not send (null, NaN) is null."""
+    """The vehicle's last pose (NED); a number it did not send (null, NaN) is null;
+    ``lat_deg``/``lon_deg`` from the datum (null without one, or without x/y)."""
 
     t_s: float | None
     x_m: float | None
@@ -115,6 +120,8 @@ class Pose(BaseModel):
     z_m: float | None
     heading_deg: float | None
     roll_deg: float | None
+    lat_deg: float | None
+    lon_deg: float | None
 
 
 class VehicleStatus(BaseModel):
