@@ -22,9 +22,10 @@ from backend.geo import Datum, initial_datum
 from backend.gps import GpsFix, GpsReader, Station, parse_gps, station_of
 from backend.health import UNKNOWN_VALUES_RECENT_S, LinkHealth, assess
 from backend.link import Link, RosbridgeLink, open_link
+from backend.predict import TwinWorker
 from backend.preview import frame_doc, plan_doc
 from backend.profile import VehicleProfile, profile_for
-from backend.reach import add_geo, with_lat_lon
+from backend.reach import active_path_doc, add_geo, with_lat_lon
 from backend.settings import Settings
 from backend.store import LogWriteError, MissionLog
 from backend.store_open import open_checked
@@ -57,6 +58,10 @@ class Console:
         self.limits = Limits(max_depth_m=settings.max_depth_m, max_speed_mps=settings.max_speed_mps)
         #: The NED origin's latitude and longitude (None: not known, positions in metres only).
         self.datum: Datum | None = initial_datum(settings)
+        #: The process /api/predict's twins run in (started on first use).
+        self.twin_worker = TwinWorker()
+        #: The path the vehicle flies, as mirrored (NED and lat/lon), or None.
+        self.active_path: dict[str, Any] | None = None
         #: What the vehicle can do (the twin's figures in training, the settings' otherwise).
         self.profile: VehicleProfile = profile_for(settings)
         self.gps: GpsReader | None = None  # the surface GPS (``gps`` setting)
@@ -169,6 +174,7 @@ class Console:
             await self.gps.stop()
         if self.tiles is not None:
             self.tiles.close()
+        self.twin_worker.close()
 
     def start_script_loop(self, coro: Coroutine[Any, Any, None]) -> None:
         """Run a mission script's trigger loop (replacing a finished one)."""
@@ -236,8 +242,16 @@ class Console:
             self._last_track_s = t_s
             self.log.add_track(self.dive, t_s, x, y, z, heading)
 
-    def _show_active(self, active: Plan) -> None:
-        if self.viewer is not None:
+    def _show_active(self, active: Plan | None) -> None:
+        """The path the vehicle flies (as the station mirrors it): in the 3D view, and for
+        every page's chart (``/api/vehicle`` and an ``active_path`` message on /ws)."""
+        self.active_path = None if active is None else active_path_doc(active, self.datum)
+        self.hub.publish({"type": "active_path", "active_path": self.active_path})
+        if self.viewer is None:
+            return
+        if active is None:
+            self.viewer.clear_active()
+        else:
             p = active.path
             self.viewer.show_active(p.xs, p.ys, p.zs, f"active: {active.pattern}")
 
@@ -281,6 +295,7 @@ class Console:
             "status": self.hub.status,
             "active": cm.vehicle_active if cm else None,
             "last_sent": cm.last_sent if cm else None,
+            "active_path": self.active_path,
             "echo_mismatch": cm.echo_mismatch if cm else False,
             "age_s": self.hub.age_s(),
             "link": self.link_health().model_dump(),
@@ -428,5 +443,5 @@ class Console:
             self.commands.reset_vehicle()
         if self.viewer is not None:
             self.viewer.reset_track()
-            self.viewer.clear_active()
+        self._show_active(None)
         return self.dive

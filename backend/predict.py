@@ -68,11 +68,10 @@ RETRY_AFTER_S = 2
 class PredictorBusy(RuntimeError):
     """A prediction runs and the queue is full: try again after ``retry_after_s``."""
 
-    def __init__(self, retry_after_s: int = RETRY_AFTER_S) -> None:
+    def __init__(self, reason: str | None = None, retry_after_s: int = RETRY_AFTER_S) -> None:
         self.retry_after_s = retry_after_s
-        super().__init__(
-            f"a prediction is running and {QUEUE} more are waiting: retry in {retry_after_s} s"
-        )
+        why = reason or f"a prediction is running and {QUEUE} more are waiting"
+        super().__init__(f"{why}: retry in {retry_after_s} s")
 
 
 class Gate:
@@ -221,35 +220,41 @@ def run_twin(
     return Track(ts, xs, ys, zs, outcome, reason, duration, sim.t_s - t0)
 
 
-class _Worker:
-    """The worker process the twins run in (spawned: no copy of this process's threads),
-    started on first use, replaced if it dies."""
+class TwinWorker:
+    """The worker process a console's twins run in (spawned: no copy of this process's
+    threads), started on first use, replaced if it dies, shut down with the console."""
 
     def __init__(self) -> None:
         self._lock = threading.Lock()
         self._pool: ProcessPoolExecutor | None = None
+        self._closed = False
 
-    def pool(self, *, fresh: bool = False) -> ProcessPoolExecutor:
+    def _get(self, *, fresh: bool = False) -> ProcessPoolExecutor:
         with self._lock:
+            if self._closed:
+                raise PredictorBusy("the console is shutting down")
             if self._pool is None or fresh:
                 self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
             return self._pool
 
+    def run(
+        self, base: SimConfig, start: Start, frame: bytes, horizon_s: float, *, finite: bool
+    ) -> Track:
+        """:func:`run_twin` in the worker process; a new worker if the last one died."""
+        try:
+            job = self._get().submit(run_twin, base, start, frame, horizon_s, finite=finite)
+            return job.result()
+        except BrokenProcessPool:
+            pool = self._get(fresh=True)
+            return pool.submit(run_twin, base, start, frame, horizon_s, finite=finite).result()
 
-_WORKER = _Worker()
-
-
-def run_twin_apart(
-    base: SimConfig, start: Start, frame: bytes, horizon_s: float, *, finite: bool
-) -> Track:
-    """:func:`run_twin` in the worker process; a new worker if the last one died."""
-    try:
-        return (
-            _WORKER.pool().submit(run_twin, base, start, frame, horizon_s, finite=finite).result()
-        )
-    except BrokenProcessPool:
-        pool = _WORKER.pool(fresh=True)
-        return pool.submit(run_twin, base, start, frame, horizon_s, finite=finite).result()
+    def close(self) -> None:
+        """Stop the worker process (a prediction still running is abandoned)."""
+        with self._lock:
+            self._closed = True
+            pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
 
 
 def max_deviation_m(path: Plan, xs: list[float], ys: list[float], zs: list[float]) -> float:
@@ -302,7 +307,8 @@ def predict(
         assumptions.append("battery charge unknown: a full battery")
     start = Start(state, mode, mirror, soc_pct)
     repeats = planned.path.loop_start is not None
-    track = run_twin_apart(base, start, enc.frame.to_bytes(), horizon_s, finite=not repeats)
+    worker: TwinWorker = console.twin_worker
+    track = worker.run(base, start, enc.frame.to_bytes(), horizon_s, finite=not repeats)
     keep = decimate(len(track.t_s))
     xs = [track.x_m[i] for i in keep]
     ys = [track.y_m[i] for i in keep]

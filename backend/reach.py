@@ -23,6 +23,10 @@ import numpy as np
 from backend.geo import Datum, ned_to_geodetic
 from backend.gps import Station
 
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from planner import Plan
+
 #: Beyond this fraction of the range the link is marginal (Cockpit's 75 %).
 MARGINAL_FRACTION: Final = 0.75
 #: Farthest NED offset given a lat/lon (m): a local frame 10,000 km wide is no frame at all,
@@ -134,3 +138,17 @@ def add_geo(doc: dict[str, Any], datum: Datum | None, station: Station, range_m:
     path = doc["path"]
     path["lat_deg"], path["lon_deg"] = lat_lon(datum, path["x_m"], path["y_m"])
     doc["link_reach"] = link_reach(path["x_m"], path["y_m"], path["z_m"], station, range_m)
+
+
+def active_path_doc(active: Plan, datum: Datum | None) -> dict[str, Any]:
+    """The path the vehicle flies, for the chart: pattern, NED columns (m) and lat/lon (deg)."""
+    p = active.path
+    lat, lon = lat_lon(datum, p.xs, p.ys)
+    return {
+        "pattern": active.pattern,
+        "x_m": list(p.xs),
+        "y_m": list(p.ys),
+        "z_m": list(p.zs),
+        "lat_deg": lat,
+        "lon_deg": lon,
+    }

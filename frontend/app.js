@@ -170,6 +170,7 @@ async function main() {
       emit("vehicle", { msg: m });
     },
     link: (m) => renderLink(m.link),
+    active_path: (m) => emit("active_path", { path: m.active_path }),
     open: () => {
       if (opened) {
         loadCommands();

@@ -38,6 +38,7 @@ const state = {
   lastT: null,
   track: [],
   active: null, // the vehicle's echoed active command
+  activePath: null, // the console's mirror of the path the vehicle flies (/api/vehicle, /ws)
   previewed: new Map(), // command key -> preview path latlngs (the active path, as previewed)
   fittedRing: false,
   fittedPath: false,
@@ -109,7 +110,7 @@ function legendControl() {
         item("reach-marginal", `${REACH.marginal} (> 75 %)`, "beyond 75 % of the ME link's range from the transmitter"),
         item("reach-out_of_range", REACH.out_of_range),
         item("predicted", "predicted", "what the twin predicts the vehicle will fly"),
-        item("active", "active", "the vehicle's active command, as this page previewed it"),
+        item("active", "active", "the path the vehicle flies, as the console mirrors it"),
         item("track", "track"),
       );
       L.DomEvent.disableClickPropagation(box);
@@ -205,8 +206,9 @@ function drawPredicted() {
 
 function drawActive() {
   layers.active.clearLayers();
+  // the console's mirror of the path the vehicle flies; else this page's own preview of it
   const key = commandKey(state.active);
-  const pts = key && state.previewed.get(key);
+  const pts = latLngs(state.activePath) || (key && state.previewed.get(key));
   if (pts && pts.length > 1) layers.active.addLayer(L.polyline(pts, { className: "chart-active", interactive: false }));
 }
 
@@ -245,7 +247,13 @@ function resetTrack() {
 
 // ---- inputs ----
 
+function onActivePath(path) {
+  state.activePath = path || null;
+  if (map) drawActive();
+}
+
 function onTelemetry(msg) {
+  if (msg && msg.active_path !== undefined) onActivePath(msg.active_path);
   const pose = msg && msg.pose;
   const active = msg && (msg.active !== undefined ? msg.active : msg.status && msg.status.active);
   if (active !== undefined) onActive(active);
@@ -365,6 +373,7 @@ function createMap() {
 export async function initChart() {
   on("telemetry", ({ msg }) => onTelemetry(msg));
   on("vehicle", ({ msg }) => msg && onActive(msg.active));
+  on("active_path", ({ path }) => onActivePath(path));
   on("preview", onPreview);
   on("session", ({ session }) => {
     if (!session || session.dive === state.dive) return;

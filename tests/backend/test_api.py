@@ -910,7 +910,7 @@ def test_training_current_and_time_scale(client: TestClient) -> None:
 
 def test_training_reset_starts_a_new_dive_at_the_start(client: TestClient) -> None:
     start = first_pose(client)
-    send(client, "straight", {"speed": 1.0, "depth": 2, "duration": 600, "heading": 90})
+    send(client, "straight", {"speed": 0.18, "depth": 2, "duration": 600, "heading": 90})
     wait_until(
         lambda: (p := client.get("/api/vehicle").json()["pose"]) and p["y_m"] > start["y_m"] + 3,
         what="the vehicle heading east",

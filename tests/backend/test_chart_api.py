@@ -327,3 +327,22 @@ def test_the_answers_match_the_openapi(make_client: MakeClient, tmp_path: Path) 
     assert {("GET", "/api/chart"), ("PUT", "/api/datum"), ("GET", "/api/tiles/{z}/{x}/{y}")} <= ops
     secured = {(m, p) for m, p, op in c.operations() if "security" in op}
     assert ("PUT", "/api/datum") in secured and ("GET", "/api/chart") not in secured
+
+
+def test_the_active_path_is_given_for_every_pages_chart(client: TestClient) -> None:
+    """The path the vehicle flies (the station's mirror) comes with /api/vehicle in NED and
+    lat/lon, so a page that did not preview it can still draw it; a reset clears it."""
+    assert client.get("/api/vehicle").json()["active_path"] is None
+    r = client.post("/api/commands", json={"pattern": "straight", "params": STRAIGHT}, headers=AUTH)
+    assert r.status_code == 202, r.text
+    active = wait_until(
+        lambda: client.get("/api/vehicle").json()["active_path"], what="the active path"
+    )
+    assert active["pattern"] == "straight"
+    assert len(active["x_m"]) == len(active["lat_deg"]) >= 2
+    lat, lon = expected_lat_lon(TRAINING_DATUM, active["x_m"], active["y_m"])
+    assert np.allclose(active["lat_deg"], lat, atol=1e-9)
+    assert np.allclose(active["lon_deg"], lon, atol=1e-9)
+    assert max(active["x_m"]) > 30  # 200 s north at 0.18 m/s
+    assert client.post("/api/training/reset", headers=AUTH).status_code == 200
+    assert client.get("/api/vehicle").json()["active_path"] is None

@@ -21,7 +21,7 @@ from bench._server import ConsoleProcess, start_console
 from .conftest import CIRCLE, FINAL, SQUARE, TOKEN, clear_nemesys_env, wait_until
 
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
-EAST = {"speed": 1.0, "depth": 2, "duration": 600, "heading": 90}
+EAST = {"speed": 0.18, "depth": 2, "duration": 600, "heading": 90}
 #: Links to anything off this machine in the page's HTML, scripts or styles.
 EXTERNAL = re.compile(
     r"""(?:src|href|action)\s*=\s*["']?\s*(?:https?:)?//"""

@@ -306,6 +306,7 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     c.call("GET", "/api/dictionary")
     body = {"pattern": "circle", "params": CIRCLE}
     c.call("POST", "/api/preview", json=body)
+    c.call("POST", "/api/predict?horizon_s=30", json=body)
     frame = c.call("POST", "/api/encode", json=body).json()["hex"]
     c.call("POST", "/api/decode", json={"frame": frame})
     sent = c.call("POST", "/api/commands", json=body, headers=AUTH).json()

@@ -149,6 +149,18 @@ class LastSent(BaseModel):
     params: Params
 
 
+class ActivePath(BaseModel):
+    """The path the vehicle flies, as the station mirrors it from what it sent and what the
+    vehicle acknowledged (NED m; lat/lon deg, null without a datum)."""
+
+    pattern: str
+    x_m: list[float]
+    y_m: list[float]
+    z_m: list[float]
+    lat_deg: list[float] | None
+    lon_deg: list[float] | None
+
+
 class VehicleView(BaseModel):
     """Pose, status, the vehicle's echoed active command vs the last sent, link health."""
 
@@ -159,6 +171,9 @@ class VehicleView(BaseModel):
         lenient("the vehicle's echo of its active command (its last acknowledgement's)"),
     ]
     last_sent: LastSent | None
+    active_path: ActivePath | None = Field(
+        description="the path the vehicle flies, as mirrored; null when none is known"
+    )
     echo_mismatch: bool
     age_s: float | None = Field(description="seconds since the vehicle was last heard from")
     link: LinkHealth
