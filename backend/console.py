@@ -12,15 +12,15 @@ import asyncio
 import contextlib
 import logging
 import secrets
-import time
 from collections.abc import Coroutine
 from dataclasses import replace
 from typing import Any
 
 from backend.commands import CommandManager
+from backend.draw_queue import PreviewDrawer
 from backend.geo import Datum, initial_datum
 from backend.gps import GpsFix, GpsReader, Station, parse_gps, station_of
-from backend.health import UNKNOWN_VALUES_RECENT_S, LinkHealth, assess
+from backend.health import LinkHealth, link_health_of
 from backend.link import Link, RosbridgeLink, open_link
 from backend.predict import TwinWorker
 from backend.preview import frame_doc, plan_doc
@@ -77,8 +77,7 @@ class Console:
         self.runner: Any = None  # backend.scripts.ScriptRunner while a script runs
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
-        self._pending_previews: dict[str, tuple[Any, ...]] = {}  # view id -> latest preview
-        self._preview_ready = asyncio.Event()
+        self.drawer = PreviewDrawer(PREVIEW_DRAW_INTERVAL_S)
         self._drawer: asyncio.Task[None] | None = None
         self._health_task: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
@@ -152,7 +151,7 @@ class Console:
             from backend.viewer import Viewer
 
             self.viewer = Viewer(s.viewer_host, s.viewer_port)
-            self._drawer = asyncio.create_task(self._draw_loop(), name="preview drawing")
+            self._drawer = asyncio.create_task(self.drawer.run(self.viewer), name="preview drawing")
 
     async def stop(self) -> None:
         for task in (self._runner_task, self._drawer, self._health_task):
@@ -303,36 +302,9 @@ class Console:
 
     def link_health(self) -> LinkHealth:
         """What the station knows of its link to the vehicle (not the page's websocket)."""
-        link, cm = self.link, self.commands
-        assert link is not None and cm is not None
-        totals = cm.ledger.totals()
-        telemetry_age_s = self.hub.age_s()
-        ack_age_s = None if cm.last_ack_s is None else time.monotonic() - cm.last_ack_s
-        level, problems = assess(
-            connected=link.connected,
-            connection_problem=link.connection_problem,
-            capability=link.capability,
-            capability_problems=link.capability_problems,
-            telemetry_age_s=telemetry_age_s,
-            recent=totals.recent,
-            unknown_recent=self.hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
-        )
-        return LinkHealth(
-            target=self.settings.target,
-            connected=link.connected,
-            capability=link.capability,
-            acknowledges=link.acknowledges,
-            telemetry=link.telemetry,
-            level=level,
-            problems=problems,
-            last_ack_age_s=ack_age_s,
-            last_telemetry_age_s=telemetry_age_s,
-            frames=totals,
-            unknown_values=self.hub.unknown_values,
-            ber=self._link_ber()[0],
-            delivery_target=cm.delivery_target,
-            copies=cm.copies_now(),
-            surface_copies=cm.surface_copies_now(),
+        assert self.link is not None and self.commands is not None
+        return link_health_of(
+            self.link, self.commands, self.hub, self.settings.target, self._link_ber()[0]
         )
 
     def set_link(self, link_ber: float | None, delivery_target: float | None) -> LinkHealth:
@@ -403,27 +375,10 @@ class Console:
             doc["copies"] = copies
             doc["p_delivered"] = delivery_probability(ber, copies, loss=loss)
         if show and view is not None and self.viewer is not None:
-            self._draw_later(
+            self.drawer.later(
                 view, path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
             )
         return enc, doc
-
-    def _draw_later(self, view: str, *preview: Any) -> None:
-        """Draw a preview in page ``view``'s 3D view off the request path, latest wins per
-        view: a burst of previews (an operator typing, twenty clients) costs one drawing per
-        view per interval."""
-        self._pending_previews[view] = preview
-        self._preview_ready.set()
-
-    async def _draw_loop(self) -> None:
-        while True:
-            await self._preview_ready.wait()
-            self._preview_ready.clear()
-            pending, self._pending_previews = self._pending_previews, {}
-            for view, preview in pending.items():
-                if self.viewer is not None:
-                    self.viewer.show_preview(view, *preview)
-            await asyncio.sleep(PREVIEW_DRAW_INTERVAL_S)
 
     # --- training ------------------------------------------------------------------------
 

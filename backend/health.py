@@ -10,6 +10,7 @@ level and a list of named problems. :class:`LinkHealth` is what ``/api/vehicle``
 
 from __future__ import annotations
 
+import time
 from collections import deque
 from dataclasses import dataclass
 from typing import Final, Literal
@@ -17,6 +18,12 @@ from typing import Final, Literal
 from pydantic import BaseModel
 
 from backend.link import Capability
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from backend.commands import CommandManager
+    from backend.link import Link
+    from backend.telemetry import TelemetryHub
 
 #: Frames in the "recent" window.
 WINDOW: Final = 20
@@ -160,3 +167,39 @@ def assess(
         )
     level: Level = "red" if red else "amber" if amber else "green"
     return level, red + amber
+
+
+def link_health_of(
+    link: Link, cm: CommandManager, hub: TelemetryHub, target: str, ber: float
+) -> LinkHealth:
+    """What the station knows of its link to the vehicle (not the page's websocket): the
+    link's own facts, the command ledger's and the telemetry's ages, and the assessment."""
+    totals = cm.ledger.totals()
+    telemetry_age_s = hub.age_s()
+    ack_age_s = None if cm.last_ack_s is None else time.monotonic() - cm.last_ack_s
+    level, problems = assess(
+        connected=link.connected,
+        connection_problem=link.connection_problem,
+        capability=link.capability,
+        capability_problems=link.capability_problems,
+        telemetry_age_s=telemetry_age_s,
+        recent=totals.recent,
+        unknown_recent=hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
+    )
+    return LinkHealth(
+        target=target,
+        connected=link.connected,
+        capability=link.capability,
+        acknowledges=link.acknowledges,
+        telemetry=link.telemetry,
+        level=level,
+        problems=problems,
+        last_ack_age_s=ack_age_s,
+        last_telemetry_age_s=telemetry_age_s,
+        frames=totals,
+        unknown_values=hub.unknown_values,
+        ber=ber,
+        delivery_target=cm.delivery_target,
+        copies=cm.copies_now(),
+        surface_copies=cm.surface_copies_now(),
+    )
