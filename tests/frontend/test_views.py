@@ -134,11 +134,11 @@ def test_a_replay_is_drawn_in_one_page_and_cleared_by_the_button(
         assert scene_names(second_frame, "/replay") == []
         # cleared by the button, in this page's view only
         second.get_by_test_id("clear-replay").click()  # the other page's: nothing to clear
-        expect(second.get_by_test_id("message").last).to_contain_text("no replay shown")
+        expect(second.get_by_test_id("message").first).to_contain_text("no replay shown")
         assert "/replay/track" in scene_names(op_frame, "/replay")
         operator.get_by_test_id("clear-replay").click()
         wait_gone(op_frame, "/replay")
-        expect(operator.get_by_test_id("message").last).to_contain_text("replay cleared")
+        expect(operator.get_by_test_id("message").first).to_contain_text("replay cleared")
         other.assert_clean()
     finally:
         other.page.context.close()
