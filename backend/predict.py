@@ -27,6 +27,8 @@ from __future__ import annotations
 
 import math
 import multiprocessing
+import multiprocessing.connection
+import os
 import threading
 import time
 from collections.abc import Iterator
@@ -220,6 +222,20 @@ def run_twin(
     return Track(ts, xs, ys, zs, outcome, reason, duration, sim.t_s - t0)
 
 
+def _watch_parent() -> None:
+    """In the worker: exit when the console's process is gone, however it ended (SIGKILL
+    included), so no orphaned twin outlives it."""
+    parent = multiprocessing.parent_process()
+    if parent is None:
+        return
+
+    def watch() -> None:
+        multiprocessing.connection.wait([parent.sentinel])
+        os._exit(0)
+
+    threading.Thread(target=watch, name="parent watch", daemon=True).start()
+
+
 class TwinWorker:
     """The worker process a console's twins run in (spawned: no copy of this process's
     threads), started on first use, replaced if it dies, shut down with the console."""
@@ -234,7 +250,9 @@ class TwinWorker:
             if self._closed:
                 raise PredictorBusy("the console is shutting down")
             if self._pool is None or fresh:
-                self._pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn"))
+                self._pool = ProcessPoolExecutor(
+                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_watch_parent
+                )
             return self._pool
 
     def run(

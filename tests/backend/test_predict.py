@@ -5,6 +5,7 @@ from __future__ import annotations
 import copy
 import math
 import threading
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -13,6 +14,7 @@ from fastapi.testclient import TestClient
 from backend.api.predict import _gate
 from backend.geo import ned_to_geodetic
 from backend.predict import MAX_POINTS, QUEUE, decimate
+from bench._server import start_console
 from codec import encode_frame
 from sim_bridge.guidance import Mode
 
@@ -188,3 +190,42 @@ def test_a_real_vehicle_runs_the_twin_from_its_last_pose_and_says_so(
     assert any("no simulator" in a for a in doc["assumptions"])
     assert any("no water current" in a for a in doc["assumptions"])
     assert doc["x_m"][0] == 0.0 and doc["outcome"] == "accepted"
+
+
+def _children(pid: int) -> set[int]:
+    """Processes whose parent is ``pid`` (from /proc)."""
+    out = set()
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            out.add(int(stat.parent.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.parametrize("ending", ["stop", "kill"])
+def test_the_twin_worker_never_outlives_the_console(tmp_path: Path, ending: str) -> None:
+    """Stopped (SIGTERM, the lifespan closes it) or killed (SIGKILL, no shutdown at all): the
+    prediction's worker process exits with the console, never left behind as an orphan."""
+    env = {"NEMESYS_DB_PATH": str(tmp_path / "log.sqlite3")}
+    console = start_console(tmp_path / "console.log", "predict-test-token-0123456789", env=env)
+    try:
+        before = _children(console.pid)
+        with console.client(timeout_s=60) as http:
+            r = http.post("/api/predict?horizon_s=5", json={"pattern": "circle", "params": CIRCLE})
+            assert r.status_code == 200, r.text
+        workers = _children(console.pid) - before
+        assert workers, "the prediction ran in no worker process"
+    finally:
+        console.stop() if ending == "stop" else console.kill()
+    wait_until(lambda: not any(_alive(p) for p in workers), what="the worker to exit")
