@@ -64,8 +64,10 @@ def setup_scene(server: viser.ViserServer, canvas: Canvas) -> dict[str, tuple[fl
     server.initial_camera.position = (0.0, -18.0, 17.0)
     server.initial_camera.look_at = (0.0, 0.0, 0.0)
     server.gui.add_markdown(LEGEND)
-    # a small legend in the bottom-right corner, out of the way of the scene
+    # a small legend in the bottom-right corner, minimised: on a laptop's screen the open
+    # panel would cover a third of the view (one click opens it)
     server.gui.main_panel.float(x=-10, y=-10, width=260, height=190)
+    server.gui.main_panel.minimize()
     with server.atomic():
         add(
             scene.add_grid(

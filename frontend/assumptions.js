@@ -39,8 +39,16 @@ export function initAssumptions() {
 }
 
 /** The session's mode: in training the copies follow the emulated channel's BER. */
+let shownMode; // the mode the details' open state was last set for (the operator may toggle it)
+
 export function setAssumptionsMode(mode) {
   training = mode === "training";
+  // open on a real link (the copies follow these assumptions), closed in training, where the
+  // channel sets the BER: room for the command list on a laptop's screen
+  if (mode && mode !== shownMode) {
+    shownMode = mode;
+    $("link-details").open = !training;
+  }
   const input = $("link-ber-input");
   input.disabled = training;
   input.title = training ? "in training the emulated channel's bit-error rate is used (Training panel)" : "";

@@ -650,6 +650,10 @@ def test_link_assumptions_in_training_leave_the_ber_to_the_channel(
     assert console.get("/api/session")["mode"] == "training"
     ber = page.get_by_test_id("link-ber-input")
     expect(ber).to_be_disabled()
+    # closed in training (the channel sets the BER), one click opens it
+    details = page.get_by_test_id("link-details")
+    expect(details).not_to_have_attribute("open", "")
+    details.locator("summary").click()
     expect(page.get_by_test_id("link-ber-note")).to_be_visible()
     expect(page.get_by_test_id("link-ber-note")).to_have_text("training: set by the channel")
 
