@@ -45,6 +45,7 @@ from typing import TYPE_CHECKING, Final, Literal, TextIO
 import numpy as np
 from numpy.typing import NDArray
 
+from analysis.efficiency import whole_frame_efficiency
 from codec import (
     DEFAULT_SYNC_TOLERANCE,
     DICTIONARY,
@@ -121,7 +122,8 @@ class Efficiency:
 
     ``paper_efficiency`` is the paper's k / (k + 2mT) with our field's m = 8;
     ``paper_efficiency_m7`` the same with the paper's stated m = 7 (0.667 at T = 2);
-    ``code_rate`` is the true k / n; ``frame_efficiency`` k / frame bits (sync + n + guard).
+    ``code_rate`` is the true k / n; ``frame_efficiency`` the whole-frame efficiency, payload
+    bits (52) / frame bits (sync + n + guard), as defined once in :mod:`analysis.efficiency`.
     """
 
     t: int
@@ -257,7 +259,7 @@ def efficiency_table(ts: Sequence[int] = TS) -> tuple[Efficiency, ...]:
                 m=M_FIELD,
                 paper_efficiency=K / (K + 2 * M_FIELD * t),
                 code_rate=K / n,
-                frame_efficiency=K / frame_bits(t),
+                frame_efficiency=whole_frame_efficiency(n),
                 paper_efficiency_m7=K / (K + 2 * PAPER_M * t),
             )
         )
@@ -939,7 +941,7 @@ def format_report(report: BerReport) -> str:
         )
     lines.append("")
     lines.append("Coding efficiency (k = 56)")
-    lines.append("T   n   paper k/(k+2mT) m=8   paper's m=7   code rate k/n   frame k/(n+28)")
+    lines.append("T   n   paper k/(k+2mT) m=8   paper's m=7   code rate k/n   frame 52/(n+28)")
     for e in report.efficiency:
         lines.append(
             f"{e.t}  {e.n:>3}   {e.paper_efficiency:18.4f}   {e.paper_efficiency_m7:11.4f}   "

@@ -114,10 +114,10 @@ def test_efficiency_values_are_exact() -> None:
     assert e2.code_rate == 56 / 72 and round(e2.code_rate, 4) == 0.7778
     assert e2.paper_efficiency == 56 / (56 + 2 * 8 * 2)  # 0.636 with our field's m = 8
     assert e2.paper_efficiency_m7 == 56 / 84 and round(e2.paper_efficiency_m7, 3) == 0.667
-    assert e2.frame_efficiency == 0.56
+    assert e2.frame_efficiency == 0.52  # the 52-bit payload over the 100-bit frame
     for t, e in eff.items():
         assert e.n == BCHCode(t).n == 56 + 8 * t
-        assert e.code_rate == 56 / e.n and e.frame_efficiency == 56 / (e.n + 28)
+        assert e.code_rate == 56 / e.n and e.frame_efficiency == 52 / (e.n + 28)
 
 
 # --- the vectorised decoder of T != 2 is the codec's ---------------------------------------------
