@@ -33,13 +33,14 @@ function show(rows, status = "") {
 }
 
 function reason(text, status) {
-  show([row("prediction", text, "prediction-reason")], status);
+  show([row("prediction", text, "prediction-reason", text)], status);
 }
 
+// [short text for the one-line row, the whole story on hover]
 const OUTCOMES = {
-  lost: "the frame would not reach the vehicle (out of the link's range): it keeps what it runs",
-  rejected: "the vehicle would reject it",
-  duplicate: "the vehicle already runs it (a duplicate)",
+  lost: ["not reached", "the frame would not reach the vehicle (out of the link's range): it keeps what it runs"],
+  rejected: ["rejected", "the vehicle would reject it"],
+  duplicate: ["already running", "the vehicle already runs it (a duplicate)"],
 };
 
 function render(p) {
@@ -58,15 +59,15 @@ function render(p) {
   }
   rows.push(
     row(
-      "largest deviation",
+      "max deviation",
       Number.isFinite(p.max_deviation_m) ? `${num(p.max_deviation_m, 1)} m` : "–",
       "prediction-deviation",
       "the predicted track's largest distance from the planned path",
     ),
   );
   if (p.outcome && p.outcome !== "accepted") {
-    const why = OUTCOMES[p.outcome] || p.outcome;
-    rows.push(row("outcome", p.reason ? `${why}: ${p.reason}` : why, "prediction-outcome"));
+    const [short, why] = OUTCOMES[p.outcome] || [p.outcome, p.outcome];
+    rows.push(row("outcome", short, "prediction-outcome", p.reason ? `${why}: ${p.reason}` : why));
   }
   show(rows, p.outcome && p.outcome !== "accepted" ? "error" : "done");
   const box = $("prediction");
