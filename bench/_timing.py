@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import platform
 import statistics
 import subprocess
 import sys
@@ -49,13 +51,39 @@ def verdict(ok: bool) -> str:
     return "met" if ok else "MISSED"
 
 
+def peak_rss_run(code: str, args: Sequence[str]) -> tuple[int, list[str]]:
+    """Peak RSS (KiB, as the kernel's ``VmHWM`` counts it) of one fresh ``python -c code
+    args...`` process, which prints its own peak on its last line; and the lines it printed
+    before that."""
+    done = subprocess.run(
+        [sys.executable, "-c", code, *args], capture_output=True, text=True, check=True
+    )
+    lines = done.stdout.strip().splitlines()
+    return int(lines[-1]), lines[:-1]
+
+
 def peak_rss_kb(code: str, args: Sequence[str], runs: int) -> int:
     """Median peak RSS (KiB) of ``runs`` fresh ``python -c code args...`` processes; the code
     prints its own peak (``VmHWM``) on its last line of output."""
-    values = []
-    for _ in range(runs):
-        done = subprocess.run(
-            [sys.executable, "-c", code, *args], capture_output=True, text=True, check=True
-        )
-        values.append(int(done.stdout.strip().splitlines()[-1]))
-    return int(statistics.median(values))
+    return int(statistics.median(peak_rss_run(code, args)[0] for _ in range(runs)))
+
+
+def mib(kib: float) -> str:
+    """KiB (the kernel's "kB") as MiB, unit named: ``1.23 MiB``."""
+    return f"{kib / 1024:.2f} MiB"
+
+
+def machine() -> str:
+    """CPU model, core count and Python of this machine, in one line."""
+    model = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            model = next(
+                (ln.split(":", 1)[1].strip() for ln in f if ln.startswith("model name")), model
+            )
+    except OSError:
+        pass
+    return (
+        f"{model}, {os.cpu_count()} cores, {platform.system()} {platform.release()}, "
+        f"CPython {platform.python_version()}"
+    )

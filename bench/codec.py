@@ -8,7 +8,9 @@ receiver holds after frame sync of the 13-byte wire form) and bchlib takes the s
 split as 7 data + 2 ECC bytes, timed as the research measured it (two ``bytearray`` copies,
 ``decode``, and ``correct`` when it found errors); the target is judged on that pair. The
 fast path from an int codeword (``TableDecoder.decode``, used by ``decode_frame``) and our
-Berlekamp-Massey + Chien path are shown beside them. All cases run interleaved in one
+Berlekamp-Massey + Chien path are shown beside them, and the whole onboard decode (13 clean
+bytes through a new ``FrameReceiver`` to the checked command) against bchlib's clean decode
+(``nemesys bench reconfig`` judges it over 0-2 errors). All cases run interleaved in one
 process; the medians of the rounds are printed, with the ratio to bchlib from the same run.
 """
 
@@ -22,6 +24,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
+from bench._onboard import bchlib_pair, receive, wire
 from bench._timing import interleaved_medians, table
 from codec import CODE, DICTIONARY, BCHCode, TableDecoder, decode_frame, encode_frame
 from codec.batch import decode_frames, encode_messages, inject_errors, messages_of_payloads
@@ -40,30 +43,6 @@ def _words(rng: random.Random, errors: int, count: int) -> list[int]:
             word ^= 1 << pos
         out.append(word)
     return out
-
-
-BchlibPair = tuple[Callable[[tuple[bytes, bytes]], object], Callable[[bytes], object]]
-
-
-def _bchlib() -> BchlibPair | None:
-    """bchlib's decode (as the research timed it) and encode for the same (72, 56) code, or
-    ``None`` without the dev extras (its columns then read n/a)."""
-    try:
-        import bchlib
-    except ImportError:
-        return None
-
-    bch = bchlib.BCH(2, m=8)
-
-    def decode(pair: tuple[bytes, bytes]) -> object:
-        data, ecc = bytearray(pair[0]), bytearray(pair[1])
-        nerr = bch.decode(data, ecc)
-        if nerr > 0:
-            bch.correct(data, ecc)
-        return nerr, data
-
-    encode: Callable[[bytes], object] = bch.encode
-    return decode, encode
 
 
 def _batch_fps(n: int, ber: float, rounds: int) -> float:
@@ -85,7 +64,7 @@ def run(out: TextIO, *, quick: bool = False) -> int:
     count, loops, rounds = (64, 2, 3) if quick else (256, 20, 31)
     bm = BCHCode(t=2, k=56)
     fast = TableDecoder(bm)
-    peer = _bchlib()
+    peer = bchlib_pair()
 
     cases: dict[str, tuple[Callable[[Any], object], list[Any], int]] = {}
     for errors in range(4):
@@ -104,6 +83,8 @@ def run(out: TextIO, *, quick: bool = False) -> int:
     cases["frame"] = (encode_frame, commands, loops)
     frames = [encode_frame(c).frame.bits for c in commands]
     cases["decode_frame"] = (decode_frame, frames, loops)
+    received = [wire(encode_frame(c).frame.value) for c in commands]
+    cases["receiver"] = (receive, received, loops)
     med = interleaved_medians(cases, rounds)
 
     def us(key: str) -> str:
@@ -138,6 +119,13 @@ def run(out: TextIO, *, quick: bool = False) -> int:
     info = ("-", "-", "-", "-", "(info)", "-")
     rows.append(row("encode_frame, command -> 100 bits", "-", us("frame"), *info))
     rows.append(row("decode_frame, 100-char bits -> command", "-", us("decode_frame"), *info))
+    rows.append(
+        row(
+            "FrameReceiver, 13 bytes -> checked command", "-", us("receiver"), "-",
+            us("bchlib0"), ratio("receiver", "bchlib0"), f"{PAPER_DECODE_US:g}",
+            "(info: bench reconfig)", "-",
+        )
+    )  # fmt: skip
     out.write(
         "Codec, one codeword at a time: median us per call over "
         f"{rounds} interleaved rounds\n(fast = our syndrome table, BM = our Berlekamp-Massey + "

@@ -13,13 +13,6 @@ Typical use::
 """
 
 from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
-from codec._delivery import (
-    MAX_COPIES,
-    binomial_cdf,
-    copies_for,
-    delivery_probability,
-    frame_success_probability,
-)
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
@@ -80,6 +73,13 @@ from codec._sync import Accepted, Event, FrameReceiver, Rejected
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
+    from codec._delivery import (
+        MAX_COPIES,
+        binomial_cdf,
+        copies_for,
+        delivery_probability,
+        frame_success_probability,
+    )
     from codec._describe import describe_dictionary, describe_pattern, markdown_tables
 
 __all__ = [
@@ -153,18 +153,29 @@ __all__ = [
     "sections",
 ]
 
-# The listing helpers are imported on first use: the console needs them, the vehicle does not.
-# (Hidden from the type checker, which sees the imports above, so that a misspelt name imported
-# from codec is still an error and not an ``object``.)
-_LAZY = ("describe_dictionary", "describe_pattern", "markdown_tables")
+# The listing helpers and the delivery arithmetic are imported on first use: the console needs
+# them, the vehicle does not (``nemesys bench planner`` measures its memory). (Hidden from the
+# type checker, which sees the imports above, so that a misspelt name imported from codec is
+# still an error and not an ``object``.)
+_LAZY = {
+    "describe_dictionary": "codec._describe",
+    "describe_pattern": "codec._describe",
+    "markdown_tables": "codec._describe",
+    "MAX_COPIES": "codec._delivery",
+    "binomial_cdf": "codec._delivery",
+    "copies_for": "codec._delivery",
+    "delivery_probability": "codec._delivery",
+    "frame_success_probability": "codec._delivery",
+}
 
 if not TYPE_CHECKING:
 
     def __getattr__(name: str) -> object:
-        if name not in _LAZY:
+        module_name = _LAZY.get(name)
+        if module_name is None:
             raise AttributeError(f"module 'codec' has no attribute {name!r}")
-        from codec import _describe
+        import importlib
 
-        value = getattr(_describe, name)
+        value = getattr(importlib.import_module(module_name), name)
         globals()[name] = value
         return value

@@ -7,10 +7,11 @@ Berlekamp-Massey for the error locator and finds its roots by Chien search.
 
 :class:`TableDecoder` is the fast path for codes with t <= 2 and a 16-bit (or shorter)
 remainder, such as the default (72, 56) code: the remainder of the received word modulo g(x)
-is a complete syndrome, so a dictionary from remainder to error pattern, holding the
-1 + n + n(n-1)/2 correctable patterns, replaces the algebra. Both are bounded-distance
-decoders: they correct every pattern of weight <= t and accept or reject every other pattern
-identically (the tests cross-check them and the bchlib and galois oracles).
+is a complete syndrome, taken by byte tables, and a non-zero one is solved in closed form
+(:func:`make_corrector`) instead of by Berlekamp-Massey and Chien search. Both are
+bounded-distance decoders: they correct every pattern of weight <= t and accept or reject
+every other pattern identically (the tests cross-check them and the bchlib and galois
+oracles).
 
 Bit conventions: codewords and messages are ``int``; bit i is the coefficient of x^i, so the
 highest-degree bit is sent first. A codeword is ``message << r | parity``, r = n - k.
@@ -20,7 +21,7 @@ from __future__ import annotations
 
 from types import MappingProxyType
 
-from codec._gf2 import ChunkedRemainder, GF2m, degree, poly_mul
+from codec._gf2 import ChunkedRemainder, GF2m, degree, linear_table, poly_mul
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
@@ -84,12 +85,12 @@ class BCHCode:
         )
 
     @property
-    def parity_tables(self) -> tuple[list[int], ...]:
+    def parity_tables(self) -> tuple[Sequence[int], ...]:
         """Byte tables of the parity of a message, most significant message byte first."""
         return self._parity.tables
 
     @property
-    def remainder_tables(self) -> tuple[list[int], ...]:
+    def remainder_tables(self) -> tuple[Sequence[int], ...]:
         """Byte tables of ``received mod g``, most significant codeword byte first."""
         return self._remainder.tables
 
@@ -197,10 +198,15 @@ class TableDecoder:
     """Syndrome-table decoder for a (72, 56)-shaped code with t <= 2 (the default code).
 
     The remainder of the received word modulo g(x) is a complete syndrome for these codes. It
-    is the XOR of nine byte-table lookups (one per codeword byte), and one dictionary lookup
-    then gives the error pattern. Memory: the code's byte tables (9 x 256 entries, 7 of them
-    shared with the encoder) and a dictionary of 2628 entries (about 240 KB), built the first
-    time a word has a non-zero syndrome: a process that only sees clean frames never holds it.
+    is the XOR of nine byte-table lookups (one per codeword byte). A non-zero remainder is
+    then solved in closed form (:func:`make_corrector`): S1 and S3 by four byte lookups, the
+    error locator's roots from one 256-entry table of the roots of y^2 + y = c. Memory: the
+    code's byte tables (9 x 256 packed 16-bit entries, 7 of them shared with the encoder,
+    about 5 KiB) and about 1.5 KiB of ``bytes`` tables for the correction, built with the
+    decoder: a word with errors allocates nothing. (A dictionary from every correctable
+    syndrome to its pattern, 2628 entries, costs about 300 KiB of resident memory;
+    :attr:`error_patterns` still builds it on demand, for the numpy batch path and the
+    tests, but the decoders never use it.)
     """
 
     N_BYTES = 9
@@ -214,9 +220,9 @@ class TableDecoder:
         self._errors: dict[int, int] | None = None
         self.decode: Callable[[int], tuple[int, int]]
         self.decode_bytes: Callable[[bytes], tuple[int, int]]
-        self.decode, self.decode_bytes = _make_decoders(
-            code.remainder_tables, code.r, self._error_table
-        )
+        #: Non-zero remainder -> the correctable error pattern, or ``None`` (closed form).
+        self.correct: Callable[[int], int | None] = make_corrector(code)
+        self.decode, self.decode_bytes = _make_decoders(code.remainder_tables, code.r, self.correct)
         self.decode.__doc__ = """Same contract as :meth:`BCHCode.decode`."""
         self.decode_bytes.__doc__ = """Decode the codeword as 9 bytes, MSB first (the wire form).
 
@@ -251,27 +257,88 @@ def _correctable_errors(code: BCHCode) -> dict[int, int]:
     return errors
 
 
+def make_corrector(code: BCHCode) -> Callable[[int], int | None]:
+    """The error pattern of weight 1..t (t <= 2) with a given non-zero remainder mod g(x), or
+    ``None`` when there is none inside the (shortened) codeword: bounded-distance decoding,
+    the same decisions as :meth:`BCHCode.decode` and as a table of every correctable syndrome.
+
+    In closed form over GF(2^m): the syndromes S1 = r(alpha) and S3 = r(alpha^3) of the
+    remainder r come from byte tables (linear in r). One error at i: S1 = alpha^i and
+    S3 = S1^3. Two errors x1, x2: x1 + x2 = S1 and x1 x2 = S3 / S1 + S1^2, so with x = S1 y
+    the locator becomes y^2 + y = c, c = S3 / S1^3 + 1, whose root y0 (the other is y0 + 1)
+    one 2^m-entry table holds; no root (trace of c is 1) means more than two errors. An error
+    position at or beyond n (outside the shortened code) is uncorrectable too. For t = 1 the
+    remainder is S1 itself up to the field isomorphism: one error at log S1, if below n.
+    """
+    f = code.field
+    exp, log, order, n = f.exp, f.log, f.order, code.n
+    if code.t > 2 or f.m > 8 or code.r % 8:
+        raise ValueError("the closed-form corrector handles t <= 2 over GF(2^m), m <= 8")
+
+    def syndrome_tables(j: int) -> list[bytes]:
+        """S_j of the remainder's bytes, least significant byte first: ``bytes`` of 256."""
+        tables = []
+        for b in range(code.r // 8):
+            units = [exp[((8 * b + k) * j) % order] for k in range(8)]
+            tables.append(bytes(linear_table(units)))  # small ints: no garbage
+        return tables
+
+    s1_tables = syndrome_tables(1)
+    if code.t == 1:
+        (s1_table,) = s1_tables
+
+        def correct_one(rem: int) -> int | None:
+            s1 = s1_table[rem]
+            if not s1:
+                return None
+            i = log[s1]
+            return 1 << i if i < n else None
+
+        return correct_one
+    s1_lo, s1_hi = s1_tables
+    s3_lo, s3_hi = syndrome_tables(3)
+    # roots[c] = a root y >= 2 of y^2 + y = c, 0 when there is none (c = 0 is never asked).
+    roots = bytearray(1 << f.m)
+    for y in range(2, 1 << f.m):
+        roots[f.mul(y, y) ^ y] = y
+    root_of = bytes(roots)
+
+    cube = bytes(3 * i % order for i in range(order))  # log of S1^3 from log of S1
+
+    def correct(rem: int) -> int | None:
+        lo = rem & 0xFF
+        hi = rem >> 8
+        s1 = s1_lo[lo] ^ s1_hi[hi]
+        if not s1:
+            return None  # S3 != 0 with S1 = 0: at least three errors
+        l1 = log[s1]
+        l1_cubed = cube[l1]
+        s3 = s3_lo[lo] ^ s3_hi[hi]
+        if s3 == exp[l1_cubed]:
+            return 1 << l1 if l1 < n else None
+        # exp holds two periods, so exponents up to 2 * order - 2 need no reduction.
+        y = root_of[(exp[log[s3] - l1_cubed + order] if s3 else 0) ^ 1]
+        if not y:
+            return None
+        i = log[y] + l1  # x1 = S1 * y
+        if i >= order:
+            i -= order
+        j = log[exp[i] ^ s1]  # x2 = x1 + S1
+        return (1 << i) | (1 << j) if i < n and j < n else None
+
+    return correct
+
+
 # The decoders are closures over their tables: cell variables are read almost as fast as
 # locals and, unlike default arguments, cost nothing per call. This is the per-frame hot path.
-# ``get`` starts as a stand-in that builds the error dictionary on the first non-zero syndrome
-# and rebinds ``get`` (shared by both decoders) to the dictionary's own lookup: no per-call
-# test, and the dictionary costs no memory until a word needs correcting.
 
 
 def _make_decoders(
-    tables: Sequence[list[int]], r: int, error_table: Callable[[], dict[int, int]]
+    tables: Sequence[Sequence[int]], r: int, correct: Callable[[int], int | None]
 ) -> tuple[Callable[[int], tuple[int, int]], Callable[[bytes], tuple[int, int]]]:
     t0, t1, t2, t3, t4, t5, t6, t7, t8 = tables
     from_bytes = int.from_bytes
     k_bytes = 9 - r // 8  # the message bytes of the 9-byte codeword
-    get: Callable[[int], int | None]
-
-    def first_lookup(syndrome: int) -> int | None:
-        nonlocal get
-        get = error_table().get
-        return get(syndrome)
-
-    get = first_lookup
 
     def decode(received: int) -> tuple[int, int]:
         b = received.to_bytes(9, "big")
@@ -281,7 +348,7 @@ def _make_decoders(
         )  # fmt: skip
         if not syn:
             return received >> r, 0
-        error = get(syn)
+        error = correct(syn)
         if error is None:
             return received >> r, UNCORRECTABLE
         return (received ^ error) >> r, error.bit_count()
@@ -293,7 +360,7 @@ def _make_decoders(
         )  # fmt: skip
         if not syn:
             return from_bytes(b[:k_bytes], "big"), 0
-        error = get(syn)
+        error = correct(syn)
         if error is None:
             return from_bytes(b[:k_bytes], "big"), UNCORRECTABLE
         return (from_bytes(b, "big") ^ error) >> r, error.bit_count()

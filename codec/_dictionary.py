@@ -28,6 +28,8 @@ TYPE_CHECKING = False
 if TYPE_CHECKING:
     from collections.abc import Iterator
 
+    from codec._fastpath import StraightLine
+
 #: Width of the pattern ID (bits) and the number of parameter fields in every frame.
 PATTERN_ID_BITS = 4
 FIELDS_PER_FRAME = 6
@@ -223,6 +225,13 @@ class CommandDictionary(Mapping[str, Pattern]):
             by_name[p.name] = p
         self._by_id = by_id
         self._by_name = by_name
+        #: The receiver's straight-line decoder for this dictionary (``codec._fastpath``),
+        #: built by the first receiver that uses it.
+        self.straight_line: StraightLine | None = None
+
+    def __getstate__(self) -> dict[str, object]:
+        """Pickled without the straight-line decoder (a closure; rebuilt on first use)."""
+        return {**self.__dict__, "straight_line": None}
 
     def __getitem__(self, name: str) -> Pattern:
         return self._by_name[name]

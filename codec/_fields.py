@@ -11,7 +11,6 @@ nearest representable value, which it reports as a :class:`Snap`.
 from __future__ import annotations
 
 import math
-from bisect import bisect_left
 
 from codec._errors import EncodeError
 from codec._record import Record, init
@@ -313,6 +312,8 @@ class NumericScale(Record):
                 field=name,
             )
         values = self.values
+        from bisect import bisect_left  # encoding only: not loaded onboard
+
         i = bisect_left(values, number)
         if i == len(values):
             # Only reachable for a circular scale, between the last value and the period.

@@ -45,7 +45,11 @@ class ChunkedRemainder:
     ``value.to_bytes()`` is several times faster in CPython than shifting and masking.
 
     ``share``: another remainder by the same modulus whose tables are reused where they
-    cover the same bit positions (equal tables are then the same list objects).
+    cover the same bit positions (equal tables are then the same objects).
+
+    Memory: the tables are packed by :func:`linear_table`, 1, 2 or 4 bytes an entry instead
+    of a list slot and, above 256, an int object (~40 bytes in all). For the BCH code's nine
+    16-bit tables and the CRC's seven that is about 90 KiB of the vehicle's budget.
     """
 
     __slots__ = ("_msb_first", "_nbytes", "modulus", "shift", "width")
@@ -60,7 +64,7 @@ class ChunkedRemainder:
         # A table depends only on the modulus and the bit offset of its byte, so a remainder
         # over an overlapping range (the BCH syndrome over the parity's message bytes) can
         # reuse another's tables instead of holding equal copies.
-        known: dict[int, list[int]] = {}
+        known: dict[int, Sequence[int]] = {}
         if share is not None and share.modulus == modulus:
             for j, shared in enumerate(reversed(share.tables)):
                 known[8 * j + share.shift] = shared
@@ -70,12 +74,12 @@ class ChunkedRemainder:
             table = known.get(offset)
             if table is None:
                 units = [poly_mod(1 << (offset + i), modulus) for i in range(8)]
-                table = known[offset] = _linear_table(units)
+                table = known[offset] = linear_table(units, degree(modulus))
             tables.append(table)
-        self._msb_first: tuple[list[int], ...] = tuple(reversed(tables))
+        self._msb_first: tuple[Sequence[int], ...] = tuple(reversed(tables))
 
     @property
-    def tables(self) -> tuple[list[int], ...]:
+    def tables(self) -> tuple[Sequence[int], ...]:
         """One 256-entry table per byte of the value, most significant byte first."""
         return self._msb_first
 
@@ -86,13 +90,29 @@ class ChunkedRemainder:
         return rem
 
 
-def _linear_table(unit_images: Sequence[int]) -> list[int]:
-    """Table of a GF(2)-linear map on ``len(unit_images)``-bit inputs, from the unit vectors."""
-    table = [0] * (1 << len(unit_images))
-    for v in range(1, len(table)):
+def linear_table(unit_images: Sequence[int], bits: int | None = None) -> Sequence[int]:
+    """Table of a GF(2)-linear map on ``len(unit_images)``-bit inputs, from the unit vectors.
+
+    With ``bits`` (every image below ``2^bits``, at most 32) the table is packed: a read-only
+    ``memoryview`` of unsigned 8-, 16- or 32-bit ints (native order; no module to import, and
+    numpy reads it as an array), filled in place so that building it leaves no garbage behind
+    (freed small objects keep their pages resident). Indexing it gives the same ints as the
+    list it is without ``bits``.
+    """
+    size = 1 << len(unit_images)
+    table: list[int] | memoryview
+    if bits is None or bits > 32:
+        table = [0] * size
+    elif bits <= 8:
+        table = memoryview(bytearray(size))
+    elif bits <= 16:
+        table = memoryview(bytearray(2 * size)).cast("H")
+    else:
+        table = memoryview(bytearray(4 * size)).cast("I")
+    for v in range(1, size):
         low = v & -v
         table[v] = table[v ^ low] ^ unit_images[low.bit_length() - 1]
-    return table
+    return table.toreadonly() if isinstance(table, memoryview) else table
 
 
 class GF2m:

@@ -12,6 +12,7 @@ Frames are ``(N, 13)`` ``uint8`` arrays: 100 bits MSB first plus 4 zero pad bits
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
@@ -58,9 +59,9 @@ _SYNC_BYTES: Final = np.array(
 _POPCOUNT8: Final = np.array([bin(i).count("1") for i in range(256)], dtype=np.uint8)
 
 
-def _tables(tables: tuple[list[int], ...]) -> NDArray[np.uint16]:
+def _tables(tables: tuple[Sequence[int], ...]) -> NDArray[np.uint16]:
     """Byte tables as one array, most significant byte first (as in :mod:`codec._gf2`)."""
-    return np.array(tables, dtype=np.uint16)
+    return np.array([list(t) for t in tables], dtype=np.uint16)
 
 
 # The scalar path's byte tables: parity of the message, syndrome of the codeword, CRC-4.

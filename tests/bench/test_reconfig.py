@@ -4,8 +4,14 @@ are not asserted beyond being positive: timings belong to the benchmark, not the
 from __future__ import annotations
 
 import io
+import random
+
+import pytest
 
 from bench import reconfig
+from bench._onboard import decode_rows, time_decode, wire
+from codec import Accepted, FrameReceiver, frame_of
+from tests.codec.helpers import random_command
 
 
 def _row(lines: list[str], start: str) -> list[str]:
@@ -29,7 +35,20 @@ def test_quick_run_prints_paper_ours_and_ratio() -> None:
     assert float(cells[0]) == 0.027 and float(cells[1]) > 0
     for start in ("memory: peak RSS", "memory: increment"):
         row = next(ln for ln in lines if ln.startswith(start))
-        assert "13.2" in row
+        assert "13.2" in row and 'paper "MB", ours MiB' in row
+    assert " MB " not in text and " MB," not in text  # ours are MiB, named so
+    assert "MiB (+" in text and "target <= 1.00 MiB" in text
+    assert "bits the agent corrected per frame: 1 2 2 0 2 1." in text
+    # The whole onboard decode beside bchlib, same run, and the bound.
+    for start in ("0 errors", "1 errors", "2 errors", "mean over 0-2 errors"):
+        cells = _row(lines, start)
+        receiver, bit_level, bchlib = (float(c) for c in cells[:3])
+        assert receiver > 0 and bit_level > 0 and bchlib > 0
+        assert cells[3].endswith("x") and cells[5] == "27"
+        judged = start.startswith("mean")  # the bound is on the mean over 0-2 errors
+        assert cells[4] == ("<= 4x bchlib" if judged else "(info)")
+        assert cells[6] in (("met", "MISSED") if judged else ("-",))
+    assert "Whole decode / bchlib over 0-2 errors: " in text
     for name in ("Shipwreck", "BOP", "Pod"):
         detail = next(ln for ln in lines if ln.startswith(name + " "))
         assert int(detail.split()[4]) >= 2  # waypoints, after "name a -> b"
@@ -49,6 +68,26 @@ def test_measure_quick_report_is_consistent() -> None:
     assert report.scenarios[2].retask == "square -> circle"
     assert 1024 < report.bare_kb < report.peak_kb  # the onboard process loads something
     assert report.increment_kb == report.peak_kb - report.bare_kb
+    # The memory run's frames carried errors, and the agent corrected them.
+    assert report.memory_corrected == (1, 2, 2, 0, 2, 1)
+    timing = report.onboard_decode
+    assert timing is not None and timing.bchlib_us is not None  # bchlib: the dev extras
+    assert len(timing.receiver_us) == len(timing.bchlib_us) == 3
+    assert report.decode_bchlib_ratio == pytest.approx(
+        timing.receiver_mean_us / (sum(timing.bchlib_us) / 3)
+    )
+
+
+def test_memory_arguments_carry_the_errors_the_agent_corrects() -> None:
+    args = reconfig.onboard_arguments()
+    received = [int(item.split(",")[0], 16) for arg in args for item in arg.split(";")]
+    corrected = []
+    for frame in received:
+        (event,) = FrameReceiver().feed_bytes(wire(frame))
+        assert isinstance(event, Accepted)
+        corrected.append(event.decoded.corrected)
+    expected = [e for name in reconfig.RETASK_SCENARIOS for e in reconfig.MEMORY_ERRORS[name]]
+    assert corrected == expected and {1, 2} <= set(corrected)
 
 
 def test_onboard_arguments_carry_both_frames_of_each_scenario() -> None:
@@ -66,3 +105,11 @@ def test_ratio_says_faster_or_slower() -> None:
     assert reconfig.ratio(42.0, 0.01) == "4,200x faster"
     assert reconfig.ratio(0.027, 0.0135) == "2x faster"
     assert reconfig.ratio(13.2, 20.0, "smaller", "larger") == "0.66x (1.52x larger)"
+
+
+def test_onboard_decode_timing_is_taken_over_frames_with_errors() -> None:
+    timing = time_decode([frame_of(random_command(random.Random(1))).value], rounds=1, loops=1)
+    assert timing.frames == 4 and timing.rounds == 1
+    assert all(t > 0 for t in (*timing.receiver_us, *timing.bit_level_us))
+    rows = decode_rows(timing)
+    assert [r[0] for r in rows] == ["0 errors", "1 errors", "2 errors", "mean over 0-2 errors"]

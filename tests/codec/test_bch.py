@@ -12,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from codec import CODE, UNCORRECTABLE, BCHCode, TableDecoder
+from codec._bch import make_corrector
 from codec._gf2 import poly_mod
 
 from .helpers import galois_code, galois_vectors, mask_of, random_error
@@ -296,27 +297,44 @@ def test_remainder_shares_the_parity_tables() -> None:
     parity, remainder = code.parity_tables, code.remainder_tables
     assert len(parity) == 7 and len(remainder) == 9
     assert all(r is p for r, p in zip(remainder, parity, strict=False))  # message bytes
-    assert remainder[7] == [b << 8 for b in range(256)]  # parity bytes: already reduced
-    assert remainder[8] == list(range(256))
+    assert list(remainder[7]) == [b << 8 for b in range(256)]  # parity bytes: already reduced
+    assert list(remainder[8]) == list(range(256))
+    assert all(isinstance(t, memoryview) for t in remainder)  # 16-bit values, packed
     for j, table in enumerate(reversed(remainder)):
         assert table[1] == poly_mod(1 << (8 * j), code.generator_poly)
 
 
-def test_table_decoder_builds_its_error_table_on_the_first_error(rng: random.Random) -> None:
+def test_table_decoder_corrects_without_its_error_dictionary(rng: random.Random) -> None:
+    """Decoding words with errors never builds the 2628-entry dictionary (~300 KiB): the
+    closed-form corrector does the work; ``error_patterns`` builds it only when asked."""
     decoder = TableDecoder(BCHCode(t=2, k=56))
     msg = rng.getrandbits(56)
     cw = CODE.encode(msg)
     assert decoder.decode(cw) == (msg, 0)
     assert decoder.decode_bytes(cw.to_bytes(9, "big")) == (msg, 0)
-    assert decoder._errors is None
     assert decoder.decode_bytes((cw ^ 0b11 << 20).to_bytes(9, "big")) == (msg, 2)
-    assert decoder._errors is not None and len(decoder._errors) == 2628
     assert decoder.decode(cw ^ 1 << 71) == (msg, 1)
     assert decoder.decode(cw ^ 0b111) == CODE.decode(cw ^ 0b111)
-    fresh = TableDecoder(BCHCode(t=2, k=56))
-    assert fresh.decode(cw ^ 0b111) == CODE.decode(cw ^ 0b111)  # a miss builds it too
-    assert fresh._errors is not None
-    assert fresh.error_patterns == decoder.error_patterns
+    assert decoder._errors is None
+    assert len(decoder.error_patterns) == 2628
+    assert decoder._errors is not None
+
+
+@pytest.mark.parametrize("t", [1, 2])
+def test_closed_form_corrector_equals_the_syndrome_table_on_every_syndrome(t: int) -> None:
+    """Every possible remainder: the same error pattern as the table of all correctable
+    patterns, and ``None`` exactly where the table has no entry (bounded distance)."""
+    code = BCHCode(t=t, k=72 - 8 * t)
+    decoder = TableDecoder(code)
+    table = dict(decoder.error_patterns)
+    found = {syndrome: decoder.correct(syndrome) for syndrome in range(1, 1 << code.r)}
+    assert {s: e for s, e in found.items() if e is not None} == table
+    assert sum(e is None for e in found.values()) == (1 << code.r) - 1 - len(table)
+
+
+def test_closed_form_corrector_refuses_codes_it_does_not_handle() -> None:
+    with pytest.raises(ValueError, match="t <= 2"):
+        make_corrector(CODES[3])
 
 
 def test_table_decoder_for_the_single_error_72_64_code(rng: random.Random) -> None:
