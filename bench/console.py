@@ -79,7 +79,7 @@ from websockets.exceptions import ConnectionClosed, WebSocketException
 
 from backend.store import FINAL_STATES
 from bench._server import ConsoleProcess, start_console
-from bench._timing import table, verdict
+from bench._timing import percentile, table, verdict
 from bench.console_predict import PredictRun, predict_load, predict_table
 from codec import FRAME_BITS
 
@@ -179,17 +179,6 @@ def console_server(workdir: Path) -> Iterator[ConsoleProcess]:
 
 
 # --- statistics ---------------------------------------------------------------------------
-
-
-def percentile(values: Sequence[float], q: float) -> float:
-    """The ``q``-th percentile (0-100), linear between the closest ranks."""
-    if not values:
-        return float("nan")
-    ordered = sorted(values)
-    pos = (len(ordered) - 1) * q / 100.0
-    lo = int(pos)
-    hi = min(lo + 1, len(ordered) - 1)
-    return ordered[lo] + (ordered[hi] - ordered[lo]) * (pos - lo)
 
 
 def _ms(value: float) -> str:

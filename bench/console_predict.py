@@ -20,7 +20,7 @@ from typing import Any
 
 import httpx
 
-from bench._timing import table, verdict
+from bench._timing import percentile, table, verdict
 
 TARGET_PREDICT_P50_S = 1.5
 TARGET_PREDICT_P99_S = 3.0
@@ -36,16 +36,6 @@ class PredictRun:
     horizon_s: list[float] = field(default_factory=list)
     preview_ms: list[float] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)
-
-
-def percentile(values: Sequence[float], q: float) -> float:
-    if not values:
-        return float("nan")
-    ordered = sorted(values)
-    pos = (len(ordered) - 1) * q / 100.0
-    lo = int(pos)
-    hi = min(lo + 1, len(ordered) - 1)
-    return ordered[lo] + (ordered[hi] - ordered[lo]) * (pos - lo)
 
 
 async def predict_load(base_url: str, bodies: Sequence[dict[str, Any]], count: int) -> PredictRun:
