@@ -69,7 +69,7 @@ def plan_doc(
     violations = list(validate(new, limits))
     # below the maximum speed only: above it the vehicle refuses the command onboard, so it
     # would not fly it at top speed either (the maximum's violation says enough)
-    too_fast = None if any(v.param == "speed" for v in violations) else top_speed(new, top)
+    too_fast = None if any(v.param == "speed" for v in violations) else top_speed(new, top, est)
     if too_fast is not None:
         violations.append(too_fast)
     diff = None

@@ -28,6 +28,7 @@ TYPE_CHECKING = False
 if TYPE_CHECKING:
     from collections.abc import Sequence
 
+    from planner._estimate import Estimate
     from planner._plan import Plan
 
 #: Depth rating of the NemeSys hull (m); no override can exceed it.
@@ -278,7 +279,9 @@ def validate(plan: Plan, limits: Limits) -> tuple[Violation, ...]:
     return tuple(out)
 
 
-def top_speed(plan: Plan, top_speed_mps: float | None) -> Violation | None:
+def top_speed(
+    plan: Plan, top_speed_mps: float | None, est: Estimate | None = None
+) -> Violation | None:
     """The violation of a plan asking for more than the vehicle's top speed (m/s), or
     ``None`` (also when the top speed is unknown, or the plan never moves horizontally).
 
@@ -290,7 +293,8 @@ def top_speed(plan: Plan, top_speed_mps: float | None) -> Violation | None:
     speed = planned_speed_mps(plan)
     if top_speed_mps is None or speed is None or speed <= top_speed_mps:
         return None
-    est = estimate(plan, top_speed_mps)
+    if est is None:  # the plan's estimate at the flyable speed, when not given
+        est = estimate(plan, top_speed_mps)
     planned = est.planned_duration_s
     ratio = est.duration_s / planned if planned > 0 else speed / top_speed_mps
     top = f"{round(top_speed_mps, 2):g}"

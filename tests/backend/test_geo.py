@@ -1,5 +1,6 @@
-"""backend.geo against an independent oracle: PROJ's geodesics (pyproj.Geod, Karney's
-algorithm) and its azimuthal equidistant projection, not pymap3d's own ECEF pipeline.
+"""backend.geo (PROJ's topocentric pipeline) against independent oracles: pymap3d's own
+ECEF pipeline (pure Python, a separate implementation of the same transform), PROJ's
+geodesics (pyproj.Geod, Karney's algorithm) and its azimuthal equidistant projection.
 
 A NED point (x north, y east, at the surface) ``d`` metres from the datum lies, converted, at
 a geodesic distance ``d`` and an initial azimuth ``atan2(y, x)`` from it: the tangent plane
@@ -10,6 +11,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pymap3d
 import pytest
 from pyproj import Geod, Transformer
 
@@ -89,6 +91,21 @@ def test_the_antimeridian_is_crossed_not_unwrapped() -> None:
     assert -180 < float(lon) < -179.97
     x, y = geodetic_to_ned(datum, float(lat), float(lon))
     assert (x, y) == pytest.approx((0.0, 2000.0), abs=0.01)
+
+
+@pytest.mark.parametrize(("lat0", "lon0"), DATUMS)
+def test_conversions_match_pymap3d_within_a_millimetre(lat0: float, lon0: float) -> None:
+    """The same transform (NED about the datum, through ECEF) in another implementation."""
+    datum = Datum(lat0, lon0)
+    xs = np.array([p[0] for p in POINTS])
+    ys = np.array([p[1] for p in POINTS])
+    lat, lon = ned_to_geodetic(datum, xs, ys)
+    for (x, y), la, lo in zip(POINTS, lat, lon, strict=True):
+        n, e, _d = pymap3d.geodetic2ned(float(la), float(lo), 0.0, lat0, lon0, 0.0)
+        # (la, lo) at the ellipsoid is below the tangent plane by d^2 / 2R: compare horizontally
+        assert math.hypot(n - x, e - y) < 0.001, (x, y, n, e)
+        back = geodetic_to_ned(datum, float(la), float(lo))
+        assert back == pytest.approx((n, e), abs=0.001)
 
 
 @pytest.mark.parametrize(("lat0", "lon0"), DATUMS)
