@@ -21,7 +21,6 @@ from codec._dictionary import (
     Command,
     CommandDictionary,
     Pattern,
-    make_command,
 )
 from codec._errors import CodecError, DecodeError, EncodeError, RejectReason
 from codec._fields import (
@@ -31,7 +30,6 @@ from codec._fields import (
     NumericScale,
     ParamValue,
     Segment,
-    Snap,
 )
 from codec._frame import (
     CODE,
@@ -54,20 +52,10 @@ from codec._frame import (
     SYNC_BITS,
     SYNC_WORD,
     Decoded,
-    Encoded,
     Frame,
-    Section,
-    airtime_s,
     command_of_message,
     crc4,
     decode_codeword,
-    decode_frame,
-    encode_frame,
-    frame_of,
-    message_of,
-    parse_frame,
-    payload_of,
-    sections,
 )
 from codec._sync import Accepted, Event, FrameReceiver, Rejected
 
@@ -81,6 +69,19 @@ if TYPE_CHECKING:
         frame_success_probability,
     )
     from codec._describe import describe_dictionary, describe_pattern, markdown_tables
+    from codec._parse import decode_frame, parse_frame
+    from codec._snap import Snap
+    from codec._wire import (
+        Encoded,
+        Section,
+        airtime_s,
+        encode_frame,
+        frame_of,
+        make_command,
+        message_of,
+        payload_of,
+        sections,
+    )
 
 __all__ = [
     "CODE",
@@ -153,10 +154,11 @@ __all__ = [
     "sections",
 ]
 
-# The listing helpers and the delivery arithmetic are imported on first use: the console needs
-# them, the vehicle does not (``nemesys bench planner`` measures its memory). (Hidden from the
-# type checker, which sees the imports above, so that a misspelt name imported from codec is
-# still an error and not an ``object``.)
+# Encoding, one-frame decode (of any accepted form), the listing helpers and the delivery
+# arithmetic are imported on first use: the console needs them, the vehicle does not
+# (``nemesys bench reconfig`` measures its memory). (Hidden from the type checker, which sees
+# the imports above, so that a misspelt name imported from codec is still an error and not an
+# ``object``.)
 _LAZY = {
     "describe_dictionary": "codec._describe",
     "describe_pattern": "codec._describe",
@@ -166,6 +168,18 @@ _LAZY = {
     "copies_for": "codec._delivery",
     "delivery_probability": "codec._delivery",
     "frame_success_probability": "codec._delivery",
+    "Snap": "codec._snap",
+    "Encoded": "codec._wire",
+    "Section": "codec._wire",
+    "airtime_s": "codec._wire",
+    "decode_frame": "codec._parse",
+    "encode_frame": "codec._wire",
+    "frame_of": "codec._wire",
+    "make_command": "codec._wire",
+    "message_of": "codec._wire",
+    "parse_frame": "codec._parse",
+    "payload_of": "codec._wire",
+    "sections": "codec._wire",
 }
 
 if not TYPE_CHECKING:

@@ -3,7 +3,8 @@
 :class:`BCHCode` is the textbook code of the NemeSys paper for any ``t``: the generator is the
 least common multiple of the minimal polynomials of alpha^1 .. alpha^2t, encoding appends
 ``(m(x) * x^r) mod g(x)`` to the message, and decoding computes the syndromes, runs
-Berlekamp-Massey for the error locator and finds its roots by Chien search.
+Berlekamp-Massey for the error locator and finds its roots by Chien search (in
+:mod:`codec._berlekamp`, loaded on first use: the vehicle decodes with the table decoder).
 
 :class:`TableDecoder` is the fast path for codes with t <= 2 and a 16-bit (or shorter)
 remainder, such as the default (72, 56) code: the remainder of the received word modulo g(x)
@@ -106,92 +107,34 @@ class BCHCode:
 
     def syndromes(self, received: int) -> list[int]:
         """S_1 .. S_2t, the received word evaluated at alpha^1 .. alpha^2t."""
-        return self._syndromes_of_remainder(self._remainder(received))
+        from codec._berlekamp import syndromes  # the textbook decoder: not loaded onboard
 
-    def _syndromes_of_remainder(self, rem: int) -> list[int]:
-        # g(alpha^j) = 0, so r(alpha^j) = (r mod g)(alpha^j): evaluate the short remainder.
-        exp, order = self.field.exp, self.field.order
-        powers = []
-        while rem:
-            low = rem & -rem
-            powers.append(low.bit_length() - 1)
-            rem ^= low
-        synd = [0] * (2 * self.t)
-        for j in range(1, 2 * self.t + 1, 2):
-            s = 0
-            for i in powers:
-                s ^= exp[(i * j) % order]
-            synd[j - 1] = s
-        for j in range(2, 2 * self.t + 1, 2):  # binary code: S_2j = S_j^2
-            synd[j - 1] = self.field.mul(synd[j // 2 - 1], synd[j // 2 - 1])
-        return synd
+        return syndromes(self, self._remainder(received))
 
     def error_locator(self, synd: list[int]) -> list[int]:
         """Berlekamp-Massey: coefficients of Lambda(x), constant term first."""
-        f = self.field
-        lam = [1]
-        prev = [1]
-        length = 0
-        shift = 1
-        prev_disc = 1
-        for step, s in enumerate(synd):
-            disc = s
-            for i in range(1, length + 1):
-                if i < len(lam):
-                    disc ^= f.mul(lam[i], synd[step - i])
-            if disc == 0:
-                shift += 1
-                continue
-            coef = f.div(disc, prev_disc)
-            updated = lam + [0] * max(0, len(prev) + shift - len(lam))
-            for i, p in enumerate(prev):
-                updated[i + shift] ^= f.mul(coef, p)
-            if 2 * length <= step:
-                prev, prev_disc = lam, disc
-                length = step + 1 - length
-                shift = 1
-            else:
-                shift += 1
-            lam = updated
-        while len(lam) > 1 and lam[-1] == 0:
-            lam.pop()
-        return lam
+        from codec._berlekamp import error_locator
+
+        return error_locator(self, synd)
 
     def chien_search(self, lam: list[int]) -> list[int] | None:
         """Error positions (bit indices, 0 = last parity bit) or ``None`` if Lambda does not
         have exactly deg(Lambda) distinct roots inside the shortened length."""
-        f = self.field
-        terms = [(j, f.log[c]) for j, c in enumerate(lam) if c and j]
-        positions = []
-        for i in range(self.n):  # error at x^i <=> Lambda(alpha^-i) = 0
-            value = lam[0]
-            for j, log_c in terms:
-                value ^= f.exp[(log_c - i * j) % f.order]
-            if value == 0:
-                positions.append(i)
-        return positions if len(positions) == len(lam) - 1 else None
+        from codec._berlekamp import chien_search
+
+        return chien_search(self, lam)
 
     def decode(self, received: int) -> tuple[int, int]:
-        """Correct up to t errors.
+        """Correct up to t errors (syndromes, Berlekamp-Massey, Chien search).
 
         Returns:
             ``(message, n_corrected)``; ``n_corrected`` is :data:`UNCORRECTABLE` (-1) when
             the word is beyond the decoder's reach, and ``message`` is then the uncorrected
             message bits.
         """
-        received &= self._cw_mask
-        rem = self._remainder(received)
-        if rem == 0:
-            return received >> self.r, 0
-        lam = self.error_locator(self._syndromes_of_remainder(rem))
-        if len(lam) - 1 > self.t:
-            return received >> self.r, UNCORRECTABLE
-        positions = self.chien_search(lam)
-        if positions is None:
-            return received >> self.r, UNCORRECTABLE
-        for i in positions:
-            received ^= 1 << i
-        return received >> self.r, len(positions)
+        from codec._berlekamp import decode
+
+        return decode(self, received & self._cw_mask)
 
 
 class TableDecoder:
@@ -228,33 +171,15 @@ class TableDecoder:
 
         Same result as :meth:`decode` of ``int.from_bytes(codeword, "big")``."""
 
-    def _error_table(self) -> dict[int, int]:
-        errors = self._errors
-        if errors is None:
-            errors = self._errors = _correctable_errors(self.code)
-        return errors
-
     @property
     def error_patterns(self) -> Mapping[int, int]:
         """Non-zero syndrome (remainder mod g) -> the correctable error pattern it stands for."""
-        return MappingProxyType(self._error_table())
+        errors = self._errors
+        if errors is None:
+            from codec._berlekamp import correctable_errors  # the batch path's and the tests'
 
-
-def _correctable_errors(code: BCHCode) -> dict[int, int]:
-    """Syndrome -> error pattern, for every pattern of weight 1 .. t (t <= 2)."""
-    single = [code.remainder(1 << i) for i in range(code.n)]
-    errors: dict[int, int] = {}
-    for i, si in enumerate(single):
-        errors[si] = 1 << i
-    if code.t == 2:
-        for i in range(code.n):
-            si, bit = single[i], 1 << i
-            for j in range(i + 1, code.n):
-                errors[si ^ single[j]] = bit | (1 << j)
-    expected = code.n + (code.n * (code.n - 1) // 2 if code.t == 2 else 0)
-    if 0 in errors or len(errors) != expected:
-        raise ValueError("correctable patterns do not have distinct syndromes")
-    return errors
+            errors = self._errors = correctable_errors(self.code)
+        return MappingProxyType(errors)
 
 
 def make_corrector(code: BCHCode) -> Callable[[int], int | None]:

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
-from codec._errors import EncodeError
 from codec._fields import (
     COUNT,
     DEPTH,
@@ -20,7 +19,6 @@ from codec._fields import (
     SPEED,
     Field,
     ParamValue,
-    Snap,
 )
 from codec._record import Record, init
 
@@ -202,14 +200,6 @@ PATTERNS: tuple[Pattern, ...] = (
 )
 
 
-#: What :meth:`CommandDictionary.lookup` strips around a name, and the most digits it reads
-#: as an ID (leading zeros included; ``int`` is never given thousands of digits).
-_ASCII_SPACE = " \t\r\n\f\v"
-_MAX_ID_DIGITS = 8
-#: Longest quote of an unknown pattern in the error message.
-_MAX_SHOWN = 40
-
-
 class CommandDictionary(Mapping[str, Pattern]):
     """Patterns by name, with lookup by ID; validated once at construction."""
 
@@ -256,23 +246,9 @@ class CommandDictionary(Mapping[str, Pattern]):
             EncodeError: no such pattern; the message quotes (the start of) what was given
                 and lists the known ones.
         """
-        found: Pattern | None = None
-        if isinstance(pattern, bool):
-            found = None
-        elif isinstance(pattern, int):
-            found = self._by_id.get(pattern)
-        elif isinstance(pattern, str) and pattern.isascii():
-            key = pattern.strip(_ASCII_SPACE).lower().replace("-", "_").replace(" ", "_")
-            found = self._by_name.get(key)
-            if found is None and key.isdigit() and len(key) <= _MAX_ID_DIGITS:
-                found = self._by_id.get(int(key))
-        if found is None:
-            known = ", ".join(f"{p.name} ({p.id})" for p in self._by_id.values())
-            shown = repr(pattern)
-            if len(shown) > _MAX_SHOWN:
-                shown = shown[: _MAX_SHOWN - 1] + "…"
-            raise EncodeError(f"unknown pattern {shown}: known patterns are {known}")
-        return found
+        from codec._wire import lookup_pattern  # the console's: not loaded onboard
+
+        return lookup_pattern(self, pattern)
 
 
 #: The dictionary the vehicle and the console share.
@@ -314,42 +290,3 @@ class Command(Record):
             text = value if isinstance(value, str) else format(value, ".10g")
             parts.append(f"{f.name}={text}{' ' + f.unit if f.unit else ''}")
         return " ".join(parts)
-
-
-def make_command(
-    pattern: str | int | Pattern,
-    params: Mapping[str, ParamValue],
-    dictionary: CommandDictionary = DICTIONARY,
-) -> tuple[Command, tuple[Snap, ...]]:
-    """Snap requested values to the dictionary and build the command.
-
-    Every field of the pattern must be given, and nothing else.
-
-    Returns:
-        The command and one :class:`Snap` per field, in field order (``snap.changed`` tells
-        which values moved).
-
-    Raises:
-        EncodeError: unknown pattern, missing or unknown parameter, or a value out of range;
-            the message names the parameter, its unit and what is allowed.
-    """
-    spec = pattern if isinstance(pattern, Pattern) else dictionary.lookup(pattern)
-    allowed = [f.name for f in spec.fields]
-    unknown = [name for name in params if name not in allowed]
-    if unknown:
-        takes = ", ".join(allowed) if allowed else "no parameters"
-        raise EncodeError(
-            f"{spec.name} has no parameter {', '.join(map(repr, unknown))}: it takes {takes}",
-            field=unknown[0],
-        )
-    missing = [f for f in spec.fields if f.name not in params]
-    if missing:
-        need = ", ".join(f"{f.name} ({f.scale.range_text(f.unit)})" for f in missing)
-        raise EncodeError(f"{spec.name} needs {need}", field=missing[0].name)
-    codes: list[int] = []
-    snaps: list[Snap] = []
-    for f in spec.fields:
-        code, sent = f.snap(params[f.name])
-        codes.append(code)
-        snaps.append(Snap(f.name, f.unit, params[f.name], sent))
-    return Command(spec, tuple(codes)), tuple(snaps)

@@ -6,13 +6,13 @@ and snapping is idempotent (a representable value snaps to itself). Encoding is 
 value outside the table's range is an :class:`EncodeError` naming the field, its unit and the
 allowed range; the only change the codec makes to an in-range value is the snap to the
 nearest representable value, which it reports as a :class:`Snap`.
+
+Snapping and the scales' texts live in :mod:`codec._snap`, loaded on first use: the vehicle
+decodes codes to values and never encodes.
 """
 
 from __future__ import annotations
 
-import math
-
-from codec._errors import EncodeError
 from codec._record import Record, init
 
 #: Width of every parameter field on the wire (bits).
@@ -182,9 +182,9 @@ class NumericScale(Record):
     @property
     def max_abs_error(self) -> float:
         """Largest snapping error anywhere in the range (half the largest step)."""
-        return (
-            max((b - a for a, b in zip(self.values, self.values[1:], strict=False)), default=0) / 2
-        )
+        from codec._snap import max_abs_error  # listings only: not loaded onboard
+
+        return max_abs_error(self)
 
     @property
     def max_rel_error(self) -> float | None:
@@ -193,30 +193,15 @@ class NumericScale(Record):
         Between neighbours a < b the worst input is the midpoint, whose relative error is
         (b - a) / (a + b).
         """
-        if self.rel_error_from is None:
-            return None
-        lo = self.rel_error_from
-        return max(
-            (b - a) / (a + b) for a, b in zip(self.values, self.values[1:], strict=False) if b > lo
-        )
+        from codec._snap import max_rel_error  # listings only: not loaded onboard
+
+        return max_rel_error(self)
 
     def error_text(self, unit: str) -> str:
         """The worst-case snapping error, for listings: ``<= 2.44 % from 0.5 m``."""
-        u = f" {unit}" if unit else ""
-        if self.integer:
-            return "exact (whole numbers)"
-        rel = self.max_rel_error
-        if rel is not None:
-            return (
-                f"<= {rel * 100:.2f} % from {fmt(self.rel_error_from or 0)}{u} "
-                f"(<= {fmt(self.max_abs_error)}{u} absolute)"
-            )
-        halves = [fmt(b / (2 * d)) for _, b, d in (seg.exact() for seg in self.segments)]
-        if len(halves) == 1:
-            return f"<= {halves[0]}{u}"
-        bounds = [fmt(float(seg.start)) for seg in self.segments[1:]]
-        parts = [f"<= {h}{u} below {b}{u}" for h, b in zip(halves, bounds, strict=False)]
-        return ", ".join([*parts, f"<= {halves[-1]}{u} above"])
+        from codec._snap import error_text  # listings only: not loaded onboard
+
+        return error_text(self, unit)
 
     def is_valid_code(self, code: int) -> bool:
         return self.first_code <= code < self.first_code + self._count
@@ -262,25 +247,15 @@ class NumericScale(Record):
 
     def range_text(self, unit: str) -> str:
         """``0 to 107.5 m``."""
-        u = f" {unit}" if unit else ""
-        if self.period is not None:
-            return (
-                f"{fmt(self.minimum)} to {fmt(self.maximum)}{u} "
-                f"(inputs -{fmt(self.period)} to {fmt(self.period)} are wrapped)"
-            )
-        return f"{fmt(self.minimum)} to {fmt(self.maximum)}{u}"
+        from codec._snap import range_text  # encoding and listings only: not loaded onboard
+
+        return range_text(self, unit)
 
     def describe(self) -> str:
         """Range and steps in one line, e.g. ``0..2.55 step 0.01``."""
-        parts = []
-        for seg in self.segments:
-            a, b, d = seg.exact()
-            last = (a + (seg.count - 1) * b) / d
-            parts.append(f"{fmt(float(seg.start))}..{fmt(last)} step {seg.step}")
-        text = ", ".join(parts)
-        if self.period is not None:
-            text += f" (wraps at {fmt(self.period)})"
-        return text
+        from codec._snap import describe  # encoding and listings only: not loaded onboard
+
+        return describe(self)
 
     def snap(self, name: str, unit: str, requested: ParamValue) -> tuple[int, float | int]:
         """Code and value nearest to ``requested``; ties go to the larger value.
@@ -288,60 +263,9 @@ class NumericScale(Record):
         Raises:
             EncodeError: not a finite number, out of range, or not whole for a count.
         """
-        u = f" {unit}" if unit else ""
-        number = _as_number(name, unit, requested, self.range_text(unit))
-        if self.period is not None:
-            if not -self.period <= number <= self.period:
-                raise EncodeError(
-                    f"{name} = {fmt(number)}{u} is out of range: allowed "
-                    f"{fmt(-self.period)} to {fmt(self.period)}{u} (wrapped into "
-                    f"{self.describe()})",
-                    field=name,
-                )
-            number %= self.period
-        elif not self.minimum <= number <= self.maximum:
-            raise EncodeError(
-                f"{name} = {fmt(number)}{u} is out of range: allowed "
-                f"{fmt(self.minimum)} to {fmt(self.maximum)}{u} ({self.describe()})",
-                field=name,
-            )
-        if self.integer and number != int(number):
-            raise EncodeError(
-                f"{name} = {fmt(number)} is not a whole number: allowed whole numbers "
-                f"{fmt(self.minimum)} to {fmt(self.maximum)}",
-                field=name,
-            )
-        values = self.values
-        from bisect import bisect_left  # encoding only: not loaded onboard
+        from codec._snap import snap_numeric  # encoding only: not loaded onboard
 
-        i = bisect_left(values, number)
-        if i == len(values):
-            # Only reachable for a circular scale, between the last value and the period.
-            period = self.period or 0.0
-            i = 0 if period - number <= number - values[-1] else len(values) - 1
-        elif i > 0 and number - values[i - 1] < values[i] - number:
-            i -= 1
-        value = values[i]
-        return self.first_code + i, int(value) if self.integer else value
-
-
-def _as_number(name: str, unit: str, requested: ParamValue, allowed: str) -> float:
-    """``requested`` as a finite float, or an :class:`EncodeError` saying what is allowed."""
-    unit_text = f" in {unit}" if unit else ""
-    problem = f"{name} must be a number{unit_text} ({allowed})"
-    if isinstance(requested, bool) or not isinstance(requested, str | int | float):
-        raise EncodeError(f"{problem}, got {type(requested).__name__}", field=name)
-    try:
-        number = float(requested.strip() if isinstance(requested, str) else requested)
-    except ValueError:
-        raise EncodeError(f"{problem}, got {requested!r}", field=name) from None
-    except OverflowError:  # an int too large for a float is far out of every range
-        raise EncodeError(f"{name} is out of range: allowed {allowed}", field=name) from None
-    if not math.isfinite(number):
-        raise EncodeError(
-            f"{name} must be a finite number ({allowed}), got {requested!r}", field=name
-        )
-    return number
+        return snap_numeric(self, name, unit, requested)
 
 
 class ChoiceScale(Record):
@@ -381,13 +305,14 @@ class ChoiceScale(Record):
         return ", ".join(f"{c} = {i}" for i, c in enumerate(self.choices))
 
     def snap(self, name: str, unit: str, requested: ParamValue) -> tuple[int, str]:
-        text = requested.strip().lower() if isinstance(requested, str) else None
-        if text not in self.choices:
-            raise EncodeError(
-                f"{name} = {requested!r} is not allowed: choose one of {', '.join(self.choices)}",
-                field=name,
-            )
-        return self.choices.index(text), text
+        """Code and choice of ``requested`` (any case, surrounding spaces ignored).
+
+        Raises:
+            EncodeError: not one of the choices.
+        """
+        from codec._snap import snap_choice  # encoding only: not loaded onboard
+
+        return snap_choice(self, name, requested)
 
 
 Scale = NumericScale | ChoiceScale
@@ -431,39 +356,6 @@ class Field(Record):
 
     def value_of(self, code: int) -> ParamValue:
         return self.scale.value_of(code)
-
-
-class Snap(Record):
-    """What happened to one requested value: ``requested 12.34 m, sent 12.5 m``."""
-
-    __slots__ = ("field", "requested", "sent", "unit")
-    field: str
-    unit: str
-    requested: ParamValue
-    sent: ParamValue
-
-    def __init__(self, field: str, unit: str, requested: ParamValue, sent: ParamValue) -> None:
-        init(self, "field", field)
-        init(self, "unit", unit)
-        init(self, "requested", requested)
-        init(self, "sent", sent)
-
-    @property
-    def changed(self) -> bool:
-        if isinstance(self.sent, str):
-            return (
-                not isinstance(self.requested, str) or self.requested.strip().lower() != self.sent
-            )
-        try:
-            return float(self.requested) != float(self.sent)
-        except (TypeError, ValueError):
-            return True
-
-    def __str__(self) -> str:
-        unit = f" {self.unit}" if self.unit else ""
-        req = self.requested if isinstance(self.sent, str) else fmt(float(self.requested))
-        sent = self.sent if isinstance(self.sent, str) else fmt(self.sent)
-        return f"{self.field}: requested {req}{unit}, sent {sent}{unit}"
 
 
 # --- The shared quantizations ---------------------------------------------------------------

@@ -14,7 +14,7 @@ Typical use::
 
 from planner._errors import PlanError
 from planner._geometry import CHORD_TOL_M, MAX_STEP_RAD
-from planner._path import Path, Setpoint, VehicleState
+from planner._path import Path, VehicleState
 from planner._plan import (
     DEPTH_RATE_MPS,
     HEAVE_CAPABILITY_MPS,
@@ -32,18 +32,17 @@ from planner._plan import (
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
+    from planner._checks import LimitError, check
     from planner._estimate import Estimate, ParamChange, PlanDiff, compare, estimate
+    from planner._fence import CircleFence, PolygonFence
     from planner._limits import (
         DEFAULT_MAX_SPEED_MPS,
         RATED_DEPTH_M,
-        CircleFence,
-        LimitError,
         Limits,
-        PolygonFence,
         Violation,
-        check,
         validate,
     )
+    from planner._sampling import Setpoint
 
 __all__ = [
     "CHORD_TOL_M",
@@ -80,10 +79,12 @@ __all__ = [
     "validate",
 ]
 
-# Estimates and limits are imported on first use: the console checks every plan, the vehicle's
-# decode-and-replan loop needs neither (``nemesys bench planner`` measures its footprint).
-# Hidden from the type checker, which sees the imports above.
+# Imported on first use: estimates, sampling, geofences and the console's checks are the
+# console's; the vehicle's decode-and-replan loop needs only the limits' validation, which the
+# agent imports (``nemesys bench reconfig`` measures its footprint). Hidden from the type
+# checker, which sees the imports above.
 _LAZY = {
+    "Setpoint": "_sampling",
     "Estimate": "_estimate",
     "ParamChange": "_estimate",
     "PlanDiff": "_estimate",
@@ -91,12 +92,12 @@ _LAZY = {
     "estimate": "_estimate",
     "DEFAULT_MAX_SPEED_MPS": "_limits",
     "RATED_DEPTH_M": "_limits",
-    "CircleFence": "_limits",
-    "LimitError": "_limits",
+    "CircleFence": "_fence",
+    "LimitError": "_checks",
     "Limits": "_limits",
-    "PolygonFence": "_limits",
+    "PolygonFence": "_fence",
     "Violation": "_limits",
-    "check": "_limits",
+    "check": "_checks",
     "validate": "_limits",
 }
 

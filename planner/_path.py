@@ -11,6 +11,10 @@ import math
 from codec._record import Record, init
 from planner._geometry import heading_deg
 
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from planner._sampling import Setpoint
+
 #: Distances and depth differences below this are treated as zero (m).
 EPS_M = 1e-6
 #: Passes of a path closer than this to the nearest are told apart by time (m).
@@ -72,28 +76,6 @@ class VehicleState(Record):
     @property
     def heading_rad(self) -> float:
         return math.radians(self.heading_deg)
-
-
-class Setpoint(Record):
-    """Where the path wants the vehicle at one time: position (m), speed (m/s), course (deg)."""
-
-    __slots__ = ("course_deg", "speed_mps", "t_s", "x_m", "y_m", "z_m")
-    t_s: float
-    x_m: float
-    y_m: float
-    z_m: float
-    speed_mps: float
-    course_deg: float
-
-    def __init__(
-        self, t_s: float, x_m: float, y_m: float, z_m: float, speed_mps: float, course_deg: float
-    ) -> None:
-        init(self, "t_s", t_s)
-        init(self, "x_m", x_m)
-        init(self, "y_m", y_m)
-        init(self, "z_m", z_m)
-        init(self, "speed_mps", speed_mps)
-        init(self, "course_deg", course_deg)
 
 
 class Path(Record):
@@ -186,15 +168,10 @@ class Path(Record):
         return self.hold_heading_deg if self.hold_heading_deg is not None else 0.0
 
     def length_m(self, start: int = 0, stop: int | None = None) -> float:
-        """3D length from waypoint ``start`` to ``stop`` (default: the end)."""
-        xs, ys, zs = self.xs, self.ys, self.zs
-        end = len(xs) - 1 if stop is None else stop
-        return sum(
-            math.sqrt(
-                (xs[i + 1] - xs[i]) ** 2 + (ys[i + 1] - ys[i]) ** 2 + (zs[i + 1] - zs[i]) ** 2
-            )
-            for i in range(start, end)
-        )
+        """3D length from waypoint ``start`` to ``stop`` (default: the end) (m)."""
+        from planner._sampling import length_m  # the console's: not loaded onboard
+
+        return length_m(self, start, stop)
 
     def sample(self, t_s: float) -> Setpoint:
         """The setpoint at ``t_s`` after the plan starts, interpolated between waypoints.
@@ -202,36 +179,9 @@ class Path(Record):
         Before 0 gives the first waypoint; past the end, a repeating path wraps into its lap
         and a finite one holds its last waypoint at speed 0.
         """
-        times = self.times
-        t_end = times[-1]
-        if t_s > t_end and self.loop_start is not None:
-            t_loop = times[self.loop_start]
-            lap = t_end - t_loop
-            t_s = t_loop + math.fmod(t_s - t_loop, lap) if lap > 0 else t_loop
-        if t_s <= times[0] or len(times) == 1:
-            i, f = 0, 0.0
-        elif t_s >= t_end:
-            i, f = len(times) - 2, 1.0
-        else:
-            lo, hi = 0, len(times) - 1
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if times[mid] <= t_s:
-                    lo = mid
-                else:
-                    hi = mid
-            i = lo
-            span = times[i + 1] - times[i]
-            f = (t_s - times[i]) / span if span > 0 else 1.0
-        if len(times) == 1:
-            x, y, z = self.point(0)
-            return Setpoint(t_s, x, y, z, 0.0, self.course_deg(0))
-        x = self.xs[i] + f * (self.xs[i + 1] - self.xs[i])
-        y = self.ys[i] + f * (self.ys[i + 1] - self.ys[i])
-        z = self.zs[i] + f * (self.zs[i + 1] - self.zs[i])
-        finished = t_s >= t_end and self.loop_start is None
-        speed = 0.0 if finished else self.speeds[i]
-        return Setpoint(t_s, x, y, z, speed, self.course_deg(i))
+        from planner._sampling import sample  # the console's: not loaded onboard
+
+        return sample(self, t_s)
 
     def locate(
         self,

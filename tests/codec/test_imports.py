@@ -49,3 +49,41 @@ def test_listing_helpers_load_on_first_use() -> None:
     assert "codec._describe" not in _modules_after("import codec")
     loaded = _modules_after("from codec import markdown_tables; markdown_tables()")
     assert "codec._describe" in loaded
+
+
+#: The console's modules: encoding, one-frame decode of any form, snapping and the scales'
+#: texts, the textbook BCH decoder. The vehicle's decode loads none of them.
+CONSOLE_ONLY = ("codec._wire", "codec._parse", "codec._snap", "codec._berlekamp")
+
+
+def _received(errors: int) -> str:
+    """A statement feeding the receiver the 13 bytes of a circle frame with ``errors``
+    codeword bit errors, as the onboard agent does, and checking what it corrected."""
+    from codec import Frame, encode_frame
+
+    value = encode_frame("circle", speed=0.5, depth=2, radius=5, direction="cw").frame.value
+    for k in range(errors):
+        value ^= 1 << (20 + 7 * k)  # codeword bits (the guard is the last 4)
+    data = Frame(value).to_bytes().hex()
+    return (
+        f"import codec; events = codec.FrameReceiver().feed_bytes(bytes.fromhex('{data}')); "
+        f"assert events[0].decoded.corrected == {errors}, events"
+    )
+
+
+def test_the_vehicles_decode_loads_no_console_module() -> None:
+    for errors in (0, 2):
+        loaded = _modules_after(_received(errors))
+        assert "codec._sync" in loaded
+        for name in CONSOLE_ONLY:
+            assert name not in loaded, f"{name} is loaded by the onboard decode"
+
+
+def test_console_modules_load_on_first_use() -> None:
+    """Guards the test above: each console module is loaded by the names it holds."""
+    loaded = _modules_after(
+        "import codec; "
+        "enc = codec.encode_frame('circle', speed=0.5, depth=2, radius=5, direction='cw'); "
+        "codec.decode_frame(enc.frame.hex); codec.CODE.decode(enc.frame.codeword)"
+    )
+    assert set(CONSOLE_ONLY) <= loaded
