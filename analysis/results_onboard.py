@@ -20,7 +20,14 @@ from analysis.decode_spread import (
     spread_text,
 )
 from analysis.efficiency import DEFINITION, whole_frame_text
-from bench.reconfig import PAPER_DECODE_MS, PAPER_RSS_MB, PAPER_TOTAL_MS, ReconfigReport, ratio
+from bench.reconfig import (
+    PAPER_DECODE_MS,
+    PAPER_RSS_MB,
+    PAPER_TOTAL_MS,
+    ReconfigReport,
+    paper_rows,
+    ratio,
+)
 
 Section = tuple[str, list[str]]
 PAPER_T = 2
@@ -38,48 +45,22 @@ def _ber_method() -> str:
 
 
 def _paper_rows(rep: ReconfigReport) -> list[list[str]]:
-    """The paper's table beside ours, units named: the kernel's kB are KiB, shown as MiB."""
-    rows = [
-        [
-            f"{s.paper_name}: normalised replan latency (ms/waypoint)",
-            f"{s.paper_normalised_ms:g}",
-            f"{s.normalised_ms:.4f}",
-            ratio(s.paper_normalised_ms, s.normalised_ms),
-            f"total replan time / waypoints of the new path ({s.waypoints}), mean of 10 trials",
-        ]
+    """The bench's table of the paper beside ours (units named: the kernel's kB are KiB,
+    shown as MiB), each row with how it is measured."""
+    how = [
+        f"total replan time / waypoints of the new path ({s.waypoints}), mean of 10 trials"
         for s in rep.scenarios
     ]
-    rows.append(
-        [
-            f"decode latency (ms, mean of {rep.decode_trials} trials)",
-            f"{PAPER_DECODE_MS:g}",
-            f"{rep.decode_ms:.4f}",
-            ratio(PAPER_DECODE_MS, rep.decode_ms),
-            "the agent's decode latency (bits received -> synced, BCH-corrected, CRC- and "
-            "dictionary-checked), mean of a round's 30; this run of the reruns below",
-        ]
+    how.append(
+        "the agent's decode latency (bits received -> synced, BCH-corrected, CRC- and "
+        "dictionary-checked), mean of a round's 30; this run of the reruns below"
     )
-    peak_mib, inc_mib = rep.peak_kb / 1024, rep.increment_kb / 1024
-    rows.append(
-        [
-            'memory: peak RSS of the decode + replan process (paper "MB", ours MiB)',
-            f"{PAPER_RSS_MB:g}",
-            f"{peak_mib:.2f}",
-            ratio(PAPER_RSS_MB, peak_mib, "smaller", "larger"),
-            "VmHWM of a fresh process decoding and replanning the three scenarios, median of "
-            f"{rep.memory_runs} processes",
-        ]
+    how.append(
+        "VmHWM of a fresh process decoding and replanning the three scenarios, median of "
+        f"{rep.memory_runs} processes"
     )
-    rows.append(
-        [
-            'memory: increment over a bare interpreter (paper "MB", ours MiB)',
-            f"{PAPER_RSS_MB:g}",
-            f"{inc_mib:.2f}",
-            ratio(PAPER_RSS_MB, inc_mib, "smaller", "larger"),
-            f"the same minus a bare `python -c` ({kib_text(rep.bare_kb)})",
-        ]
-    )
-    return rows
+    how.append(f"the same minus a bare `python -c` ({kib_text(rep.bare_kb)})")
+    return [[*row, text] for row, text in zip(paper_rows(rep), how, strict=True)]
 
 
 def _spread_lines(spread: DecodeSpread) -> list[str]:
