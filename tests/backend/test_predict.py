@@ -34,15 +34,22 @@ def _paused_mid_circle(client: TestClient) -> Any:
     wait_until(lambda: sim.t_s > 60.0, 30.0, what="a minute on the circle")
     r = client.put("/api/training/time_scale", json={"time_scale": 0}, headers=AUTH)
     assert r.status_code == 200, r.text
-    wait_until(
-        lambda: (
-            (console.hub.pose or {}).get("t_s") == sim.t_s
-            and (console.hub.status or {}).get("t_s") == sim.t_s
+
+    def paused_state_shown() -> bool:
+        # the pose's stamp is whole nanoseconds (sec + nanosec): equal to the simulator's
+        # clock only to within a nanosecond, never exactly in general
+        pose_t = (console.hub.pose or {}).get("t_s")
+        status_t = (console.hub.status or {}).get("t_s")
+        return (
+            isinstance(pose_t, float)
+            and isinstance(status_t, float)
+            and abs(pose_t - sim.t_s) < 1e-6
+            and abs(status_t - sim.t_s) < 1e-6
             and console.commands is not None
             and console.commands.mirror is not None
-        ),
-        what="telemetry of the paused vehicle",
-    )
+        )
+
+    wait_until(paused_state_shown, what="telemetry of the paused vehicle")
     return sim
 
 
