@@ -77,11 +77,8 @@ def plan_doc(
         d = compare(current, new, top, heave)
         diff = {
             "active": current.pattern,
-            # only real changes: a new pattern's parameter equal to the old one's is not one
             "changes": [
-                {"param": c.param, "old": c.old, "new": c.new, "unit": c.unit}
-                for c in d.changes
-                if c.old != c.new
+                {"param": c.param, "old": c.old, "new": c.new, "unit": c.unit} for c in d.changes
             ],
             "pattern_changed": d.pattern_changed,
             "duration_delta_s": d.delta("duration_s"),

@@ -205,7 +205,7 @@ function renderConfirm(preview, command) {
     const diff = preview.diff || {};
     parts.push(el("p", { testid: "confirm-summary" },
       "Active: ", el("strong", {}, diff.active || "none"), "  ->  new: ", el("strong", {}, preview.pattern)));
-    const changes = realChanges(diff.changes);
+    const changes = Array.isArray(diff.changes) ? diff.changes : [];
     const active = Boolean(preview.diff);
     const changedPattern = active && diff.active !== preview.pattern;
     parts.push(changes.length
@@ -248,21 +248,6 @@ function firstCommand(preview) {
     el("p", { class: "hint" }, "Nothing is running: every parameter is new."),
     params.length ? el("ul", { class: "changes" }, ...params.map(([k, v]) =>
       el("li", { dataset: { param: k } }, `${k}: ${withUnit(v, unitOf(preview.pattern, k))}`))) : null);
-}
-
-/** The changes that are real: a parameter whose old and new (snapped, as the vehicle decodes
- * them) values are equal is not one, even when the pattern changes. */
-function realChanges(changes) {
-  if (!Array.isArray(changes)) return [];
-  return changes.filter((c) => !sameValue(c.old, c.new));
-}
-
-function sameValue(a, b) {
-  if (a === b) return true;
-  if (a === null || a === undefined || b === null || b === undefined) return false;
-  const x = Number(a);
-  const y = Number(b);
-  return typeof a !== "string" && typeof b !== "string" && Number.isFinite(x) && x === y;
 }
 
 /** What the new plan costs: shown on every send, the first one too. */

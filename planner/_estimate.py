@@ -190,7 +190,8 @@ class PlanDiff(Record):
     Attributes:
         old_pattern: the running pattern (``None`` if none).
         new_pattern: the commanded one.
-        changes: parameters that differ (all of them when the pattern changes).
+        changes: parameters whose value differs (snapped, as decoded), across patterns
+            too: a parameter equal in both is not a change; one only one side has is.
         old, new: estimates of both plans (``old`` is ``None`` with no running plan), at
             the flyable speed when a top speed is given.
         anchor_moved_m: how far the mission anchor moves (m).
@@ -222,7 +223,7 @@ class PlanDiff(Record):
         changes = [
             ParamChange(name, units[name], old_params.get(name), new_params.get(name))
             for name in dict.fromkeys([*old_params, *new_params])
-            if old_params.get(name) != new_params.get(name) or self.pattern_changed
+            if old_params.get(name) != new_params.get(name)
         ]
         init(self, "changes", tuple(changes))
         rates = (top_speed_mps, heave_rate_mps)

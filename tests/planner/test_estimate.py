@@ -68,13 +68,16 @@ def test_diff_lists_changed_parameters_only_for_the_same_pattern() -> None:
     )
 
 
-def test_diff_across_patterns_lists_every_parameter_of_both() -> None:
+def test_diff_across_patterns_lists_every_parameter_that_differs() -> None:
     running = default_plan("helix")
     new = default_plan("square", START, running)
     d = compare(running, new)
     assert d.pattern_changed and (d.old_pattern, d.new_pattern) == ("helix", "square")
     names = [c.param for c in d.changes]
-    assert set(names) == set(DICTIONARY["helix"].defaults) | set(DICTIONARY["square"].defaults)
+    old, new_params = running.command.params, new.command.params
+    differ = {k for k in {*old, *new_params} if old.get(k) != new_params.get(k)}
+    assert set(names) == differ
+    assert differ != set(old) | set(new_params)  # a shared, equal value (speed) is no change
     side = next(c for c in d.changes if c.param == "side_span")
     assert (side.old, side.new, side.unit) == (None, 10.0, "m")
     assert d.anchor_moved_m == 0.0  # orbit patterns share the anchor
