@@ -6,10 +6,10 @@ from dataclasses import asdict
 from typing import Any
 
 from fastapi import APIRouter, HTTPException, Request
-from fastapi.responses import JSONResponse
 
 from backend.api.deps import ConsoleDep, token_from, token_ok
 from backend.api.models import CommandIn, DecodeIn
+from backend.api.responses import DocResponse
 from backend.api.schemas import (
     DecodeFailure,
     DecodeResult,
@@ -73,30 +73,31 @@ def dictionary() -> list[dict[str, Any]]:
     return describe_dictionary()
 
 
-# preview and encode return a JSONResponse: their model documents the shape, and a Response is
-# not re-validated on the way out (that would be half a preview's time)
+# preview and encode answer a DocResponse: their model documents the shape, the dict is not
+# validated again on the way out. They are async: their work (0.3-1.2 ms) runs on the event loop
+# without a thread hop per request, and the preview's drawing is queued from the loop's thread.
 @router.post(
     "/preview",
-    response_class=JSONResponse,
+    response_class=DocResponse,
     response_model=PreviewDoc,
     responses=errors((413, 422)),
 )
-def preview(
+async def preview(
     body: CommandIn, console: ConsoleDep, x_nemesys_view: ViewHeader = None
-) -> JSONResponse:
+) -> DocResponse:
     """The frame (bits, sections, hex, airtime) and the path the vehicle would fly from where it
     is now, expanded from the decoded packet, with estimates, limit violations and the diff
     against the active pattern. Also drawn in the caller's own 3D view (``X-Nemesys-View``)."""
-    return JSONResponse(console.preview(body.pattern, dict(body.params), view=x_nemesys_view))
+    return DocResponse(console.preview(body.pattern, dict(body.params), view=x_nemesys_view))
 
 
 @router.post(
-    "/encode", response_class=JSONResponse, response_model=EncodeDoc, responses=errors((413, 422))
+    "/encode", response_class=DocResponse, response_model=EncodeDoc, responses=errors((413, 422))
 )
-def encode(body: CommandIn, console: ConsoleDep) -> JSONResponse:
+async def encode(body: CommandIn, console: ConsoleDep) -> DocResponse:
     """The frame only: snapped values, bits by section, hex, airtime."""
     _, doc = console.encode(body.pattern, dict(body.params))
-    return JSONResponse(doc)
+    return DocResponse(doc)
 
 
 @router.post(

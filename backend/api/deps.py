@@ -12,7 +12,8 @@ from pydantic import Field
 from backend.console import Console
 
 
-def get_console(request: Request) -> Console:
+async def get_console(request: Request) -> Console:
+    # async: FastAPI runs a sync dependency in its thread pool, a hop on every request
     console: Console = request.app.state.console
     return console
 

@@ -12,6 +12,7 @@ from fastapi.responses import JSONResponse
 
 from backend.api.deps import ConsoleDep
 from backend.api.models import CommandIn
+from backend.api.responses import DocResponse
 from backend.api.schemas import errors
 from backend.api.schemas.predict import Prediction
 from backend.console import Console
@@ -44,7 +45,7 @@ _RESPONSES[503]["headers"] = {
 
 
 @router.post(
-    "/predict", response_class=JSONResponse, response_model=Prediction, responses=_RESPONSES
+    "/predict", response_class=DocResponse, response_model=Prediction, responses=_RESPONSES
 )
 def predict_track(
     body: CommandIn,
@@ -66,4 +67,4 @@ def predict_track(
             status_code=503,
             headers={"Retry-After": str(math.ceil(err.retry_after_s))},
         )
-    return JSONResponse(doc)
+    return DocResponse(doc)
