@@ -25,6 +25,7 @@ uses the machine's other core. Should the worker die, the next prediction starts
 
 from __future__ import annotations
 
+import contextlib
 import math
 import multiprocessing
 import multiprocessing.connection
@@ -222,6 +223,19 @@ def run_twin(
     return Track(ts, xs, ys, zs, outcome, reason, duration, sim.t_s - t0)
 
 
+#: How much the twin's worker yields the CPU (``nice`` increment): a prediction is background
+#: work, the console's requests, telemetry and the simulated vehicle come first on a busy
+#: machine (on 2 cores a 600 s prediction otherwise took a whole core from the page's previews).
+WORKER_NICE = 10
+
+
+def _worker_init() -> None:
+    """In the worker: lower its priority, and exit when the console's process is gone."""
+    with contextlib.suppress(OSError):  # a platform without nice: the same work, unyielding
+        os.nice(WORKER_NICE)
+    _watch_parent()
+
+
 def _watch_parent() -> None:
     """In the worker: exit when the console's process is gone, however it ended (SIGKILL
     included), so no orphaned twin outlives it."""
@@ -251,7 +265,7 @@ class TwinWorker:
                 raise PredictorBusy("the console is shutting down")
             if self._pool is None or fresh:
                 self._pool = ProcessPoolExecutor(
-                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_watch_parent
+                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_worker_init
                 )
             return self._pool
 

@@ -13,7 +13,7 @@ from fastapi.testclient import TestClient
 
 from backend.api.predict import _gate
 from backend.geo import ned_to_geodetic
-from backend.predict import MAX_POINTS, QUEUE, decimate
+from backend.predict import MAX_POINTS, QUEUE, WORKER_NICE, decimate
 from bench._server import start_console
 from codec import encode_frame
 from sim_bridge.guidance import Mode
@@ -212,6 +212,11 @@ def _children(pid: int) -> set[int]:
     return out
 
 
+def _nice(pid: int) -> int:
+    """A process's nice value (field 19 of /proc/<pid>/stat)."""
+    return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[16])
+
+
 def _alive(pid: int) -> bool:
     try:
         state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
@@ -233,6 +238,11 @@ def test_the_twin_worker_never_outlives_the_console(tmp_path: Path, ending: str)
             assert r.status_code == 200, r.text
         workers = _children(console.pid) - before
         assert workers, "the prediction ran in no worker process"
+        # background work: the twin's worker (not multiprocessing's resource tracker) yields
+        # the CPU to the console's requests
+        twins = {p for p in workers if b"spawn_main" in Path(f"/proc/{p}/cmdline").read_bytes()}
+        assert twins, "no spawned worker among the console's children"
+        assert {_nice(p) for p in twins} == {min(19, _nice(console.pid) + WORKER_NICE)}
     finally:
         console.stop() if ending == "stop" else console.kill()
     wait_until(lambda: not any(_alive(p) for p in workers), what="the worker to exit")
