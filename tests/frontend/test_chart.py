@@ -1,5 +1,6 @@
 """The page's 2D chart (Leaflet), predicted track and telemetry plots (uPlot) in real
-Chromium at 1280x800, against a real console in training mode (datum: training's site).
+Chromium at 1280x800 (the chart's drawing at 1920x1080 too), against a real console in
+training mode (datum: training's site).
 
 Leaflet and uPlot come from npm (``frontend/vendor``, ``make test`` installs them) and are
 served by the console itself: every request the page makes must stay on loopback, and none of
@@ -22,6 +23,7 @@ from playwright.sync_api import Page, Response, expect
 
 from backend.geo import TRAINING_DATUM
 from tests.frontend.conftest import TOKEN, Console, Watched
+from tests.frontend.pagekit import SIZES
 
 POLL_MS = 100
 WIDTH, HEIGHT = 1280, 800
@@ -105,10 +107,13 @@ class Network:
         return [(u, s) for u, s in self.responses if urlsplit(u).path.startswith(prefix)]
 
 
-def open_chart(w: Watched, console: Console) -> tuple[Page, Network]:
-    """The page at 1280x800 with the operator token, once the chart is drawn."""
+def open_chart(
+    w: Watched, console: Console, size: tuple[int, int] = (WIDTH, HEIGHT)
+) -> tuple[Page, Network]:
+    """The page at ``size`` (default 1280x800) with the operator token, once the chart is
+    drawn."""
     page = w.page
-    page.set_viewport_size({"width": WIDTH, "height": HEIGHT})
+    page.set_viewport_size({"width": size[0], "height": size[1]})
     w.stub_viewer()
     net = Network(page)
     page.goto(f"{console.base}/?token={TOKEN}")
@@ -196,10 +201,11 @@ def wait_attr_change(page: Page, selector: str, attr: str, before: str | None) -
 # ---- tests -------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("size", list(SIZES))
 def test_chart_draws_graticule_range_rings_and_preview_without_leaving_the_machine(
-    console: Console, watched: Watched
+    console: Console, watched: Watched, size: str
 ) -> None:
-    page, net = open_chart(watched, console)
+    page, net = open_chart(watched, console, SIZES[size])
     chart = console.get("/api/chart")
     assert chart["datum"] == {
         "lat_deg": TRAINING_DATUM.lat_deg,

@@ -123,8 +123,9 @@ def expected_latlon(datum: Datum, x_m: float, y_m: float) -> str:
     return f"{dm(float(lat), lat=True)} {dm(float(lon), lat=False)}"
 
 
+@pytest.mark.parametrize("size", list(SIZES))
 def test_position_and_datum_are_shown_in_degrees_and_decimal_minutes(
-    console: Console, browser: Browser
+    console: Console, browser: Browser, size: str
 ) -> None:
     session = console.get("/api/session")
     assert session.get("datum"), f"training has a datum: {session.get('datum')}"
@@ -132,7 +133,7 @@ def test_position_and_datum_are_shown_in_degrees_and_decimal_minutes(
     # move the vehicle off the origin: 60 s north-east at 0.18 m/s, then it holds there
     straight = {"speed": 0.18, "depth": 1, "duration": 60, "heading": 45}
     console.post("/api/commands", {"pattern": "straight", "params": straight}, token=True)
-    with sized_page(browser, 1280, 800, shot="latlon_1280x800") as w:
+    with sized_page(browser, *SIZES[size], shot=f"latlon_{size}") as w:
         page = open_sized(w, console)
         expect(page.get_by_test_id("status-datum")).to_have_text(expected_latlon(datum, 0.0, 0.0))
         deadline = time.monotonic() + 40.0

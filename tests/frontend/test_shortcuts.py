@@ -8,10 +8,11 @@ from __future__ import annotations
 import re
 import time
 
+import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from tests.frontend.conftest import Console
-from tests.frontend.pagekit import open_sized, sized_page, wait_preview
+from tests.frontend.pagekit import SIZES, open_sized, sized_page, wait_preview
 
 #: Counts the surface button's clicks (the shortcut must be exactly that click).
 COUNT_CLICKS_JS = """() => { window.__surfaceClicks = 0;
@@ -30,8 +31,11 @@ def surfaces(console: Console) -> list[dict[str, object]]:
     return [r for r in console.get("/api/commands") if r.get("pattern") == "surface"]
 
 
-def test_the_shortcuts_are_listed_in_the_page(console: Console, browser: Browser) -> None:
-    with sized_page(browser, 1280, 800) as w:
+@pytest.mark.parametrize("size", list(SIZES))
+def test_the_shortcuts_are_listed_in_the_page(
+    console: Console, browser: Browser, size: str
+) -> None:
+    with sized_page(browser, *SIZES[size]) as w:
         page = open_sized(w, console)
         # visible hints on the buttons themselves
         expect(page.get_by_test_id("send-button")).to_contain_text("Ctrl+Enter")

@@ -4,10 +4,11 @@ text of the key elements meets WCAG AA contrast (4.5:1) against what is behind i
 
 from __future__ import annotations
 
+import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from tests.frontend.conftest import Console
-from tests.frontend.pagekit import open_sized, sized_page, wait_preview
+from tests.frontend.pagekit import SIZES, open_sized, sized_page, wait_preview
 
 #: In the browser: the WCAG contrast ratio of an element's text colour against the first
 #: opaque background behind it (its own or an ancestor's; the page's when none).
@@ -77,10 +78,11 @@ def assert_aa(page: Page) -> None:
     assert not low, f"below WCAG AA ({AA_NORMAL}:1) in the {theme(page)} theme: {low}"
 
 
+@pytest.mark.parametrize("size", list(SIZES))
 def test_day_theme_toggles_persists_and_keeps_aa_contrast(
-    console: Console, browser: Browser
+    console: Console, browser: Browser, size: str
 ) -> None:
-    with sized_page(browser, 1280, 800, shot="theme_day_1280x800", scheme="dark") as w:
+    with sized_page(browser, *SIZES[size], shot=f"theme_day_{size}", scheme="dark") as w:
         page = open_sized(w, console)
         wait_preview(page, "circle")
         assert theme(page) == "night", "a first visit follows the system's dark preference"

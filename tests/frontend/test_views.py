@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import time
 
+import pytest
 from playwright.sync_api import Browser, Frame, Page, expect
 
 from tests.frontend.conftest import Console, Watched
+from tests.frontend.pagekit import SIZES
 from tests.frontend.test_browser import (
     LAWNMOWER,
     POLL_MS,
@@ -60,9 +62,10 @@ def wait_gone(frame: Frame, prefix: str, timeout_ms: int = 20_000) -> None:
     )
 
 
-def second_page(browser: Browser, watched: Watched) -> Watched:
-    """Another browser (own context: no token, its own view id), watched like the first."""
-    context = browser.new_context(viewport={"width": 1100, "height": 800})
+def second_page(browser: Browser, watched: Watched, size: tuple[int, int] = (1100, 800)) -> Watched:
+    """Another browser (own context: no token, its own view id) at ``size``, watched like the
+    first."""
+    context = browser.new_context(viewport={"width": size[0], "height": size[1]})
     page = context.new_page()
     page.set_default_timeout(LOAD_MS)  # two real 3D views load on a busy 2-core machine
     w = Watched(page)
@@ -76,17 +79,20 @@ def view_id(page: Page) -> str:
     return src.rsplit("/view/", 1)[1].split("&", 1)[0]
 
 
+@pytest.mark.parametrize("size", list(SIZES))
 def test_an_observers_preview_does_not_change_the_operators_view(
-    console: Console, watched: Watched, browser: Browser
+    console: Console, watched: Watched, browser: Browser, size: str
 ) -> None:
     watched.page.set_default_timeout(LOAD_MS)
+    width, height = SIZES[size]
+    watched.page.set_viewport_size({"width": width, "height": height})
     operator = open_page(watched, console, viewer=True)
     author(operator, "lawnmower", LAWNMOWER)
     op_frame = viewer_frame(operator)
     # the first wait covers the 3D view's loading (seconds of SwiftShader on a busy machine)
     wait_scene_label(op_frame, "/preview/end", "lawnmower", "depth 3.0 m", timeout_ms=LOAD_MS)
 
-    other = second_page(browser, watched)
+    other = second_page(browser, watched, SIZES[size])
     try:
         observer = open_page(other, console, token=False, viewer=True)
         assert view_id(observer) != view_id(operator)  # each page its own view
