@@ -5,7 +5,7 @@ thruster, the unit thrust vector ``f_i`` over the moment it makes about the cent
 ``r_i x f_i``; its rank is the number of independently controllable degrees of freedom. The
 paper states rank 4 (surge, heave, roll, yaw) for NemeSys and gives no geometry.
 
-Here ``B`` is built from the twin's geometry (:class:`sim_bridge.model.VehicleParams`), body
+Here ``B`` is built from the twin's geometry (:class:`sim.model.VehicleParams`), body
 frame x forward, y starboard, z down, origin at the centre of gravity:
 
 * thruster 1 (port) and 2 (starboard), horizontal, pushing forward, at y = -/+ ``arm_h_m``;
@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from analysis.stability import config_params
-from sim_bridge.model import Vehicle, VehicleParams
+from sim.model import Vehicle, VehicleParams
 
 #: Wrench rows: forces (N) then moments (N m) about the centre of gravity, body axes.
 WRENCH = ("X surge", "Y sway", "Z heave", "K roll", "M pitch", "N yaw")

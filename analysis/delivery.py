@@ -2,9 +2,9 @@
 (``nemesys analyze delivery``).
 
 Checks :func:`codec.delivery_probability` (``1 - (1 - P1)^r``) by Monte Carlo through the
-emulated ME link the simulator uses (:class:`sim_bridge.channel.MEChannel`: independent bit
+emulated ME link the simulator uses (:class:`sim.channel.MEChannel`: independent bit
 errors at ``ber`` on all 100 frame bits, no bursts, no loss, in range) and the vehicle's onboard
-decode (:func:`received_command`, the path of :meth:`sim_bridge.agent.OnboardAgent.receive`:
+decode (:func:`received_command`, the path of :meth:`onboard.agent.OnboardAgent.receive`:
 the packed 13 bytes into a fresh :class:`codec.FrameReceiver`, which searches for the sync word
 within its tolerance, then BCH, CRC-4 and the dictionary checks; the first accepted event).
 
@@ -43,7 +43,7 @@ from codec import (
     delivery_probability,
     frame_of,
 )
-from sim_bridge.channel import ChannelConfig, MEChannel
+from sim.channel import ChannelConfig, MEChannel
 
 #: The BERs of the research note's delivery arithmetic (0.9625 / 0.9986 / 0.99995 at 1e-2).
 BERS: Final = (1e-2, 2e-2)
@@ -94,7 +94,7 @@ def received_command(bits: int, dictionary: CommandDictionary = DICTIONARY) -> C
     """The command the onboard agent takes from ``bits`` (a 100-bit frame as received, first
     bit most significant), or ``None`` when it rejects the frame.
 
-    The same steps as :meth:`sim_bridge.agent.OnboardAgent.receive` up to the decoded command.
+    The same steps as :meth:`onboard.agent.OnboardAgent.receive` up to the decoded command.
     """
     events = FrameReceiver(dictionary=dictionary).feed_bytes(Frame(bits).to_bytes())
     accepted = next((e for e in events if isinstance(e, Accepted)), None)

@@ -29,7 +29,7 @@ from analysis.twin import (
     PAPER_TRANSIENT_S,
     TwinReport,
 )
-from sim_bridge.model import (
+from sim.model import (
     HEAVE_TEST_DESCENT_M,
     PAPER_HEAVE_MPS,
     YAW_TEST_DURATION_S,
@@ -57,14 +57,14 @@ def design(twin: TwinReport) -> Section:
         table(headers, rows),
         "",
         f"**How measured.** The paper's own manoeuvres, run on the twin's vehicle model "
-        f"(`sim_bridge.model.heave_test`, `yaw_test`, 50 Hz RK4): heave is a full-thrust "
+        f"(`sim.model.heave_test`, `yaw_test`, 50 Hz RK4): heave is a full-thrust "
         f"{HEAVE_TEST_DESCENT_M:g} m descent from rest at 0.5 m depth, its length over its "
         f"duration; yaw is a {YAW_TEST_DURATION_S:g} s full-thrust rotation at 0.5 m depth, "
         "total heading change over 60 s.",
         "",
         "**Why they agree.** The twin's per-thruster thrust limit "
         f"({r.thrust_max_n:.3f} N) and its quadratic yaw damping ({r.nrr:.3f} N m s^2) were "
-        "*fitted* to exactly these two numbers (`sim_bridge.model.calibrate`), so agreement "
+        "*fitted* to exactly these two numbers (`sim.model.calibrate`), so agreement "
         "checks the calibration, not a prediction. The fit needs about 1.6 % of a T200's "
         "51.5 N nameplate thrust: the tested vehicle evidently ran software-capped thrust "
         "(`docs/simulator.md`).",
@@ -227,7 +227,7 @@ def battery(twin: TwinReport) -> Section:
     return "Battery (Table `tab:battery_power_consumption_table`)", [
         table(["time (h)", "paper battery %", "twin battery %", "difference (pp)"], rows),
         "",
-        "**How measured.** `sim_bridge.environment.Battery` stepped every 60 s for 5 h at its "
+        "**How measured.** `sim.environment.Battery` stepped every 60 s for 5 h at its "
         "nominal load (hotel 15 W, the horizontal thrusters at the calibrated 0.8 N, the "
         "vertical pair holding the +0.7 N buoyancy), read on the hour.",
         "",
@@ -348,7 +348,7 @@ def scenarios(twin: TwinReport, base: Path) -> Section:
         "",
         "The paper's figure has Gazebo snapshots and no numbers, and gives no geometry; the "
         "twin's sizes, depths and retask times are estimates "
-        "(`sim_bridge/scenarios.py`, from the research note `sim.md` section 5), flown at the "
+        "(`sim/scenarios.py`, from the research note `sim.md` section 5), flown at the "
         "calibrated vehicle's 0.18 m/s top speed. Join time: from the retask until the vehicle "
         "is on the new pattern's body within 0.3 m cross-track and 3 cm of the depth "
         "reference, held 10 s. The paper's figure shows the same three retasks: (a) a "

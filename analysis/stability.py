@@ -12,7 +12,7 @@ thrusters off; at :data:`PUSH_AT_S` it is given a roll rate of 30 deg/s, the res
 impulsive push about its long axis (an angular impulse ``(Ix+A44) p0`` = 0.105 N m s, e.g. a
 1 N push 0.1 m off the centreline for about 0.1 s). No controller acts: passive stability is
 the response without actuation. Each configuration is the calibrated Cfg #3 model
-(:class:`sim_bridge.model.VehicleParams`: mass, inertia, damping) with only GM changed: the
+(:class:`sim.model.VehicleParams`: mass, inertia, damping) with only GM changed: the
 paper gives no other figures for the earlier hardware, so the *shape* of each response
 (capsize, neutral, righting) is what this reproduces, not Cfg #1/#2's exact timing.
 
@@ -26,7 +26,7 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 
 from analysis.twin import PAPER_DESIGNS, _pyplot, _save
-from sim_bridge.model import G_MPS2, Vehicle, VehicleParams
+from sim.model import G_MPS2, Vehicle, VehicleParams
 
 #: The disturbance: a roll rate (deg/s) given at PUSH_AT_S from upright rest.
 PUSH_DPS = 30.0

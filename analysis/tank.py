@@ -19,7 +19,7 @@ import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from sim_bridge.scenarios import SETTLE_BAND_M, ScenarioResult
+from sim.scenarios import SETTLE_BAND_M, ScenarioResult
 
 #: The steady-state window starts this long after each command (s).
 STEADY_FROM_S = 10.0

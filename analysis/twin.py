@@ -3,13 +3,13 @@
 * Table ``tab:design_comparison``, Cfg #3: the paper measured heave as a full-thrust 1.5 m
   descent (73.1 mm/s) and yaw as a 60 s full-thrust rotation at 0.5 m depth (30.3 deg/s).
   :func:`design_rates` runs the same two manoeuvres on the calibrated
-  :class:`sim_bridge.model.VehicleParams` (``heave_test``, ``yaw_test``). The thrust limit
+  :class:`sim.model.VehicleParams` (``heave_test``, ``yaw_test``). The thrust limit
   and the quadratic yaw damping were *fitted* to these two numbers, so agreement checks the
   calibration, not a prediction. Cfg #1 (three thrusters, antenna above the heave thruster)
   and Cfg #2 (antenna above the hull, GM -2 mm) are different hardware the twin does not
   model: they are not reproducible here.
 * Table ``tab:battery_power_consumption_table``: :func:`battery_table` steps the battery
-  model (``sim_bridge.environment.Battery``) every 60 s at its nominal load (hotel 15 W, the
+  model (``sim.environment.Battery``) every 60 s at its nominal load (hotel 15 W, the
   horizontal pair at the calibrated 0.8 N and the vertical pair holding the buoyancy) and
   reads it after 1..5 h, against 71/54/42/32/22 %. The curve is a fit to those points.
 * Figure ``fig:depth_control``: the tank scenario (``run_scenario("tank")``: hover, target
@@ -30,13 +30,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from bench.reconfig import RETASK_SCENARIOS
-from sim_bridge.environment import (
+from sim.environment import (
     NOMINAL_THRUST_POWER_W,
     PAPER_SOC_TABLE,
     Battery,
     paper_soc_pct,
 )
-from sim_bridge.model import (
+from sim.model import (
     PAPER_HEAVE_MPS,
     PAPER_YAW_DPS,
     TEST_START_DEPTH_M,
@@ -45,7 +45,7 @@ from sim_bridge.model import (
     heave_test,
     yaw_test,
 )
-from sim_bridge.scenarios import SETTLE_BAND_M, ScenarioResult, run_scenario
+from sim.scenarios import SETTLE_BAND_M, ScenarioResult, run_scenario
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes

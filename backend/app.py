@@ -23,7 +23,7 @@ from backend.api import authoring, chart, commands, errors_db, live, predict, sc
 from backend.api import view as view_api
 from backend.api.openapi import security_schemes
 from backend.bounded_input import BodyLimit, shorten, validation_errors
-from backend.commands import RateLimited
+from backend.commands.manager import RateLimited
 from backend.console import Console
 from backend.security import HostGuard, allowed_hosts, install_redaction
 from backend.settings import Settings
@@ -121,7 +121,7 @@ def _static(app: FastAPI) -> None:
     @app.get("/viewer/", include_in_schema=False)
     def viewer_page() -> FileResponse:
         """viser's own client page, served same-origin; it connects to viser's port."""
-        from backend.viewer import client_html_path
+        from backend.viewer.viewer import client_html_path
 
         return FileResponse(client_html_path())
 

@@ -16,21 +16,20 @@ from collections.abc import Coroutine
 from dataclasses import replace
 from typing import Any
 
-from backend.commands import CommandManager
-from backend.draw_queue import PreviewDrawer
-from backend.geo import Datum, initial_datum
-from backend.gps import GpsFix, GpsReader, Station, parse_gps, station_of
-from backend.health import LinkHealth, link_health_of
-from backend.link import Link, RosbridgeLink, open_link
-from backend.predict import TwinWorker
-from backend.preview import frame_doc, plan_doc
-from backend.profile import VehicleProfile, profile_for
-from backend.reach import active_path_doc, add_geo, with_lat_lon
+from backend.authoring.predict import TwinWorker
+from backend.authoring.preview import frame_doc, plan_doc
+from backend.authoring.profile import VehicleProfile, profile_for
+from backend.chart.geo import Datum, initial_datum
+from backend.chart.gps import GpsFix, GpsReader, Station, parse_gps, station_of
+from backend.chart.reach import active_path_doc, add_geo, with_lat_lon
+from backend.chart.tiles import TileSource, open_tiles
+from backend.commands.health import LinkHealth, link_health_of
+from backend.commands.manager import CommandManager
+from backend.mission_log.opening import open_checked
+from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
-from backend.store import LogWriteError, MissionLog
-from backend.store_open import open_checked
 from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
-from backend.tiles import TileSource, open_tiles
+from backend.viewer.draw_queue import PreviewDrawer
 from codec import (
     Encoded,
     airtime_s,
@@ -39,6 +38,7 @@ from codec import (
     encode_frame,
 )
 from planner import Limits, Plan, VehicleState, plan
+from station.link import Link, RosbridgeLink, open_link
 
 logger = logging.getLogger("backend.console")
 
@@ -68,13 +68,13 @@ class Console:
         self.tiles: TileSource | None = None  # local map tiles (``tiles`` setting)
         self.log: MissionLog | None = None
         self.dive = 0
-        self.sim: Any = None  # sim_bridge.sim.Simulation in training mode
-        self.bridge: Any = None  # sim_bridge.server.BridgeServer in training mode
+        self.sim: Any = None  # sim.simulation.Simulation in training mode
+        self.bridge: Any = None  # rosbridge.server.BridgeServer in training mode
         self.link: Link | None = None
         self.hub = TelemetryHub(settings.telemetry_hz)
         self.commands: CommandManager | None = None
-        self.viewer: Any = None  # backend.viewer.Viewer
-        self.runner: Any = None  # backend.scripts.ScriptRunner while a script runs
+        self.viewer: Any = None  # backend.viewer.viewer.Viewer
+        self.runner: Any = None  # backend.scripts.operations.ScriptRunner while a script runs
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
         self.drawer = PreviewDrawer(PREVIEW_DRAW_INTERVAL_S)
@@ -105,8 +105,8 @@ class Console:
             )
         self.dive = self.log.new_dive(s.target)
         if s.training:
-            from sim_bridge.server import BridgeServer
-            from sim_bridge.sim import SimConfig, Simulation
+            from rosbridge.server import BridgeServer
+            from sim.simulation import SimConfig, Simulation
 
             self.sim = Simulation(SimConfig(seed=s.sim_seed, limits=self.limits))
             # frames only from this console: a per-start secret for the rosbridge auth op
@@ -148,7 +148,7 @@ class Console:
             await link.wait_connected(5.0)
         self._health_task = asyncio.create_task(self._push_health(), name="link health")
         if viewer:
-            from backend.viewer import Viewer
+            from backend.viewer.viewer import Viewer
 
             self.viewer = Viewer(s.viewer_host, s.viewer_port)
             self._drawer = asyncio.create_task(self.drawer.run(self.viewer), name="preview drawing")

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 if TYPE_CHECKING:
     import uvicorn
 
-#: The exit status of bad input (``backend.cli.EXIT_USAGE``): a setting, the mission log,
+#: The exit status of bad input (``cli.main.EXIT_USAGE``): a setting, the mission log,
 #: the port.
 EXIT_USAGE = 2
 
@@ -69,8 +69,8 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
         return _usage(f"setting {where}: {first['msg']}")
-    from backend.store import LogWriteError
-    from backend.store_open import ELSEWHERE, LogError, open_checked
+    from backend.mission_log.opening import ELSEWHERE, LogError, open_checked
+    from backend.mission_log.store import LogWriteError
 
     # before the URL: the log is usable, and what an earlier run left on its way is
     # interrupted, not stuck
@@ -140,7 +140,7 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
 
 def _usage(message: str) -> int:
     """One line on stderr, exit status 2 (as the CLI's ``UsageError``: raising that from here
-    would not reach ``python -m backend.cli``'s handler, a second copy of the module)."""
+    would not reach ``python -m cli.main``'s handler, a second copy of the module)."""
     print(f"nemesys console: {message}", file=sys.stderr)
     return EXIT_USAGE
 

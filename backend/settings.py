@@ -121,9 +121,9 @@ class Settings(BaseSettings):
     #: Origins whose pages may open /ws besides the console's own (e.g. a chart plotter's).
     allowed_origins: list[Annotated[str, Field(min_length=1, max_length=300)]] = []
 
-    # --- geo reference and chart (backend/geo.py, backend/gps.py, backend/tiles.py) -------
+    # --- geo reference and chart (backend/chart/: geo.py, gps.py, tiles.py) -------------------
     #: Latitude and longitude of the NED origin (deg, WGS84). Unset: training uses its
-    #: documented site (backend.geo.TRAINING_DATUM); a real vehicle takes the surface GPS's
+    #: documented site (backend.chart.geo.TRAINING_DATUM); a real vehicle takes the surface GPS's
     #: first fix when ``gps`` is set, else has no datum (positions in metres only).
     datum_lat_deg: Annotated[float, Field(ge=-90, le=90)] | None = None
     datum_lon_deg: Annotated[float, Field(ge=-180, le=180)] | None = None
@@ -138,7 +138,7 @@ class Settings(BaseSettings):
     #: Optional local map tiles: a directory of z/x/y.png tiles or an .mbtiles file.
     tiles: Path | None = None
 
-    # --- vehicle profile (backend/profile.py); unset: the twin's figures in training --------
+    # --- vehicle profile (backend/authoring/profile.py); unset: the twin's figures in training --
     #: Top speed through the water (m/s).
     top_speed_mps: Annotated[float, Field(gt=0, le=5)] | None = None
     #: Largest vertical speed (m/s).
@@ -153,7 +153,7 @@ class Settings(BaseSettings):
     def _target(cls, value: str) -> str:
         if value == SIM_TARGET:
             return value
-        from sim_bridge.transmit import open_transmitter
+        from station.transmit import open_transmitter
 
         # parse only (raises ValueError naming the allowed forms); nothing is opened here
         open_transmitter(value).close()
@@ -162,7 +162,7 @@ class Settings(BaseSettings):
     @field_validator("gps")
     @classmethod
     def _gps(cls, value: str) -> str:
-        from backend.gps import parse_gps
+        from backend.chart.gps import parse_gps
 
         parse_gps(value)  # raises ValueError naming the allowed forms; nothing is opened
         return value

@@ -17,11 +17,12 @@ import random
 import statistics
 
 import codec
+import onboard
 import planner
-import sim_bridge
+import vehicle_contract
 from bench._onboard import with_errors
 from bench._timing import peak_rss_run
-from sim_bridge.scenarios import SCENARIOS, run_scenario
+from sim.scenarios import SCENARIOS, run_scenario
 
 #: The retask scenarios, in the paper's order.
 RETASK_SCENARIOS = ("wreck", "panel", "pod")
@@ -41,8 +42,8 @@ _ONBOARD = (
     """
 import sys
 from planner import VehicleState
-from sim_bridge.agent import OnboardAgent
-from sim_bridge.guidance import Guidance
+from onboard.agent import OnboardAgent
+from onboard.guidance import Guidance
 corrected = []
 for case in sys.argv[1:]:
     agent = OnboardAgent(Guidance())
@@ -61,7 +62,7 @@ print(*corrected)
 
 def compile_onboard() -> None:
     """Write the onboard packages' bytecode, as installing them on a vehicle does."""
-    for package in (codec, planner, sim_bridge):
+    for package in (codec, planner, onboard, vehicle_contract):
         compileall.compile_dir(
             str(pathlib.Path(package.__file__ or "").parent), quiet=1, force=False
         )

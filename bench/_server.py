@@ -1,7 +1,7 @@
 """``nemesys console`` as a subprocess on a free loopback port, for the console benchmark and
 the end-to-end and browser tests.
 
-:func:`start_console` runs ``python -m backend.cli console`` from the repository (the viser
+:func:`start_console` runs ``python -m cli.main console`` from the repository (the viser
 view on a port of its own choosing), with no ``NEMESYS_*`` variable of the caller's (a
 target, a settings file) but the operator token and what the caller adds; its output goes
 to a log file. It parses the URL the console prints and polls ``/api/session`` until it
@@ -97,7 +97,7 @@ def start_console(
     child_env = {k: v for k, v in os.environ.items() if not k.startswith("NEMESYS_")}
     child_env["NEMESYS_TOKEN"] = token
     child_env.update(env or {})
-    cmd = [sys.executable, "-m", "backend.cli", "console", "--port", str(port)]
+    cmd = [sys.executable, "-m", "cli.main", "console", "--port", str(port)]
     cmd += ["--viewer-port", "0", *args]
     with log_path.open("wb") as log:
         proc = subprocess.Popen(

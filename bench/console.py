@@ -77,7 +77,7 @@ import httpx
 from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, WebSocketException
 
-from backend.store import FINAL_STATES
+from backend.mission_log.store import FINAL_STATES
 from bench._server import ConsoleProcess, start_console
 from bench._timing import percentile, table, verdict
 from bench.console_predict import PredictRun, predict_load, predict_table

@@ -11,9 +11,9 @@ its three digital-twin retasking scenarios (shipwreck, BOP panel, pod):
   Pod 46 ms per waypoint.
 * memory: peak resident set size (RSS) during decoding and replanning. Paper: 13.2 MB.
 
-Here each scenario's retask frame (``sim_bridge.scenarios``: lawnmower 20 -> 30 m sweep,
+Here each scenario's retask frame (``sim.scenarios``: lawnmower 20 -> 30 m sweep,
 helix -> square, square -> circle) goes through the onboard agent
-(:meth:`sim_bridge.agent.OnboardAgent.receive`) against the simulated vehicle at the moment
+(:meth:`onboard.agent.OnboardAgent.receive`) against the simulated vehicle at the moment
 of the retask, mid-scenario; the agent is deep-copied for every trial so each one sees the
 same vehicle and plan (as ``bench sim`` does). The agent's acknowledgment carries the two
 latencies, wall clock: decode = bits received -> frame synced, decoded and checked; replan =
@@ -62,9 +62,9 @@ from bench._reconfig_memory import (
 )
 from bench._timing import machine, mib, table
 from codec import FRAME_BITS, encode_frame
-from sim_bridge.agent import OnboardAgent
-from sim_bridge.scenarios import SCENARIOS
-from sim_bridge.sim import SimConfig, Simulation
+from onboard.agent import OnboardAgent
+from sim.scenarios import SCENARIOS
+from sim.simulation import SimConfig, Simulation
 
 # The memory half lives in bench._reconfig_memory; its names are re-exported here.
 __all__ = [

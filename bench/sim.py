@@ -23,8 +23,8 @@ from typing import TextIO
 from bench._timing import table, verdict
 from bench.reconfig import receive_afresh, retask_cases
 from codec import DICTIONARY, encode_frame
-from sim_bridge.scenarios import SCENARIOS
-from sim_bridge.sim import SimConfig, Simulation
+from sim.scenarios import SCENARIOS
+from sim.simulation import SimConfig, Simulation
 
 TARGET_SPEEDUP = 100.0
 TARGET_FLEET = 20

@@ -2,7 +2,7 @@
 // machine): the graticule, optional local tiles, the transmitter and its ME range rings, the
 // vehicle and its track, the active path, this page's preview shaded by the link's reach, and
 // the predicted track (prediction.js). Positions come from the API's lat_deg/lon_deg; the
-// page never converts NED metres itself (backend/geo.py is the one edge).
+// page never converts NED metres itself (backend/chart/geo.py is the one edge).
 
 import { api } from "./api.js";
 import { drawGraticule } from "./graticule.js";

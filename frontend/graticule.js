@@ -1,6 +1,6 @@
 // The chart's latitude/longitude graticule: lines every N minutes (N chosen from the view so
 // that a few lines cross it), labelled in degrees and decimal minutes as on a paper chart
-// (29°31.896'N, 082°18.186'W: the same form as backend/geo.py's dm()). Drawn always, with or
+// (29°31.896'N, 082°18.186'W: the same form as backend/chart/geo.py's dm()). Drawn always, with or
 // without map tiles. In Web Mercator parallels and meridians are straight lines, so each
 // line is exact with two points.
 

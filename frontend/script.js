@@ -15,7 +15,7 @@ const TRIGGERS = [
 ];
 
 /** Patterns that repeat until retasked, so never complete: the planner's REPEATING_PATTERNS
- * (backend/scripts_completion.py; tests/backend/test_scripts_completion.py checks they agree). */
+ * (backend/scripts/completion.py; tests/backend/scripts/test_completion.py checks they agree). */
 export const REPEATING = new Set(["square", "circle"]);
 /** localStorage key of the script being authored. */
 export const STORE_KEY = "nemesys.script";

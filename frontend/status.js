@@ -44,7 +44,7 @@ export function renderTelemetry(msg) {
     const y = known(s.y_m, p.y_m);
     set("status-position", x === null && y === null ? "unknown"
       : `x ${x === null ? "unknown" : `${num(x, 1)} m`} north, y ${y === null ? "unknown" : `${num(y, 1)} m`} east`);
-    // latitude/longitude as the API computed them (backend/geo.py): null without a datum
+    // latitude/longitude as the API computed them (backend/chart/geo.py): null without a datum
     const lat = known(p.lat_deg, s.lat_deg);
     const lon = known(p.lon_deg, s.lon_deg);
     const geo = latLon(lat, lon);

@@ -183,7 +183,7 @@ export function on(name, fn) {
 
 // ---- latitude and longitude ----
 
-/** Degrees and decimal minutes as on a chart, exactly as backend/geo.py dm() prints them:
+/** Degrees and decimal minutes as on a chart, exactly as backend/chart/geo.py dm() prints them:
  * dm(29.5316, true) -> "29°31.896'N", dm(-82.3031, false) -> "082°18.186'W"; "–" if unknown. */
 export function dm(value, isLat) {
   if (value === null || value === undefined || value === "" || !Number.isFinite(Number(value))) return "–";

@@ -1,6 +1,6 @@
-"""Write ``docs/vehicle.md`` from the vehicle contract (``sim_bridge/contract.py``).
+"""Write ``docs/vehicle.md`` from the vehicle contract (``vehicle_contract/contract.py``).
 
-The page is generated, never edited: ``tests/sim_bridge/test_contract.py`` fails when the
+The page is generated, never edited: ``tests/vehicle_contract/test_contract.py`` fails when the
 committed page differs. After a contract change, run (from the repository root)::
 
     .venv/bin/python scripts/gen_vehicle_doc.py [ROOT]
@@ -15,7 +15,7 @@ import pathlib
 import sys
 from collections.abc import Sequence
 
-from sim_bridge.contract_doc import write
+from vehicle_contract.doc import write
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -22,7 +22,7 @@ from backend.api.schemas import (
 )
 from backend.api.view import ViewHeader
 from codec import DecodeError, decode_frame, describe_dictionary
-from sim_bridge.agent import command_json
+from onboard.agent import command_json
 
 router = APIRouter(prefix="/api", tags=["authoring"])
 

@@ -11,11 +11,11 @@ from fastapi.exceptions import RequestValidationError
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.schemas import OPERATOR, errors
 from backend.api.schemas.chart import ChartDoc, DatumIn
+from backend.chart.geo import Datum
+from backend.chart.reach import MARGINAL_FRACTION
+from backend.chart.tiles import MAX_ZOOM, MEDIA_TYPES
 from backend.console import Console
-from backend.geo import Datum
-from backend.reach import MARGINAL_FRACTION
-from backend.store import LogWriteError
-from backend.tiles import MAX_ZOOM, MEDIA_TYPES
+from backend.mission_log.store import LogWriteError
 
 router = APIRouter(prefix="/api", tags=["chart"])
 

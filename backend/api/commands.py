@@ -24,11 +24,11 @@ from backend.api.schemas import (
     errors,
 )
 from backend.api.view import ViewHeader
-from backend.commands import CommandManager, NotRetryable
-from backend.health import LinkHealth
-from backend.reach import track_lat_lon
-from backend.store import STATES
-from backend.store_csv import csv_rows
+from backend.chart.reach import track_lat_lon
+from backend.commands.health import LinkHealth
+from backend.commands.manager import CommandManager, NotRetryable
+from backend.mission_log.export import csv_rows
+from backend.mission_log.store import STATES
 
 router = APIRouter(prefix="/api", tags=["commands"])
 

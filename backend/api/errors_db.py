@@ -10,14 +10,15 @@ from __future__ import annotations
 from fastapi import FastAPI, Request
 from fastapi.responses import JSONResponse
 
-from backend.store import LogWriteError
+from backend.mission_log.store import LogWriteError
 
 #: Seconds the client is told to wait before trying again (the disk must be fixed first).
 RETRY_AFTER_S = 5
 
 
 def register(app: FastAPI) -> None:
-    """Answer :class:`backend.store.LogWriteError` with 503 and its message as ``detail``."""
+    """Answer :class:`backend.mission_log.store.LogWriteError` with 503 and its message as
+    ``detail``."""
 
     @app.exception_handler(LogWriteError)
     async def log_write_error(_request: Request, err: LogWriteError) -> JSONResponse:

@@ -12,7 +12,7 @@ from fastapi import APIRouter, WebSocket, WebSocketDisconnect, status
 from backend.api.deps import token_ok
 from backend.api.models import check_copies
 from backend.bounded_input import shorten
-from backend.commands import RateLimited
+from backend.commands.manager import RateLimited
 from backend.console import Console
 from backend.security import origin_allowed
 from codec import CodecError

@@ -15,8 +15,8 @@ from backend.api.models import CommandIn
 from backend.api.responses import DocResponse
 from backend.api.schemas import errors
 from backend.api.schemas.predict import Prediction
+from backend.authoring.predict import MAX_HORIZON_S, Gate, PredictorBusy, predict
 from backend.console import Console
-from backend.predict import MAX_HORIZON_S, Gate, PredictorBusy, predict
 
 router = APIRouter(prefix="/api", tags=["authoring"])
 

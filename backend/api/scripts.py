@@ -15,7 +15,8 @@ from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.schemas import OPERATOR, OnboardScript, RunState, errors
 from backend.api.view import ViewHeader
 from backend.console import Console
-from backend.scripts import (
+from backend.mission_log.store import FINAL_STATES
+from backend.scripts.operations import (
     MissionScript,
     ScriptError,
     ScriptPreview,
@@ -26,7 +27,6 @@ from backend.scripts import (
     onboard_csv,
     preview,
 )
-from backend.store import FINAL_STATES
 from codec import encode_frame
 
 router = APIRouter(prefix="/api/scripts", tags=["scripts"])

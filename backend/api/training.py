@@ -115,7 +115,7 @@ async def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
 async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Load one of the paper's scenarios: the vehicle reset to its start, its first command
     sent. The retask is the operator's to send (the preset returns it, ready to preview)."""
-    from sim_bridge.scenarios import SCENARIOS
+    from sim.scenarios import SCENARIOS
 
     _sim(console)
     if name not in SCENARIOS:

@@ -16,7 +16,7 @@ from fastapi import APIRouter, Header
 from backend.api.deps import ConsoleDep
 from backend.api.schemas import errors
 from backend.api.schemas.view import ViewCleared
-from backend.viewer_ids import VIEW_ID_PATTERN
+from backend.viewer.ids import VIEW_ID_PATTERN
 
 #: The caller's view id (8-64 of ``A-Z a-z 0-9 _ -``), or None.
 ViewHeader = Annotated[

@@ -29,7 +29,7 @@ from analysis.ber import (
     SuccessPoint,
     WrongAcceptance,
 )
-from backend.cli import main
+from cli.main import main
 from codec import DICTIONARY, BCHCode, DecodeError, command_of_message
 from codec.batch import decode_frames, encode_messages, inject_errors, messages_of_payloads
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from analysis import controllability as ctl
-from sim_bridge.model import VehicleParams
+from sim.model import VehicleParams
 
 
 def test_rank_is_four_with_surge_heave_roll_yaw() -> None:

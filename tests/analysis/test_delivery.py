@@ -18,9 +18,9 @@ import pytest
 
 from analysis import delivery
 from analysis.delivery import CommandDraw, DeliveryRow, received_command
-from backend.cli import main as cli_main
+from cli.main import main as cli_main
 from codec import DICTIONARY, FRAME_BITS, SYNC_BITS, delivery_probability, encode_frame, frame_of
-from sim_bridge.channel import Delivery, MEChannel
+from sim.channel import Delivery, MEChannel
 
 TRIALS = 20_000
 SEED = 0

@@ -16,7 +16,7 @@ import pytest
 from analysis import ber, results, results_paper
 from analysis.ber import BerConfig
 from analysis.decode_spread import reruns
-from backend import cli
+from cli import main as cli
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from analysis import stability
-from sim_bridge.model import VehicleParams
+from sim.model import VehicleParams
 
 PNG = b"\x89PNG\r\n\x1a\n"
 

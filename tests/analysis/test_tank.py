@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from analysis import tank
-from sim_bridge.scenarios import run_scenario
+from sim.scenarios import run_scenario
 
 
 def _track(points: list[tuple[float, float]], dt: float = 0.1) -> list[tuple[float, float]]:

@@ -15,8 +15,8 @@ from fastapi.testclient import TestClient
 
 from backend.app import create_app
 from backend.console import Console
+from backend.mission_log.store import FINAL_STATES
 from backend.settings import Settings
-from backend.store import FINAL_STATES
 from codec import encode_frame
 
 TOKEN = "x" * 20

@@ -16,10 +16,9 @@ from urllib.parse import parse_qs, urlsplit
 import pytest
 from fastapi.testclient import TestClient
 
-from backend.store_csv import csv_rows
+from backend.mission_log.export import csv_rows
 from codec import copies_for, decode_frame, delivery_probability, encode_frame
-
-from .conftest import (
+from tests.backend.conftest import (
     AUTH,
     CIRCLE,
     SQUARE,

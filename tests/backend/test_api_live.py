@@ -13,8 +13,7 @@ from fastapi.testclient import TestClient
 from starlette.testclient import WebSocketTestSession
 
 from backend.api.live import MAX_CONTROL_BYTES
-
-from .conftest import CIRCLE, TOKEN, WRONG_TOKEN, MakeClient, send
+from tests.backend.conftest import CIRCLE, TOKEN, WRONG_TOKEN, MakeClient, send
 
 Message = dict[str, Any]
 

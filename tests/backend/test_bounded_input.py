@@ -18,10 +18,9 @@ from starlette.types import Message, Receive, Scope, Send
 
 from backend.api.live import MAX_CONTROL_BYTES, MAX_CONTROL_DEPTH, nesting_over
 from backend.bounded_input import EXCERPT_CHARS, BodyLimit, excerpt
-from backend.cli import main as cli_main
 from backend.settings import Settings
-
-from .conftest import AUTH, CIRCLE, TOKEN, MakeClient, clear_nemesys_env, loc_of, send
+from cli.main import main as cli_main
+from tests.backend.conftest import AUTH, CIRCLE, TOKEN, MakeClient, clear_nemesys_env, loc_of, send
 
 CAP = 65536
 OVER = {"detail": f"request body over {CAP} bytes"}

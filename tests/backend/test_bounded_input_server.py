@@ -21,8 +21,7 @@ from websockets.sync.connection import Connection
 
 from backend.api.live import MAX_CONTROL_BYTES, MAX_CONTROL_DEPTH
 from bench._server import ConsoleProcess, start_console
-
-from .conftest import TOKEN, clear_nemesys_env
+from tests.backend.conftest import TOKEN, clear_nemesys_env
 
 CAP = 65536
 BIG = 50 * 1024 * 1024

@@ -14,11 +14,10 @@ from typing import Any
 import httpx
 import pytest
 
+from backend.mission_log.store import STATES, MissionLog
 from backend.settings import Settings
-from backend.store import STATES, MissionLog
 from bench._server import ConsoleProcess, start_console
-
-from .conftest import CIRCLE, FINAL, SQUARE, TOKEN, clear_nemesys_env, wait_until
+from tests.backend.conftest import CIRCLE, FINAL, SQUARE, TOKEN, clear_nemesys_env, wait_until
 
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 EAST = {"speed": 0.18, "depth": 2, "duration": 600, "heading": 90}

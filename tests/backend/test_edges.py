@@ -14,8 +14,7 @@ from websockets.exceptions import InvalidStatus
 from websockets.sync.client import connect
 
 from bench._server import ConsoleProcess, start_console
-
-from .conftest import TOKEN, clear_nemesys_env, wait_until
+from tests.backend.conftest import TOKEN, clear_nemesys_env, wait_until
 
 CIRCLE = {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"}
 

@@ -27,10 +27,10 @@ from starlette.requests import Request
 
 from backend.api import authoring, commands, scripts, training
 from backend.api.commands import LogFilter
-from backend.store import LogWriteError
+from backend.mission_log.store import LogWriteError
 from codec import describe_dictionary
-
-from .conftest import (
+from tests.backend.chart.test_tiles import tile_dir
+from tests.backend.conftest import (
     AUTH,
     CIRCLE,
     SQUARE,
@@ -43,7 +43,6 @@ from .conftest import (
     wait_state,
     wait_until,
 )
-from .test_tiles import tile_dir
 
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "api.md"
 SPEC_URI = "urn:nemesys:console:openapi"

@@ -41,8 +41,7 @@ from schemathesis.engine import StopReason, events, from_schema
 from schemathesis.engine.recorder import CheckFailureInfo
 
 from bench._server import ConsoleProcess, start_console
-
-from .conftest import TOKEN, clear_nemesys_env
+from tests.backend.conftest import TOKEN, clear_nemesys_env
 
 #: Examples an operation (each phase); the whole test (both runs) takes about 25 s here.
 MAX_EXAMPLES = 25

@@ -10,9 +10,8 @@ from fastapi.testclient import TestClient
 from websockets.sync.client import connect
 
 from codec import encode_frame
-from sim_bridge.contract import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC
-
-from .conftest import console_of, send, wait_state, wait_until
+from tests.backend.conftest import console_of, send, wait_state, wait_until
+from vehicle_contract.contract import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC
 
 
 def test_a_stranger_can_watch_but_not_publish_a_frame(client: TestClient) -> None:

@@ -21,8 +21,7 @@ from codec.batch import (
     inject_weight,
     messages_of_payloads,
 )
-
-from .helpers import random_command
+from tests.codec.helpers import random_command
 
 
 def _commands_and_frames(seed: int, n: int) -> tuple[list[Command], NDArray[np.uint8]]:

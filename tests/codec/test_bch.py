@@ -14,8 +14,7 @@ from hypothesis import strategies as st
 from codec import CODE, UNCORRECTABLE, BCHCode, TableDecoder
 from codec._bch import make_corrector
 from codec._gf2 import poly_mod
-
-from .helpers import galois_code, galois_vectors, mask_of, random_error
+from tests.codec.helpers import galois_code, galois_vectors, mask_of, random_error
 
 T_VALUES = (1, 2, 3, 4)
 CODES = {t: BCHCode(t) for t in T_VALUES}

@@ -25,8 +25,7 @@ from codec import (
     make_command,
     sections,
 )
-
-from .helpers import random_bits, representable, summary
+from tests.codec.helpers import random_bits, representable, summary
 
 #: Table tab:command_dict of the paper (IDs 0-7, fields j1.. in order) plus surface on 15.
 PAPER = [

@@ -41,9 +41,8 @@ from codec import (
     frame_of,
 )
 from codec._fastpath import SHIFT_DISTANCE, _decline, shift_distance, straight_line
-
-from .helpers import flip_frame, random_command
-from .test_frame import CRAFTED
+from tests.codec.helpers import flip_frame, random_command
+from tests.codec.test_frame import CRAFTED
 
 #: Every frame the codec tests build on purpose: each pattern at its defaults, the crafted
 #: frames of every rejection reason, random valid commands.

@@ -24,8 +24,7 @@ from codec import (
     make_command,
 )
 from codec._fields import exact_decimal
-
-from .helpers import in_range, representable, valid_codes
+from tests.codec.helpers import in_range, representable, valid_codes
 
 
 def field(pattern: str, name: str) -> Field:

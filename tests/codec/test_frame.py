@@ -53,8 +53,7 @@ from codec import (
     payload_of,
     sections,
 )
-
-from .helpers import (
+from tests.codec.helpers import (
     crafted_frame,
     flip_frame,
     frame_value,

@@ -2,7 +2,7 @@
 
 The dictionary tables, the worked example and the delimiter ranking are re-derived from the
 code and looked up in the document; every ``console`` session is run through bash (with
-``nemesys`` bound to this interpreter's ``backend.cli``) and every ``pycon`` session through
+``nemesys`` bound to this interpreter's ``cli.main``) and every ``pycon`` session through
 doctest, in document order, and their output is compared with the text. When the codec
 changes, fix the document with the output these tests print.
 """
@@ -34,7 +34,7 @@ ROOT = Path(__file__).parents[2]
 DOC = ROOT / "docs" / "protocol.md"
 DELIMITER_SCRIPT = ROOT / "scripts" / "choose_delimiter.py"
 #: Makes ``nemesys`` in a console session mean this interpreter's CLI, installed or not.
-CONSOLE_PRELUDE = 'nemesys() { "$NEMESYS_PYTHON" -m backend.cli "$@"; }\n'
+CONSOLE_PRELUDE = 'nemesys() { "$NEMESYS_PYTHON" -m cli.main "$@"; }\n'
 
 
 @pytest.fixture(scope="module")

@@ -26,8 +26,7 @@ from codec import (
     RejectReason,
     frame_of,
 )
-
-from .helpers import (
+from tests.codec.helpers import (
     accepted,
     chunked,
     crafted_frame,

@@ -21,7 +21,7 @@ from urllib.parse import urlsplit
 import pytest
 from playwright.sync_api import Page, Response, expect
 
-from backend.geo import TRAINING_DATUM
+from backend.chart.geo import TRAINING_DATUM
 from tests.frontend.conftest import TOKEN, Console, Watched
 from tests.frontend.pagekit import SIZES
 

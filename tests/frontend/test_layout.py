@@ -2,7 +2,8 @@
 and 1920x1080, for every pattern, Send, the estimates and the checks are in the window without
 scrolling, not clipped by a scrolling box and not covered by anything; the 3D view and the
 chart are both in sight beside them, and nothing overlaps. Also the lat/lon readouts: the
-vehicle's position and the datum in degrees and decimal minutes, as backend/geo.py gives them."""
+vehicle's position and the datum in degrees and decimal minutes, as backend/chart/geo.py gives
+them."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from typing import Any
 import pytest
 from playwright.sync_api import Browser, Page, expect
 
-from backend.geo import Datum, dm, ned_to_geodetic
+from backend.chart.geo import Datum, dm, ned_to_geodetic
 from tests.frontend.conftest import Console
 from tests.frontend.pagekit import PATTERNS, POLL_MS, SIZES, open_sized, sized_page, wait_preview
 
@@ -164,7 +165,7 @@ def test_position_and_datum_are_shown_in_degrees_and_decimal_minutes(
 
 
 def test_dm_in_the_page_matches_backend_geo(console: Console, browser: Browser) -> None:
-    """frontend/ui.js dm() prints exactly what backend/geo.py dm() prints, hemispheres,
+    """frontend/ui.js dm() prints exactly what backend/chart/geo.py dm() prints, hemispheres,
     zero padding, the 59.9995' carry and exact ties included."""
     values = [
         0.0,

@@ -7,12 +7,10 @@ from collections.abc import Callable
 import pytest
 
 from nemesys_vehicle.core import PENDING_FRAMES
-from sim_bridge.agent import INVALID_PLAN, LIMIT_VIOLATION
-from sim_bridge.contract import validate_ack
-from sim_bridge.guidance import Mode
-
-from ..codec.helpers import crafted_frame
-from .helpers import (
+from onboard.agent import INVALID_PLAN, LIMIT_VIOLATION
+from onboard.guidance import Mode
+from tests.codec.helpers import crafted_frame
+from tests.nemesys_vehicle.helpers import (
     CIRCLE,
     T0_S,
     bytes_of,
@@ -25,6 +23,7 @@ from .helpers import (
     receive_checked,
     running_core,
 )
+from vehicle_contract.contract import validate_ack
 
 # --- accepted ------------------------------------------------------------------------------
 

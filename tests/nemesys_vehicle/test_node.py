@@ -19,7 +19,9 @@ import pytest
 import nemesys_vehicle
 from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.core import VehicleCore
-from sim_bridge.contract import (
+from tests.nemesys_vehicle import fake_rclpy
+from tests.nemesys_vehicle.helpers import CIRCLE, frame_bytes
+from vehicle_contract.contract import (
     FRAME_TOPIC,
     MISSION_TOPIC,
     POSE_TOPIC,
@@ -28,9 +30,6 @@ from sim_bridge.contract import (
     validate_ack,
     validate_status,
 )
-
-from . import fake_rclpy
-from .helpers import CIRCLE, frame_bytes
 
 NODE_PY = Path(nemesys_vehicle.__file__).parent / "node.py"
 

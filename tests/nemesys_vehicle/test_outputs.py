@@ -8,10 +8,8 @@ import math
 import pytest
 
 from nemesys_vehicle.frames import yaw_deg_of
-from sim_bridge.contract import validate_status
-from sim_bridge.guidance import Mode
-
-from .helpers import (
+from onboard.guidance import Mode
+from tests.nemesys_vehicle.helpers import (
     CIRCLE,
     T0_S,
     frame_bytes,
@@ -20,6 +18,7 @@ from .helpers import (
     receive_checked,
     running_core,
 )
+from vehicle_contract.contract import validate_status
 
 # --- status and pose -----------------------------------------------------------------------
 

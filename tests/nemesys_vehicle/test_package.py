@@ -27,9 +27,8 @@ from nemesys_vehicle.convert import (
 from nemesys_vehicle.core import Odometry, Setpoint, pose_msg, setpoint_msg
 from nemesys_vehicle.frames import NedPose
 from planner import CircleFence
-from sim_bridge.contract import FRAME_TOPIC, Durability, Reliability
-
-from . import fake_rclpy
+from tests.nemesys_vehicle import fake_rclpy
+from vehicle_contract.contract import FRAME_TOPIC, Durability, Reliability
 
 PACKAGE = Path(nemesys_vehicle.__file__).parent.parent
 

@@ -1,6 +1,6 @@
 // roslibjs (npm `roslib` 2.x, Node with `ws`) against a rosbridge server: what a browser
 // console would do. Usage: node interop.mjs ws://127.0.0.1:PORT FRAME_HEX
-// Prints one JSON object of results on stdout; tests/sim_bridge/test_roslibjs.py checks it.
+// Prints one JSON object of results on stdout; tests/rosbridge/test_roslibjs.py checks it.
 import { Ros, Topic } from "roslib";
 
 const [url, frameHex] = process.argv.slice(2);

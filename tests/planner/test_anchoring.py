@@ -8,8 +8,7 @@ import pytest
 
 from codec import ParamValue
 from planner import DEPTH_RATE_MPS, Plan, anchor_for, plan
-
-from .helpers import (
+from tests.planner.helpers import (
     TOL,
     angle_diff_deg,
     body_points,

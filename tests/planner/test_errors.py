@@ -8,8 +8,7 @@ import pytest
 
 from codec import ParamValue
 from planner import MAX_WAYPOINTS, PlanError, VehicleState, plan
-
-from .helpers import command, vehicle
+from tests.planner.helpers import command, vehicle
 
 STATE = vehicle(0.0, 0.0, 2.0, 0.0, 0.5)
 

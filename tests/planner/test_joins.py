@@ -11,8 +11,7 @@ from hypothesis import strategies as st
 
 from codec import ParamValue
 from planner import MAX_STEP_RAD, YAW_RATE_DPS, Plan, VehicleState, plan, turn_radius_m
-
-from .helpers import (
+from tests.planner.helpers import (
     CASES,
     TOL,
     case_id,

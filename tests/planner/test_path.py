@@ -7,8 +7,7 @@ import math
 import pytest
 
 from planner import Path, plan
-
-from .helpers import TOL, command, vehicle
+from tests.planner.helpers import TOL, command, vehicle
 
 
 def _finite() -> Path:

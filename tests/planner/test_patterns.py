@@ -19,8 +19,7 @@ from planner import (
     plan,
     turn_radius_m,
 )
-
-from .helpers import (
+from tests.planner.helpers import (
     TOL,
     angle_diff_deg,
     bearing,

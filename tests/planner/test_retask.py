@@ -7,8 +7,7 @@ import math
 import pytest
 
 from planner import LEAD_TURN_RADII, MAX_STEP_RAD, Plan, plan, turn_radius_m
-
-from .helpers import (
+from tests.planner.helpers import (
     TOL,
     angle_diff_deg,
     bearing,

@@ -22,8 +22,7 @@ from planner import (
     VehicleState,
     plan,
 )
-
-from .helpers import (
+from tests.planner.helpers import (
     CASES,
     case_id,
     check_timing,

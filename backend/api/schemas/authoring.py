@@ -15,7 +15,7 @@ from backend.api.schemas.common import (
     ParamValue,
     VehicleStateOut,
 )
-from backend.link import Capability
+from station.link import Capability
 
 # --- session ------------------------------------------------------------------------------
 
@@ -34,7 +34,8 @@ class LinkCapability(BaseModel):
 
 
 class VehicleProfileDoc(BaseModel):
-    """What the vehicle can do (``backend/profile.py``): the twin's figures in training, the
+    """What the vehicle can do (``backend/authoring/profile.py``): the twin's figures in training,
+    the
     settings' for a real vehicle; null: unknown (the checks needing it are skipped)."""
 
     top_speed_mps: float | None = Field(description="top speed through the water (m/s)")

@@ -7,8 +7,8 @@ from typing import Annotated, Any, Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from backend.api.schemas.common import CommandJson, Params, VehicleStateOut
-from backend.health import LinkHealth
-from backend.lifecycle import State
+from backend.commands.health import LinkHealth
+from backend.commands.lifecycle import State
 
 
 def lenient(description: str) -> Any:

@@ -1,5 +1,5 @@
 """Mission scripts' documents: the onboard export and a run's state (the preview's model
-is :class:`backend.scripts.ScriptPreview`)."""
+is :class:`backend.scripts.operations.ScriptPreview`)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from typing import Literal
 from pydantic import BaseModel, Field
 
 from backend.api.schemas.common import Params
-from backend.scripts import RunMode, StepState, Trigger, TriggerKind, WaitingFor
+from backend.scripts.operations import RunMode, StepState, Trigger, TriggerKind, WaitingFor
 
 
 class OnboardFrame(BaseModel):

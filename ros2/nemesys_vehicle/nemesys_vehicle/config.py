@@ -12,8 +12,8 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from typing import Any, Final
 
+from onboard.guidance import GuidanceConfig
 from planner import CircleFence, Limits
-from sim_bridge.guidance import GuidanceConfig
 
 #: Where frames come from: the contract's frame topic, or a serial ME receiver.
 FRAME_INPUTS: Final = ("topic", "serial")
@@ -49,7 +49,7 @@ class VehicleConfig:
     geofence_radius_m: float = 0.0
     geofence_north_m: float = 0.0
     geofence_east_m: float = 0.0
-    # guidance (sim_bridge.guidance.GuidanceConfig)
+    # guidance (onboard.guidance.GuidanceConfig)
     lookahead_m: float = 1.5
     capture_m: float = 1.0
     settle_m: float = 0.3

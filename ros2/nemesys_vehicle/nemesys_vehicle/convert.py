@@ -14,8 +14,8 @@ from typing import Any, Final
 
 from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.core import Odometry
-from sim_bridge.contract import Durability, QoS, Reliability, topic
-from sim_bridge.rosbridge import to_json
+from rosbridge.protocol import to_json
+from vehicle_contract.contract import Durability, QoS, Reliability, topic
 
 #: Odometry in: BEST_EFFORT matches both reliable and best-effort publishers (sensor data).
 ODOMETRY_QOS: Final = QoS(Reliability.BEST_EFFORT, Durability.VOLATILE, 5)

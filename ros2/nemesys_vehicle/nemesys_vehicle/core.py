@@ -1,8 +1,8 @@
 """The vehicle node's logic, free of ROS: frames in, contract messages out.
 
-:class:`VehicleCore` wraps the onboard agent the simulator runs (:mod:`sim_bridge.agent`:
+:class:`VehicleCore` wraps the onboard agent the simulator runs (:mod:`onboard.agent`:
 decode -> validate -> replan -> guidance switch -> one acknowledgement per frame) and the same
-guidance (:mod:`sim_bridge.guidance`). Inputs:
+guidance (:mod:`onboard.guidance`). Inputs:
 
 * :meth:`VehicleCore.on_frame`: one frame's bytes (``/nemesys/frame``, a UInt8MultiArray's data);
 * :meth:`VehicleCore.on_serial_bytes`: a raw ME receiver stream, any chunking
@@ -36,11 +36,11 @@ from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.frames import EnuPose, NedPose, enu_to_ned, ned_to_enu, yaw_deg_of
 from nemesys_vehicle.frames import yaw_quaternion as yaw_q
 from nemesys_vehicle.stream import FrameStream
+from onboard.agent import OnboardAgent, command_json
+from onboard.guidance import Guidance, Mode, Reference
 from planner import VehicleState
-from sim_bridge.agent import OnboardAgent, command_json
-from sim_bridge.contract import FRAME_TOPIC, POSE_FRAME_ID, topic
-from sim_bridge.guidance import Guidance, Mode, Reference
-from sim_bridge.rosbridge import stamp
+from rosbridge.protocol import stamp
+from vehicle_contract.contract import FRAME_TOPIC, POSE_FRAME_ID, topic
 
 #: Frames held while waiting for the first odometry (the frame topic's history depth).
 PENDING_FRAMES: Final = topic(FRAME_TOPIC).qos.depth
@@ -125,7 +125,7 @@ class Recorder:
 
 def pose_msg(t_s: float, ned: NedPose) -> JsonDict:
     """``geometry_msgs/PoseStamped`` in ``map_ned`` (position NED, heading yaw quaternion),
-    as :func:`sim_bridge.rosbridge.pose_stamped_msg` builds the simulator's."""
+    as :func:`rosbridge.protocol.pose_stamped_msg` builds the simulator's."""
     qx, qy, qz, qw = yaw_q(ned.heading_deg)
     return {
         "header": {"stamp": stamp(t_s), "frame_id": POSE_FRAME_ID},
@@ -280,7 +280,7 @@ class VehicleCore:
     # --- internals -----------------------------------------------------------------------
 
     def state(self, t_s: float) -> VehicleState:
-        """The vehicle as the planner sees it (as :meth:`sim_bridge.sim.Simulation.state`).
+        """The vehicle as the planner sees it (as :meth:`sim.simulation.Simulation.state`).
         Depth is at least 0: a vehicle afloat whose odometry puts it a little above the
         surface is at the surface."""
         odometry = self.odometry

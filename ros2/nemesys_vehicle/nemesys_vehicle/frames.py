@@ -2,7 +2,8 @@
 
 ROS odometry (``nav_msgs/msg/Odometry``) is ENU: world x east, y north, z up, with an FLU body
 (x forward, y left, z up), and yaw measured from east, counter-clockwise, about +z up. The
-contract (``sim_bridge.contract``: frame ``map_ned``) and the planner are NED: x north, y east,
+contract (``vehicle_contract.contract``: frame ``map_ned``) and the planner are NED: x north,
+y east,
 z down (depth), with an FRD body, and the heading measured from north, clockwise.
 
 Each direction is ONE function: :func:`enu_to_ned` and :func:`ned_to_enu` (position and
@@ -16,7 +17,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from sim_bridge.rosbridge import quaternion_from_roll_yaw
+from rosbridge.protocol import quaternion_from_roll_yaw
 
 #: A quaternion ``(x, y, z, w)``.
 Quaternion = tuple[float, float, float, float]

@@ -31,7 +31,7 @@ from nemesys_vehicle.convert import (
 )
 from nemesys_vehicle.core import Sinks, VehicleCore
 from nemesys_vehicle.serial_input import SerialByteSource
-from sim_bridge.contract import (
+from vehicle_contract.contract import (
     FRAME_TOPIC,
     MISSION_TOPIC,
     POSE_TOPIC,

@@ -4,7 +4,7 @@ The node polls :meth:`SerialByteSource.read_available` on a timer (``serial_poll
 the bytes to :meth:`nemesys_vehicle.core.VehicleCore.on_serial_bytes`: everything runs in the
 node's executor thread, so the core needs no locks. The port is anything
 :func:`serial.serial_for_url` opens (a UART, a pty, ``socket://host:port`` for a TCP gateway),
-opened on the first read, as the station's :class:`sim_bridge.transmit.SerialTransmitter` does;
+opened on the first read, as the station's :class:`station.transmit.SerialTransmitter` does;
 after an error it is closed and opened again ``reopen_after_s`` later.
 """
 

@@ -1,0 +1,386 @@
+"""The predicted track: what the vehicle will actually do with a command (``POST /api/predict``).
+
+The preview is the planner's path on the planner's clock. The prediction runs the training
+twin (:class:`sim.simulation.Simulation`, a fresh one each time) from the vehicle's current
+state, with the command's encoded frame submitted the way the console sends it (so it goes
+through the onboard decode, checks and replan), faster than real time over a bounded horizon
+(at most :data:`MAX_HORIZON_S` of simulated time, or until a finite pattern completes plus
+:data:`COMPLETION_MARGIN_S`). It shows what the plan's clock does not: the vehicle's top
+speed, its turns and depth transients, the current, the battery.
+
+The twin starts where the console last saw the vehicle: position, depth, heading, speed
+through the water (taken along the heading), the mission clock and the plan it runs (the
+console's mirror, so the retask join and anchor are the vehicle's), its battery's charge. In
+training it gets the simulator's vehicle, gains, limits and the water current now (held
+constant); the frame arrives intact (the channel's delay and range kept, no errors or loss).
+For a real vehicle there is no simulator: the twin's own dynamics, from the last pose, with
+no current; ``assumptions`` says so.
+
+Cost: a pure-Python simulation of up to 600 s at ~1000x, about 0.6 s of one core. The request
+waits in the threadpool (never on the event loop), one prediction at a time (:class:`Gate`),
+and the twin runs in a worker process (one, started on the first prediction, ~1 s): in this
+process it would hold the GIL and slow the previews on the event loop threefold; in its own it
+uses the machine's other core. Should the worker die, the next prediction starts another.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+import multiprocessing
+import multiprocessing.connection
+import os
+import threading
+import time
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from backend.authoring.profile import hours_run
+from backend.chart.geo import Datum, ned_to_geodetic
+from codec import decode_frame, encode_frame
+from onboard.guidance import Mode
+from planner import Plan, VehicleState, plan
+from sim.environment import CurrentConfig
+from sim.simulation import SimConfig, Simulation
+
+#: Longest simulated time a prediction covers (s), and the default.
+MAX_HORIZON_S = 600.0
+#: Simulated time kept after a finite pattern completes (s): the vehicle settling.
+COMPLETION_MARGIN_S = 10.0
+#: Most points returned (the track is decimated evenly, first and last kept).
+MAX_POINTS = 600
+#: Track samples per simulated second (before decimation).
+RECORD_HZ = 1.0
+#: Simulated seconds between checks of the twin (its guidance tick).
+TICK_S = 0.1
+#: Ticks between two yields of the GIL (~0.1 ms of work each), for a twin run in a thread of
+#: a busy process (the worker process has no other thread to yield to).
+YIELD_EVERY = 20
+#: Requests that may wait while one prediction runs; more get 503.
+QUEUE = 2
+#: Retry-After of a 503 (s): about one prediction's time.
+RETRY_AFTER_S = 2
+
+
+class PredictorBusy(RuntimeError):
+    """A prediction runs and the queue is full: try again after ``retry_after_s``."""
+
+    def __init__(self, reason: str | None = None, retry_after_s: int = RETRY_AFTER_S) -> None:
+        self.retry_after_s = retry_after_s
+        why = reason or f"a prediction is running and {QUEUE} more are waiting"
+        super().__init__(f"{why}: retry in {retry_after_s} s")
+
+
+class Gate:
+    """At most one prediction at a time, ``queue`` more waiting; beyond that
+    :class:`PredictorBusy` at once."""
+
+    def __init__(self, queue: int = QUEUE) -> None:
+        self.queue = queue
+        #: Held by the prediction running now.
+        self.running = threading.Lock()
+        self._count_lock = threading.Lock()
+        self._count = 0
+
+    @property
+    def admitted(self) -> int:
+        """Predictions running or waiting."""
+        return self._count
+
+    @contextmanager
+    def slot(self) -> Iterator[None]:
+        with self._count_lock:
+            if self._count >= 1 + self.queue:
+                raise PredictorBusy()
+            self._count += 1
+        try:
+            with self.running:
+                yield
+        finally:
+            with self._count_lock:
+                self._count -= 1
+
+
+@dataclass(frozen=True, slots=True)
+class Start:
+    """Where the twin starts: the vehicle as last reported (NED m, deg, m/s, s)."""
+
+    state: VehicleState
+    #: The vehicle's mode as last reported (``holding``, ``running``...; None: unknown).
+    mode: str | None
+    #: The plan it flies (the console's mirror), or None.
+    active: Plan | None
+    #: Battery charge (%), None: unknown (full is assumed).
+    soc_pct: float | None
+
+
+@dataclass(frozen=True, slots=True)
+class Track:
+    """The twin's run: samples (t from the submission, s; NED m) and what happened."""
+
+    t_s: list[float]
+    x_m: list[float]
+    y_m: list[float]
+    z_m: list[float]
+    #: The onboard agent's answer: accepted, duplicate, rejected (its sentence), or lost.
+    outcome: str
+    reason: str | None
+    #: Simulated seconds from the frame's arrival to the pattern's completion (None: not).
+    duration_s: float | None
+    horizon_s: float
+
+
+def _place(sim: Simulation, start: Start) -> None:
+    """Put the fresh twin in the reported state: pose, speed, clock and the active plan."""
+    st = start.state
+    veh = sim.vehicle
+    veh.u = st.speed_mps
+    sim.steps = round(st.t_s / sim.dt_s)
+    sim.t_s = sim.steps * sim.dt_s
+    active = start.active
+    if active is None:
+        return
+    g = sim.guidance
+    sim.agent.active = active
+    g.set_plan(active, active.t0_s)
+    path = active.path
+    if len(path) > 1 and active.pattern not in ("hover", "surface"):
+        where = path.locate(st.x_m, st.y_m, st.z_m, None, st.t_s - active.t0_s)
+        g.segment = min(int(where), len(path) - 2)
+    if start.mode == Mode.HOLDING.value and active.pattern != "hover":
+        g.hold_here(path.xs[-1], path.ys[-1], path.zs[-1], st.heading_deg)
+        g.mode = Mode.HOLDING
+
+
+def run_twin(
+    base: SimConfig,
+    start: Start,
+    frame: bytes,
+    horizon_s: float,
+    *,
+    finite: bool,
+) -> Track:
+    """Run a fresh twin configured like ``base`` from ``start``, submit ``frame`` at once and
+    follow it for ``horizon_s`` simulated seconds (less once a ``finite`` pattern completes:
+    the margin after it)."""
+    st = start.state
+    soc_h = 0.0 if start.soc_pct is None else hours_run(start.soc_pct)
+    cfg = replace(
+        base,
+        start_x_m=st.x_m,
+        start_y_m=st.y_m,
+        start_z_m=max(0.0, st.z_m),
+        start_heading_deg=st.heading_deg,
+        battery_start_h=soc_h,
+        record_hz=0.0,
+    )
+    sim = Simulation(cfg)
+    _place(sim, start)
+    t0 = sim.t_s
+    veh = sim.vehicle
+    ts, xs, ys, zs = [0.0], [veh.x], [veh.y], [veh.z]
+    sim.submit_frame(frame)
+    end = t0 + horizon_s
+    every = max(1, round(1.0 / (RECORD_HZ * TICK_S)))
+    outcome, reason = "lost", None
+    arrived: float | None = None
+    completed: float | None = None
+    k = 0
+    half_step = sim.dt_s / 2
+    while sim.t_s + half_step <= end:  # the last whole step (run_until's own rule)
+        k += 1
+        sim.run_until(min(end, t0 + k * TICK_S))
+        if arrived is None and sim.acks:
+            ack = sim.acks[0]
+            arrived = sim.t_s
+            if ack.get("outcome") != "accepted":
+                outcome, reason = "rejected", str(ack.get("message") or ack.get("reason"))
+            else:
+                outcome = "duplicate" if ack.get("duplicate") else "accepted"
+        if (
+            completed is None
+            and arrived is not None
+            and outcome in ("accepted", "duplicate")
+            and finite
+            and sim.mode in (Mode.HOLDING, Mode.SURFACED)
+        ):
+            completed = sim.t_s
+            end = min(end, completed + COMPLETION_MARGIN_S)
+        if k % every == 0 or sim.t_s + half_step > end or completed == sim.t_s:
+            ts.append(sim.t_s - t0)
+            xs.append(veh.x)
+            ys.append(veh.y)
+            zs.append(veh.z)
+        if k % YIELD_EVERY == 0:
+            time.sleep(0)  # let the event loop's thread take the GIL between ticks
+    duration = None if completed is None or arrived is None else completed - arrived
+    return Track(ts, xs, ys, zs, outcome, reason, duration, sim.t_s - t0)
+
+
+#: How much the twin's worker yields the CPU (``nice`` increment): a prediction is background
+#: work, the console's requests, telemetry and the simulated vehicle come first on a busy
+#: machine (on 2 cores a 600 s prediction otherwise took a whole core from the page's previews).
+WORKER_NICE = 10
+
+
+def _worker_init() -> None:
+    """In the worker: lower its priority, and exit when the console's process is gone."""
+    with contextlib.suppress(OSError):  # a platform without nice: the same work, unyielding
+        os.nice(WORKER_NICE)
+    _watch_parent()
+
+
+def _watch_parent() -> None:
+    """In the worker: exit when the console's process is gone, however it ended (SIGKILL
+    included), so no orphaned twin outlives it."""
+    parent = multiprocessing.parent_process()
+    if parent is None:
+        return
+
+    def watch() -> None:
+        multiprocessing.connection.wait([parent.sentinel])
+        os._exit(0)
+
+    threading.Thread(target=watch, name="parent watch", daemon=True).start()
+
+
+class TwinWorker:
+    """The worker process a console's twins run in (spawned: no copy of this process's
+    threads), started on first use, replaced if it dies, shut down with the console."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._pool: ProcessPoolExecutor | None = None
+        self._closed = False
+
+    def _get(self, *, fresh: bool = False) -> ProcessPoolExecutor:
+        with self._lock:
+            if self._closed:
+                raise PredictorBusy("the console is shutting down")
+            if self._pool is None or fresh:
+                self._pool = ProcessPoolExecutor(
+                    1, mp_context=multiprocessing.get_context("spawn"), initializer=_worker_init
+                )
+            return self._pool
+
+    def run(
+        self, base: SimConfig, start: Start, frame: bytes, horizon_s: float, *, finite: bool
+    ) -> Track:
+        """:func:`run_twin` in the worker process; a new worker if the last one died."""
+        try:
+            job = self._get().submit(run_twin, base, start, frame, horizon_s, finite=finite)
+            return job.result()
+        except BrokenProcessPool:
+            pool = self._get(fresh=True)
+            return pool.submit(run_twin, base, start, frame, horizon_s, finite=finite).result()
+
+    def close(self) -> None:
+        """Stop the worker process (a prediction still running is abandoned)."""
+        with self._lock:
+            self._closed = True
+            pool, self._pool = self._pool, None
+        if pool is not None:
+            pool.shutdown(wait=False, cancel_futures=True)
+
+
+def max_deviation_m(path: Plan, xs: list[float], ys: list[float], zs: list[float]) -> float:
+    """Largest 3D distance (m) from any track point to the planned path's polyline."""
+    p = path.path
+    a = np.column_stack((p.xs, p.ys, p.zs))
+    pts = np.column_stack((xs, ys, zs))
+    if len(a) == 1:
+        return float(np.max(np.linalg.norm(pts - a[0], axis=1)))
+    seg_a, d = a[:-1], a[1:] - a[:-1]
+    den = np.einsum("ij,ij->i", d, d)
+    den[den == 0.0] = np.inf  # a point segment: the nearest is its start
+    worst = 0.0
+    for chunk in np.array_split(pts, max(1, len(pts) // 64)):
+        rel = chunk[:, None, :] - seg_a[None, :, :]
+        f = np.clip(np.einsum("ijk,jk->ij", rel, d) / den[None, :], 0.0, 1.0)
+        near = rel - f[:, :, None] * d[None, :, :]
+        dist = np.sqrt(np.einsum("ijk,ijk->ij", near, near)).min(axis=1)
+        worst = max(worst, float(dist.max()))
+    return worst
+
+
+def decimate(n: int, most: int = MAX_POINTS) -> list[int]:
+    """Indices of at most ``most`` of ``n`` points, evenly spread, first and last kept."""
+    if n <= most:
+        return list(range(n))
+    step = (n - 1) / (most - 1)
+    return sorted({round(i * step) for i in range(most)})
+
+
+def predict(
+    console: Any, pattern: str, params: dict[str, Any], horizon_s: float = MAX_HORIZON_S
+) -> dict[str, Any]:
+    """The predicted track of ``pattern``/``params`` from the vehicle's state now.
+
+    Raises:
+        codec.EncodeError / planner.PlanError: naming the parameter at fault (422).
+    """
+    enc = encode_frame(pattern, params)
+    cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
+    state: VehicleState = console.vehicle_state()
+    mirror: Plan | None = console.commands.mirror if console.commands is not None else None
+    planned = plan(cmd, state, mirror)
+    status = console.hub.status or {}
+    soc = status.get("battery_pct")
+    soc_pct = float(soc) if isinstance(soc, int | float) and math.isfinite(soc) else None
+    mode = status.get("mode") if isinstance(status.get("mode"), str) else None
+    base, assumptions = _base_config(console)
+    if soc_pct is None:
+        assumptions.append("battery charge unknown: a full battery")
+    start = Start(state, mode, mirror, soc_pct)
+    repeats = planned.path.loop_start is not None
+    worker: TwinWorker = console.twin_worker
+    track = worker.run(base, start, enc.frame.to_bytes(), horizon_s, finite=not repeats)
+    keep = decimate(len(track.t_s))
+    xs = [track.x_m[i] for i in keep]
+    ys = [track.y_m[i] for i in keep]
+    lat: list[float] | None = None
+    lon: list[float] | None = None
+    datum: Datum | None = console.datum
+    if datum is not None:
+        la, lo = ned_to_geodetic(datum, xs, ys)
+        lat, lon = [float(v) for v in la], [float(v) for v in lo]
+    return {
+        "x_m": xs,
+        "y_m": ys,
+        "z_m": [track.z_m[i] for i in keep],
+        "t_s": [track.t_s[i] for i in keep],
+        "lat_deg": lat,
+        "lon_deg": lon,
+        "duration_s": track.duration_s,
+        "planned_duration_s": None if repeats else planned.path.duration_s,
+        "max_deviation_m": max_deviation_m(planned, track.x_m, track.y_m, track.z_m),
+        "horizon_s": track.horizon_s,
+        "completes": track.duration_s is not None,
+        "outcome": track.outcome,
+        "reason": track.reason,
+        "assumptions": assumptions,
+    }
+
+
+def _base_config(console: Any) -> tuple[SimConfig, list[str]]:
+    """The twin's configuration and what the prediction assumes."""
+    sim = console.sim
+    if sim is None:
+        return SimConfig(limits=console.limits), [
+            "no simulator: the training twin's dynamics from the last reported pose",
+            "no water current",
+        ]
+    cfg: SimConfig = sim.config
+    north, east = float(sim.vehicle.current_n), float(sim.vehicle.current_e)
+    channel = replace(cfg.channel, ber=0.0, loss=0.0, burst_rate=0.0)
+    base = replace(cfg, channel=channel, current=CurrentConfig(north_mps=north, east_mps=east))
+    return base, [
+        f"the water current stays at its present {north:.3f} m/s north, {east:.3f} m/s east",
+        "the frame arrives intact (no bit errors or loss)",
+    ]

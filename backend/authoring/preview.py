@@ -1,0 +1,117 @@
+"""What the console shows of a command before it is sent: the frame by section, and the plan
+(path, estimates, limit checks, the change from the running plan). Pure functions of the
+codec's and planner's results; :class:`backend.console.Console` adds the vehicle's state and
+the link's odds."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from backend.authoring.profile import VehicleProfile, battery_use_pct
+from codec import FRAME_BITS, Encoded, airtime_s, sections
+from onboard.agent import command_json
+from planner import Limits, Plan, compare, estimate, validate
+from planner._limits import top_speed
+
+
+def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
+    """The frame: the command, the values asked for and sent, the bits by section, airtime."""
+    cmd, frame = enc.command, enc.frame
+    bits = frame.bits
+    return {
+        **command_json(cmd),
+        "requested": {s.field: s.requested for s in enc.snaps},
+        "snaps": [
+            {
+                "field": s.field,
+                "requested": s.requested,
+                "sent": s.sent,
+                "unit": s.unit,
+                "changed": s.changed,
+                "text": str(s),
+            }
+            for s in enc.snaps
+        ],
+        "bits": bits,
+        "hex": frame.hex,
+        "sections": [
+            {
+                "name": sec.name,
+                "start": sec.start,
+                "length": sec.length,
+                "bits": bits[sec.start : sec.start + sec.length],
+            }
+            for sec in sections(cmd.pattern)
+        ],
+        "airtime_ms": airtime_s(bitrate_bps) * 1e3,
+        "bitrate_bps": bitrate_bps,
+        "frame_bits": FRAME_BITS,
+    }
+
+
+def plan_doc(
+    new: Plan,
+    current: Plan | None,
+    limits: Limits,
+    profile: VehicleProfile | None = None,
+    soc_pct: float | None = None,
+) -> dict[str, Any]:
+    """The plan: path (NED, m; arrival times, s), estimates, violations, diff from ``current``.
+
+    With the vehicle's ``profile``, durations are at the speed it can fly (the planned ones
+    beside them), a speed above its top speed is a violation, and the checks its unknown
+    figures prevent are listed; the battery use starts from ``soc_pct`` (None: full).
+    """
+    top = profile.top_speed_mps if profile is not None else None
+    heave = profile.heave_rate_mps if profile is not None else None
+    est = estimate(new, top, heave)
+    path = new.path
+    violations = list(validate(new, limits))
+    # below the maximum speed only: above it the vehicle refuses the command onboard, so it
+    # would not fly it at top speed either (the maximum's violation says enough)
+    too_fast = None if any(v.param == "speed" for v in violations) else top_speed(new, top, est)
+    if too_fast is not None:
+        violations.append(too_fast)
+    diff = None
+    if current is not None:
+        d = compare(current, new, top, heave)
+        diff = {
+            "active": current.pattern,
+            "changes": [
+                {"param": c.param, "old": c.old, "new": c.new, "unit": c.unit} for c in d.changes
+            ],
+            "pattern_changed": d.pattern_changed,
+            "duration_delta_s": d.delta("duration_s"),
+            "length_delta_m": d.delta("length_m"),
+            "anchor_moved_m": d.anchor_moved_m,
+        }
+    return {
+        "path": {
+            "x_m": list(path.xs),
+            "y_m": list(path.ys),
+            "z_m": list(path.zs),
+            "t_s": list(path.times),
+            "body_start": path.body_start,
+            "repeats": path.loop_start is not None,
+        },
+        "estimate": {
+            **{k: v for k, v in est.as_dict().items() if isinstance(v, int | float | None)},
+            "join_length_m": est.transit_length_m,
+            "join_duration_s": est.transit_duration_s,
+            # the whole battery fit, from the charge now, over the flyable duration
+            "battery_pct": battery_use_pct(est.duration_s, soc_pct),
+        },
+        "violations": [
+            {
+                "param": v.param,
+                "value": v.value,
+                "limit": v.limit,
+                "unit": v.unit,
+                "message": v.message,
+                "overridable": v.overridable,
+            }
+            for v in violations
+        ],
+        "skipped_checks": profile.skipped_checks() if profile is not None else [],
+        "diff": diff,
+    }

@@ -1,0 +1,190 @@
+"""The vehicle profile: what the vehicle can do, for every estimate and check.
+
+Top speed through the water (m/s), heave rate (m/s), yaw rate (deg/s), maximum depth (m) and
+endurance (s). A real vehicle's come from the settings (``NEMESYS_TOP_SPEED_MPS``...): an
+unset figure is unknown (``None``) and the checks that need it are skipped, saying so. In
+training they come from the twin (``sim_bridge``), once per parameter set (cached):
+
+* top speed: the steady surge with both horizontal thrusters at their (calibrated) limit,
+  ``2 T = (Xu + Xuu u) u``, solved for ``u``: about 0.19 m/s;
+* heave and yaw rates: the paper's own full-thrust manoeuvres run in the model
+  (:func:`sim.model.heave_test`, :func:`sim.model.yaw_test`): 73.1 mm/s and
+  30.3 deg/s, what the model is calibrated to;
+* endurance: the battery fit run to the empty cut-off at cruise load (hotel power, both
+  horizontal thrusters at their limit, the vertical pair holding the buoyancy), ~7.2 h.
+
+A setting, when given, overrides the twin's figure in training too.
+
+The battery estimate (:func:`battery_use_pct`) uses the whole fit of the paper's table,
+``SOC = 100 - 9.23 t - 32.0 (1 - exp(-t / 1.03 h))``: the fast initial term matters most in
+the first hours of a dive, which is where a plan's cost is asked.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Literal
+
+from backend.settings import Settings
+from sim.environment import (
+    SOC_FAST_PCT,
+    SOC_FAST_TAU_H,
+    SOC_LINEAR_PCT_PER_H,
+    BatteryConfig,
+    paper_soc_pct,
+    thrust_power_w,
+)
+from sim.model import VehicleParams, heave_test, yaw_test
+
+#: Longest dive the battery fit is searched over (h): beyond the fit's reach in any case.
+_MAX_HOURS = 100.0
+
+
+@dataclass(frozen=True, slots=True)
+class VehicleProfile:
+    """What the vehicle can do; ``None``: unknown (the checks needing it are skipped)."""
+
+    #: Top speed through the water (m/s).
+    top_speed_mps: float | None
+    #: Largest vertical speed (m/s).
+    heave_rate_mps: float | None
+    #: Largest turn rate (deg/s).
+    yaw_rate_dps: float | None
+    #: Deepest allowed depth (m): the console's limit.
+    max_depth_m: float
+    #: Time on a full battery at cruise (s).
+    endurance_s: float | None
+    #: Where the figures come from: the training twin, or the settings (a real vehicle).
+    source: Literal["twin", "settings"]
+
+    def skipped_checks(self) -> list[str]:
+        """What cannot be checked or estimated for lack of a figure, in words."""
+        out = []
+        if self.top_speed_mps is None:
+            out.append(
+                "top speed unknown (setting top_speed_mps): speeds are not checked against "
+                "it and durations are at the commanded speed"
+            )
+        if self.heave_rate_mps is None:
+            out.append(
+                "heave rate unknown (setting heave_rate_mps): depth changes are timed at the "
+                "planner's rates"
+            )
+        return out
+
+
+def top_speed_mps(params: VehicleParams) -> float:
+    """Steady speed through the water with both horizontal thrusters at their limit (m/s):
+    the positive root of ``Xuu u^2 + Xu u - 2 T = 0``."""
+    thrust = 2.0 * params.thrust_max_n
+    if params.xuu <= 0.0:
+        return thrust / params.xu if params.xu > 0 else math.inf
+    disc = params.xu * params.xu + 4.0 * params.xuu * thrust
+    return (-params.xu + math.sqrt(disc)) / (2.0 * params.xuu)
+
+
+def cruise_thrust_power_w(params: VehicleParams) -> float:
+    """Thruster power cruising at top speed (W): the horizontal pair at the limit, the
+    vertical pair sharing the buoyancy margin."""
+    hold = params.buoyancy_margin_n / 2.0
+    t = params.thrust_max_n
+    return thrust_power_w((t, t, hold, hold))
+
+
+def endurance_s(battery: BatteryConfig, thrust_w: float) -> float:
+    """Time from a full battery to the cut-off (s) at a constant thruster load (W): the fit
+    with its linear term scaled by the load, as the twin's battery does."""
+    load = (battery.hotel_power_w + thrust_w) / (
+        battery.hotel_power_w + battery.nominal_thrust_power_w
+    )
+
+    def soc(t_h: float) -> float:
+        return (
+            100.0
+            - SOC_LINEAR_PCT_PER_H * load * t_h
+            - SOC_FAST_PCT * -math.expm1(-t_h / SOC_FAST_TAU_H)
+        )
+
+    lo, hi = 0.0, _MAX_HOURS
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        if soc(mid) > battery.cutoff_pct:
+            lo = mid
+        else:
+            hi = mid
+    return (lo + hi) / 2 * 3600.0
+
+
+@lru_cache(maxsize=8)
+def _twin_figures(
+    params: VehicleParams, battery: BatteryConfig
+) -> tuple[float, float, float, float]:
+    """(top speed m/s, heave m/s, yaw deg/s, endurance s) of the twin; ~60 ms, once each."""
+    return (
+        top_speed_mps(params),
+        heave_test(params),
+        yaw_test(params),
+        endurance_s(battery, cruise_thrust_power_w(params)),
+    )
+
+
+def twin_profile(
+    max_depth_m: float,
+    params: VehicleParams | None = None,
+    battery: BatteryConfig | None = None,
+) -> VehicleProfile:
+    """The training twin's profile (its default parameters unless given)."""
+    top, heave, yaw, endurance = _twin_figures(
+        params or VehicleParams(), battery or BatteryConfig()
+    )
+    return VehicleProfile(top, heave, yaw, max_depth_m, endurance, "twin")
+
+
+def profile_for(settings: Settings) -> VehicleProfile:
+    """The vehicle's profile: the settings' figures, the twin's for those unset in training."""
+    s = settings
+    if not s.training:
+        return VehicleProfile(
+            s.top_speed_mps,
+            s.heave_rate_mps,
+            s.yaw_rate_dps,
+            s.max_depth_m,
+            s.endurance_s,
+            "settings",
+        )
+    twin = twin_profile(s.max_depth_m)
+    return VehicleProfile(
+        s.top_speed_mps if s.top_speed_mps is not None else twin.top_speed_mps,
+        s.heave_rate_mps if s.heave_rate_mps is not None else twin.heave_rate_mps,
+        s.yaw_rate_dps if s.yaw_rate_dps is not None else twin.yaw_rate_dps,
+        s.max_depth_m,
+        s.endurance_s if s.endurance_s is not None else twin.endurance_s,
+        "twin",
+    )
+
+
+# --- battery --------------------------------------------------------------------------------
+
+
+def hours_run(soc_pct: float) -> float:
+    """Hours of operation at nominal load that leave ``soc_pct`` (%) by the fit: its inverse
+    (the fit falls monotonically), 0 for a full battery."""
+    if not soc_pct < 100.0:
+        return 0.0
+    lo, hi = 0.0, _MAX_HOURS
+    for _ in range(50):
+        mid = (lo + hi) / 2
+        if paper_soc_pct(mid) > soc_pct:
+            lo = mid
+        else:
+            hi = mid
+    return (lo + hi) / 2
+
+
+def battery_use_pct(duration_s: float, soc_pct: float | None = None) -> float:
+    """State of charge a run of ``duration_s`` uses (percentage points), by the whole fit at
+    nominal load, from a battery now at ``soc_pct`` (``None``: full, the dearest case)."""
+    t0 = 0.0 if soc_pct is None else hours_run(soc_pct)
+    return paper_soc_pct(t0) - paper_soc_pct(t0 + max(0.0, duration_s) / 3600.0)

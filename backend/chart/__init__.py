@@ -1,0 +1,1 @@
+"""backend.chart package."""

@@ -1,0 +1,104 @@
+"""The records side of command delivery: how a record's state is written, announced and
+ended, and how a send's writes are committed together.
+:class:`backend.commands.manager.CommandManager`
+builds the delivery (copies, supersede rule, acknowledgements) on top of it."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections import OrderedDict
+from collections.abc import Iterator
+from typing import Any
+
+from backend.commands.delivery import Delivery
+from backend.commands.health import FrameLedger, Outcome
+from backend.commands.lifecycle import Event, IllegalTransition, advance
+from backend.mission_log.store import LogWriteError, MissionLog
+from backend.telemetry import TelemetryHub
+from codec import Encoded
+
+logger = logging.getLogger("backend.commands.manager")
+
+
+class CommandRecords:
+    """The records of the commands on their way: deliveries running, acknowledgements awaited,
+    their timers and frames; every state change written, then announced."""
+
+    def __init__(self, log: MissionLog, hub: TelemetryHub) -> None:
+        self.log = log
+        self.hub = hub
+        self._live: dict[int, Delivery] = {}  # copies still going out
+        self._awaiting: OrderedDict[int, Encoded] = OrderedDict()  # id -> frame, oldest first
+        self._timeouts: dict[int, asyncio.TimerHandle] = {}
+        self.ledger = FrameLedger()
+        self._held: list[dict[str, Any]] | None = None  # announcements awaiting a commit
+
+    def _end(self, command_id: int, event: Event, outcome: Outcome, **fields: Any) -> None:
+        """The one way a record ends: its repetition stops, its timer goes, its frames are
+        settled in the ledger and its terminal state is written."""
+        d = self._live.pop(command_id, None)
+        if d is not None and d.task is not None and d.task is not asyncio.current_task():
+            d.task.cancel()
+        self._awaiting.pop(command_id, None)
+        handle = self._timeouts.pop(command_id, None)
+        if handle is not None:
+            handle.cancel()
+        self.ledger.settle(command_id, outcome)
+        record = self.log.command(command_id)
+        assert record is not None
+        try:
+            state = advance(record["state"], event)
+        except IllegalTransition as err:  # a bookkeeping bug: say so, keep the record
+            logger.error("command %s: %s", command_id, err)
+            return
+        self._update(command_id, state=state, **fields)
+
+    def _update(self, command_id: int, **fields: Any) -> dict[str, Any]:
+        record = self.log.update_command(command_id, **fields)
+        self._announce(record)
+        return record
+
+    def _announce(self, record: dict[str, Any]) -> None:
+        if self._held is not None:
+            self._held.append(record)
+        else:
+            self.hub.publish({"type": "command", "command": record})
+
+    @contextlib.contextmanager
+    def _atomic(self) -> Iterator[None]:
+        """The log writes inside are committed together (a crash leaves all or none) and
+        announced after the commit."""
+        held: list[dict[str, Any]] = []
+        self._held = held
+        live = dict(self._live)
+        try:
+            with self.log.transaction():
+                yield
+        except LogWriteError as err:
+            self._held = None
+            self._rolled_back(live, err)
+            raise
+        finally:
+            self._held = None
+        for record in held:
+            self._announce(record)
+
+    def _rolled_back(self, live: dict[int, Delivery], err: LogWriteError) -> None:
+        """The log writes of a send failed (none is committed): the deliveries it began are
+        cancelled before their first copy (their tasks have not run yet), and those it
+        superseded stay stopped: interrupted, if the log can still be written."""
+        err.outcome = "nothing was transmitted"
+        for cid, d in list(self._live.items()):
+            if live.get(cid) is not d and d.task is not None:
+                d.task.cancel()
+                del self._live[cid]
+        for cid in sorted(live.keys() - self._live.keys()):
+            why = f"stopped by a send the mission log could not record ({err.reason})"
+            logger.error("command %s: %s", cid, why)
+            record = self.log.command(cid)
+            with contextlib.suppress(LogWriteError, IllegalTransition):
+                if record is not None:
+                    state = advance(record["state"], Event.INTERRUPTED)
+                    self._update(cid, state=state, reason=why)

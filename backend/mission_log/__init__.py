@@ -1,0 +1,1 @@
+"""backend.mission_log package."""

@@ -1,0 +1,390 @@
+"""The mission log: every command, written before it is transmitted, and the dives' tracks.
+
+SQLite in WAL mode with ``synchronous=FULL``: a committed row survives a killed process or a
+power cut. One connection guarded by a lock (the console is one process; writes are small).
+Rows are only ever inserted or updated field by field, so no record is half written. A write
+that fails (disk full, the file made read-only) raises :class:`LogWriteError`. Track points are
+written within :data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that).
+Opening a log with its checks: :func:`backend.mission_log.opening.open_checked`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import sqlite3
+import threading
+from collections.abc import Iterator, Mapping
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from backend.commands.lifecycle import ON_ITS_WAY, TERMINAL, Event, State, advance
+from backend.mission_log.schema import create_or_migrate
+
+logger = logging.getLogger("backend.mission_log.store")
+
+#: How long a write waits for a lock another connection holds before it fails (s).
+BUSY_TIMEOUT_S = 1.0
+#: Track points are buffered at most this long after the first of them arrived (s)...
+TRACK_FLUSH_S = 0.5
+#: ... or until this many are buffered.
+TRACK_BATCH = 10
+#: Points kept while the log cannot be written (the oldest are dropped beyond).
+TRACK_BUFFER_MAX = 3600
+
+#: Columns holding JSON text.
+_JSON = ("params", "requested", "ack")
+#: Columns holding booleans (SQLite integers).
+_BOOL = ("two_way",)
+#: Columns a command update may set.
+_UPDATABLE = frozenset(
+    {
+        "state",
+        "attempts",
+        "sent_at",
+        "acked_at",
+        "ack",
+        "reason",
+        "copies",
+        "copies_sent",
+        "p_delivered",
+        "ber",
+        "two_way",
+        "superseded_by",
+    }
+)
+STATES = tuple(State)
+FINAL_STATES = frozenset(str(s) for s in TERMINAL)
+
+
+class LogWriteError(Exception):
+    """The mission log cannot be written (disk full, file or directory made read-only, locked
+    by another process, I/O error): SQLite's ``reason``. ``outcome``: what the caller did
+    about it (e.g. "nothing was transmitted"), added to the message."""
+
+    def __init__(self, reason: str, outcome: str | None = None) -> None:
+        super().__init__(reason)
+        self.reason = reason
+        self.outcome = outcome
+
+    def __str__(self) -> str:
+        tail = f"; {self.outcome}" if self.outcome else ""
+        return f"the mission log cannot be written: {self.reason}{tail}"
+
+
+@contextlib.contextmanager
+def _writing() -> Iterator[None]:
+    """SQLite's errors of a write as :class:`LogWriteError` (our own misuse stays as it is)."""
+    try:
+        yield
+    except (sqlite3.IntegrityError, sqlite3.ProgrammingError):
+        raise
+    except sqlite3.DatabaseError as err:
+        raise LogWriteError(str(err)) from err
+
+
+def now_iso() -> str:
+    """Current UTC time, ISO 8601 with milliseconds."""
+    return datetime.now(UTC).isoformat(timespec="milliseconds")
+
+
+class MissionLog:
+    """The SQLite mission log. Thread-safe."""
+
+    def __init__(self, path: Path | str, *, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
+        self.path = Path(path)
+        if str(path) != ":memory:":
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+        self._lock = threading.RLock()  # re-entered by the writes of a transaction()
+        self._track: list[tuple[int, float, float, float, float, float]] = []
+        self._track_timer: threading.Timer | None = None
+        self._track_failing = False
+        self._closed = False
+        self._db = sqlite3.connect(
+            str(path), timeout=busy_timeout_s, check_same_thread=False, isolation_level=None
+        )
+        self._db.row_factory = sqlite3.Row
+        try:
+            self._db.execute("PRAGMA journal_mode=WAL")
+            self._db.execute("PRAGMA synchronous=FULL")
+            self._db.execute("PRAGMA foreign_keys=ON")
+            create_or_migrate(self._db)
+        except BaseException:
+            self._db.close()
+            raise
+
+    def set_busy_timeout(self, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
+        """How long a write waits for another connection's lock before it fails."""
+        with self._lock:
+            self._db.execute(f"PRAGMA busy_timeout = {round(busy_timeout_s * 1000)}")
+
+    def check(self) -> list[str]:
+        """SQLite's ``quick_check``: the problems it finds (none: the file is intact). Then a
+        write that changes nothing, rolled back: raises ``sqlite3.OperationalError`` if the log
+        is locked by another process or read-only."""
+        with self._lock:
+            rows = self._db.execute("PRAGMA quick_check").fetchall()
+            self._db.execute("BEGIN IMMEDIATE")  # busy: locked
+            try:
+                self._db.execute("DELETE FROM dives WHERE 0")  # read-only, as opened
+            finally:
+                self._db.execute("ROLLBACK")
+        return [
+            line
+            for row in rows
+            for line in str(row[0]).splitlines()
+            if line != "ok" and not line.startswith("***")
+        ]
+
+    def recover_interrupted(self) -> int:
+        """Every command an earlier run left on its way (``queued`` or ``transmitted``) becomes
+        ``interrupted``, naming the last time the log was written. One transaction; returns
+        how many. Call before the console takes new commands."""
+        on_its_way = sorted(ON_ITS_WAY)
+        marks = ", ".join("?" * len(on_its_way))
+        target = advance(State.QUEUED, Event.INTERRUPTED)
+        with self._lock:
+            last = self._db.execute(
+                "SELECT MAX(t) FROM (SELECT MAX(updated_at) AS t FROM commands "
+                "UNION ALL SELECT MAX(started_at) FROM dives)"
+            ).fetchone()[0]
+            with self.transaction(), _writing():
+                cur = self._db.execute(
+                    "UPDATE commands SET state = ?, updated_at = ?, "
+                    "reason = 'the console stopped while this command was ' || state || "
+                    "' (the log was last written at ' || ? || "
+                    "'); whether the vehicle received it is not known' "
+                    f"WHERE state IN ({marks})",
+                    (target, now_iso(), last or "an unknown time", *on_its_way),
+                )
+        return cur.rowcount
+
+    @contextlib.contextmanager
+    def transaction(self) -> Iterator[None]:
+        """Every write inside is committed together, or none is (a crash or an exception in
+        between leaves the log as it was). Holds the log's lock throughout."""
+        with self._lock:
+            if self._db.in_transaction:  # nested: part of the outer one
+                yield
+                return
+            with _writing():
+                self._db.execute("BEGIN IMMEDIATE")
+            try:
+                yield
+                with _writing():
+                    self._db.execute("COMMIT")
+            except BaseException:
+                if self._db.in_transaction:  # SQLite may have rolled back already
+                    with contextlib.suppress(sqlite3.Error):
+                        self._db.execute("ROLLBACK")
+                raise
+
+    def close(self) -> None:
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+            if self._track_timer is not None:
+                self._track_timer.cancel()
+            self._flush_track_logged()
+            self._db.close()
+
+    # --- dives ---------------------------------------------------------------------------
+
+    def new_dive(self, target: str) -> int:
+        with self._lock, _writing():
+            cur = self._db.execute(
+                "INSERT INTO dives (started_at, target) VALUES (?, ?)", (now_iso(), target)
+            )
+            return int(cur.lastrowid or 0)
+
+    def dives(self) -> list[dict[str, Any]]:
+        with self._lock:
+            self._flush_track_logged()
+            rows = self._db.execute(
+                "SELECT d.id, d.started_at, d.target, "
+                "(SELECT COUNT(*) FROM commands c WHERE c.dive = d.id) AS commands, "
+                "(SELECT COUNT(*) FROM track t WHERE t.dive = d.id) AS track_points "
+                "FROM dives d ORDER BY d.id DESC"
+            ).fetchall()
+        return [dict(r) for r in rows]
+
+    def dive_exists(self, dive: int) -> bool:
+        with self._lock:
+            return (
+                self._db.execute("SELECT 1 FROM dives WHERE id = ?", (dive,)).fetchone() is not None
+            )
+
+    # --- commands ------------------------------------------------------------------------
+
+    def insert_command(self, dive: int, record: Mapping[str, Any]) -> dict[str, Any]:
+        """Write a new command (state ``queued``) and return it with its id. Committed."""
+        stamp = now_iso()
+        row = {
+            "dive": dive,
+            "created_at": stamp,
+            "updated_at": stamp,
+            "state": "queued",
+            "attempts": 0,
+            **record,
+        }
+        cols = list(row)
+        values = [json.dumps(row[c]) if c in _JSON else row[c] for c in cols]
+        with self._lock, _writing():
+            cur = self._db.execute(
+                f"INSERT INTO commands ({', '.join(cols)}) VALUES ({', '.join('?' * len(cols))})",
+                values,
+            )
+            got = self._command(int(cur.lastrowid or 0))
+        assert got is not None
+        return got
+
+    def update_command(self, command_id: int, **fields: Any) -> dict[str, Any]:
+        """Set some fields of a command (one atomic statement); returns the new record."""
+        unknown = set(fields) - _UPDATABLE
+        if unknown:
+            raise ValueError(f"cannot update {sorted(unknown)}; allowed: {sorted(_UPDATABLE)}")
+        if "state" in fields:
+            if fields["state"] not in STATES:
+                allowed = ", ".join(STATES)
+                raise ValueError(f"unknown state {fields['state']!r}; allowed: {allowed}")
+            fields["state"] = str(fields["state"])
+        fields["updated_at"] = now_iso()
+        sets = ", ".join(f"{k} = ?" for k in fields)
+        values = [json.dumps(v) if k in _JSON else v for k, v in fields.items()]
+        with self._lock, _writing():
+            self._db.execute(f"UPDATE commands SET {sets} WHERE id = ?", [*values, command_id])
+            got = self._command(command_id)
+        if got is None:
+            raise KeyError(command_id)
+        return got
+
+    def command(self, command_id: int) -> dict[str, Any] | None:
+        with self._lock:
+            return self._command(command_id)
+
+    def _command(self, command_id: int) -> dict[str, Any] | None:
+        """The record as written (under the lock: the row this call's statement left)."""
+        row = self._db.execute("SELECT * FROM commands WHERE id = ?", (command_id,)).fetchone()
+        return _record(row) if row is not None else None
+
+    def commands(
+        self,
+        *,
+        state: str | None = None,
+        pattern: str | None = None,
+        target: str | None = None,
+        dive: int | None = None,
+        since: str | None = None,
+        until: str | None = None,
+        limit: int = 200,
+        oldest_first: bool = False,
+    ) -> list[dict[str, Any]]:
+        filters = (
+            ("state = ?", state),
+            ("pattern = ?", pattern),
+            ("target = ?", target),
+            ("dive = ?", dive),
+            ("created_at >= ?", since),
+            ("created_at <= ?", until),
+        )
+        where = [clause for clause, value in filters if value is not None]
+        args: list[Any] = [value for _, value in filters if value is not None]
+        sql = "SELECT * FROM commands"
+        if where:
+            sql += " WHERE " + " AND ".join(where)
+        sql += f" ORDER BY id {'ASC' if oldest_first else 'DESC'} LIMIT ?"
+        args.append(limit)
+        with self._lock:
+            rows = self._db.execute(sql, args).fetchall()
+        return [_record(r) for r in rows]
+
+    # --- events: what the vehicle did that the console did not cause ------------------------
+
+    def add_event(
+        self, dive: int, kind: str, detail: str, data: Mapping[str, Any] | None = None
+    ) -> dict[str, Any]:
+        """Write one event (committed); returns it with its id."""
+        row = (dive, now_iso(), kind, detail, None if data is None else json.dumps(data))
+        with self._lock, _writing():
+            cur = self._db.execute(
+                "INSERT INTO events (dive, at, kind, detail, data) VALUES (?, ?, ?, ?, ?)", row
+            )
+        keys = ("dive", "at", "kind", "detail")
+        return {"id": int(cur.lastrowid or 0), **dict(zip(keys, row, strict=False)), "data": data}
+
+    def events(self, dive: int | None = None) -> list[dict[str, Any]]:
+        """Events, oldest first (of one dive)."""
+        sql = "SELECT * FROM events" + (" WHERE dive = ?" if dive is not None else "")
+        with self._lock:
+            rows = self._db.execute(sql + " ORDER BY id", () if dive is None else (dive,))
+            out = [dict(r) for r in rows.fetchall()]
+        for event in out:
+            event["data"] = None if event["data"] is None else json.loads(event["data"])
+        return out
+
+    # --- track ---------------------------------------------------------------------------
+
+    def add_track(
+        self, dive: int, t_s: float, x_m: float, y_m: float, z_m: float, heading_deg: float
+    ) -> None:
+        """Buffer one track point; written (one commit) within :data:`TRACK_FLUSH_S` of the
+        first point buffered, at :data:`TRACK_BATCH` points, on a read and on close. A write
+        that fails is logged and tried again by the timer (never raised)."""
+        with self._lock:
+            self._track.append((dive, t_s, x_m, y_m, z_m, heading_deg))
+            del self._track[:-TRACK_BUFFER_MAX]
+            if len(self._track) >= TRACK_BATCH and not self._track_failing:
+                self._flush_track_logged()
+            elif self._track_timer is None and not self._closed:
+                self._track_timer = threading.Timer(TRACK_FLUSH_S, self._flush_track_due)
+                self._track_timer.daemon = True
+                self._track_timer.start()
+
+    def _flush_track_due(self) -> None:
+        with self._lock:
+            self._track_timer = None
+            if not self._closed:
+                self._flush_track_logged()
+
+    def _flush_track_logged(self) -> None:
+        try:
+            self._flush_track()
+        except LogWriteError as err:
+            if not self._track_failing:  # once, not at every point
+                logger.error("track points are kept in memory only: %s", err)
+            self._track_failing = True
+
+    def _flush_track(self) -> None:
+        if self._track:
+            with self.transaction(), _writing():
+                self._db.executemany("INSERT INTO track VALUES (?, ?, ?, ?, ?, ?)", self._track)
+            self._track = []
+            if self._track_failing:
+                logger.warning("track points are written to the mission log again")
+                self._track_failing = False
+        if self._track_timer is not None:
+            self._track_timer.cancel()
+            self._track_timer = None
+
+    def track(self, dive: int) -> list[dict[str, float]]:
+        with self._lock:
+            self._flush_track_logged()
+            rows = self._db.execute(
+                "SELECT t_s, x_m, y_m, z_m, heading_deg FROM track WHERE dive = ? ORDER BY t_s",
+                (dive,),
+            ).fetchall()
+        return [dict(r) for r in rows]
+
+
+def _record(row: sqlite3.Row) -> dict[str, Any]:
+    out = dict(row)
+    for col in _JSON:
+        if out.get(col) is not None:
+            out[col] = json.loads(out[col])
+    for col in _BOOL:
+        if out.get(col) is not None:
+            out[col] = bool(out[col])
+    return out

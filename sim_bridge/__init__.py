@@ -1,1 +1,0 @@
-"""sim_bridge package."""

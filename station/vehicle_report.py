@@ -1,0 +1,249 @@
+"""The rows of ``nemesys vehicle-check`` (:mod:`station.vehicle_check`): what each answer or
+measurement means against the vehicle contract, and the report they make. No I/O."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any, Final, Literal
+
+from backend.telemetry import pose_from_message
+from codec import CodecError, Encoded, encode_frame
+from rosbridge.client import topics_listing
+from rosbridge.protocol import TOPICS_SERVICE, InvalidData, same_type
+from rosbridge.subscriber_wait import SUBSCRIBERS_SERVICE, subscribers_of
+from station.link import capability_of
+from vehicle_contract.contract import (
+    CONTRACT_VERSION,
+    FRAME_TOPIC,
+    POSE_FRAME_ID,
+    POSE_TOPIC,
+    STATUS_TOPIC,
+    TOPICS,
+    Direction,
+    topic,
+    validate_ack,
+    validate_status,
+)
+
+Result = Literal["pass", "fail", "skipped"]
+
+#: A measured rate passes at this fraction of the contract's minimum.
+RATE_TOLERANCE: Final = 0.95
+#: A pose that arrived longer ago than this is stale (s).
+POSE_STALE_S: Final = 1.0
+
+
+@dataclass(frozen=True)
+class Check:
+    """One row of the report."""
+
+    name: str
+    result: Result
+    reason: str
+
+    def as_json(self) -> dict[str, str]:
+        return {"check": self.name, "result": self.result, "reason": self.reason}
+
+
+@dataclass
+class Report:
+    """Every check against one vehicle."""
+
+    url: str
+    checks: list[Check]
+
+    @property
+    def failed(self) -> list[Check]:
+        return [c for c in self.checks if c.result == "fail"]
+
+    @property
+    def ok(self) -> bool:
+        return not self.failed
+
+    def summary(self) -> str:
+        counts = {r: sum(c.result == r for c in self.checks) for r in ("pass", "fail", "skipped")}
+        tally = ", ".join(f"{n} {r}" for r, n in counts.items() if n)
+        if self.ok:
+            return f"PASS: {tally}"
+        return f"FAIL: {tally} ({', '.join(c.name for c in self.failed)})"
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "url": self.url,
+            "contract_version": CONTRACT_VERSION,
+            "ok": self.ok,
+            "summary": self.summary(),
+            "checks": [c.as_json() for c in self.checks],
+        }
+
+    def table(self) -> str:
+        width = max(len("check"), *(len(c.name) for c in self.checks))
+        lines = [
+            f"vehicle-check {self.url} (contract {CONTRACT_VERSION})",
+            f"{'check':<{width}}  {'result':<7}  reason",
+            f"{'-' * width}  {'-' * 7}  {'-' * 6}",
+            *(f"{c.name:<{width}}  {c.result:<7}  {c.reason}" for c in self.checks),
+            self.summary(),
+        ]
+        return "\n".join(lines)
+
+
+@dataclass
+class Ack:
+    """An acknowledgement as it arrived: the object, or why there was none."""
+
+    arrival_s: float
+    ack: dict[str, Any] | None
+    problem: str | None = None
+
+
+def topic_checks(answer: dict[str, Any] | None, timeout_s: float) -> list[Check]:
+    """The rosapi row and one row per contract topic, from the ``/rosapi/topics`` answer
+    (None: no answer within ``timeout_s``)."""
+    name = f"rosapi {TOPICS_SERVICE}"
+    unknown = f"not known: {TOPICS_SERVICE} did not list the topics"
+    rows = [Check(f"topic {t.name}", "skipped", unknown) for t in TOPICS]
+    if answer is None:
+        why = f"no answer in {timeout_s:g} s (is rosapi running?)"
+        return [Check(name, "fail", why), *rows]
+    if answer.get("result") is False:
+        return [Check(name, "fail", f"failed: {str(answer.get('values'))[:160]}"), *rows]
+    try:
+        listing = topics_listing(answer.get("values"))
+    except InvalidData as error:
+        return [Check(name, "fail", error.reason), *rows]
+    _, problems = capability_of(listing)
+    out = [Check(name, "pass", f"{len(listing)} topics listed")]
+    for t in TOPICS:
+        row = f"topic {t.name}"
+        said = next((p for p in problems if t.name in p), None)
+        if t.name not in listing:
+            why = (
+                "nothing on the vehicle subscribes to it"
+                if t.direction is Direction.TO_VEHICLE
+                else said or "the vehicle does not publish it"
+            )
+            out.append(Check(row, "fail", f"missing: {why}"))
+        elif not same_type(listing[t.name], t.type):
+            out.append(Check(row, "fail", f"is a {listing[t.name]}, not a {t.type}"))
+        else:
+            out.append(Check(row, "pass", listing[t.name]))
+    return out
+
+
+def subscriber_check(answer: dict[str, Any] | None, timeout_s: float) -> Check:
+    """The frame topic's subscriber, from the ``/rosapi/subscribers`` answer."""
+    name = f"{FRAME_TOPIC} subscriber"
+    if answer is None:
+        why = f"rosapi cannot tell: no answer from {SUBSCRIBERS_SERVICE} in {timeout_s:g} s"
+        return Check(name, "skipped", why)
+    if answer.get("result") is False:
+        why = f"rosapi cannot tell: {SUBSCRIBERS_SERVICE} failed: {str(answer.get('values'))[:120]}"
+        return Check(name, "skipped", why)
+    subscribers = subscribers_of(answer.get("values"))
+    if subscribers is None:
+        return Check(name, "fail", f"{SUBSCRIBERS_SERVICE} answered without a list")
+    if not subscribers:
+        return Check(name, "fail", "no node subscribes to it: frames would be lost")
+    return Check(name, "pass", "subscribed by " + ", ".join(subscribers))
+
+
+def probe_frame(active: object) -> tuple[Encoded | None, str | None]:
+    """The frame that repeats the vehicle's reported active command exactly, or why there is
+    none (a command whose values would snap would retask the vehicle, so it is not sent)."""
+    if not isinstance(active, dict):
+        return None, f"not an object: {active!r:.80}"
+    pattern, params = active.get("pattern"), active.get("params")
+    if not isinstance(pattern, str) or not isinstance(params, dict):
+        return None, "no pattern name and params"
+    try:
+        enc = encode_frame(pattern, params)
+    except (CodecError, TypeError, ValueError) as err:
+        return None, str(err)
+    if active.get("pattern_id", enc.command.pattern.id) != enc.command.pattern.id:
+        return None, f"pattern_id {active.get('pattern_id')} is not {pattern}'s"
+    changed = [str(s) for s in enc.snaps if s.changed]
+    if changed:
+        return None, "; ".join(changed)
+    return enc, None
+
+
+def rate_check(name: str, arrivals: list[float], minimum_hz: float, window_s: float) -> Check:
+    n = len(arrivals)
+    contract = f"contract: >= {minimum_hz:g} Hz"
+    if n < 2:
+        return Check(
+            name, "fail", f"{n} message{'s' if n != 1 else ''} in {window_s:.1f} s ({contract})"
+        )
+    span_s = arrivals[-1] - arrivals[0]
+    rate_hz = (n - 1) / span_s if span_s > 0 else math.inf
+    result: Result = "pass" if rate_hz >= RATE_TOLERANCE * minimum_hz else "fail"
+    return Check(name, result, f"{rate_hz:.1f} Hz ({n} messages over {span_s:.2f} s; {contract})")
+
+
+def pose_checks(poses: list[tuple[float, float, dict[str, Any]]], window_s: float) -> list[Check]:
+    minimum_hz = topic(POSE_TOPIC).rate_hz or 0.0
+    checks = [rate_check("pose rate", [p[0] for p in poses], minimum_hz, window_s)]
+    if not poses:
+        return [*checks, *(Check(n, "skipped", "no pose") for n in ("pose frame_id", "pose age"))]
+    ids = sorted({str(_header(msg).get("frame_id")) for _, _, msg in poses})
+    wrong = [i for i in ids if i != POSE_FRAME_ID]
+    if wrong:
+        checks.append(Check("pose frame_id", "fail", f"{', '.join(wrong)}, not {POSE_FRAME_ID}"))
+    else:
+        checks.append(Check("pose frame_id", "pass", POSE_FRAME_ID))
+    arrival_s, wall_s, msg = poses[-1]
+    age_s = time.monotonic() - arrival_s
+    stamp_s = pose_from_message(msg)["t_s"]
+    offset = (
+        "its stamp is unknown"
+        if stamp_s is None
+        else f"its stamp is {stamp_s - wall_s:+.3f} s from this computer's clock (information "
+        "only: the vehicle keeps ROS time)"
+    )
+    result: Result = "pass" if age_s <= POSE_STALE_S else "fail"
+    why = f"the last pose arrived {age_s:.2f} s ago (stale after {POSE_STALE_S:g} s); {offset}"
+    checks.append(Check("pose age", result, why))
+    return checks
+
+
+def _header(msg: dict[str, Any]) -> dict[str, Any]:
+    header = msg.get("header")
+    return header if isinstance(header, dict) else {}
+
+
+def status_checks(
+    statuses: list[tuple[float, dict[str, Any] | None, str | None]], window_s: float
+) -> list[Check]:
+    minimum_hz = topic(STATUS_TOPIC).rate_hz or 0.0
+    checks = [rate_check("status rate", [s[0] for s in statuses], minimum_hz, window_s)]
+    if not statuses:
+        return [*checks, Check("status schema", "skipped", "no status message to validate")]
+    problems: list[str] = []
+    bad = 0
+    for _, body, problem in statuses:
+        found = [problem] if problem is not None else validate_status(body)
+        bad += bool(found)
+        problems += [p for p in found if p not in problems]
+    if bad:
+        why = f"{bad} of {len(statuses)} invalid: {'; '.join(problems[:4])}"
+        return [*checks, Check("status schema", "fail", why)]
+    return [*checks, Check("status schema", "pass", f"{len(statuses)} valid")]
+
+
+def ack_schema_check(acks: list[Ack]) -> Check:
+    if not acks:
+        return Check("ack schema", "skipped", "no acknowledgement to validate")
+    problems: list[str] = []
+    bad = 0
+    for ack in acks:
+        found = [ack.problem] if ack.problem is not None else validate_ack(ack.ack)
+        bad += bool(found)
+        problems += [p for p in found if p not in problems]
+    if bad:
+        return Check(
+            "ack schema", "fail", f"{bad} of {len(acks)} invalid: {'; '.join(problems[:4])}"
+        )
+    return Check("ack schema", "pass", f"{len(acks)} valid")

@@ -1,0 +1,462 @@
+"""The command manager against an in-memory link: every transition of the lifecycle as the
+manager drives it, superseding, Surface (joined, bounded, reset, shutdown) and retries."""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import time
+from collections.abc import Awaitable, Callable, Coroutine
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from backend.commands.health import assess
+from backend.commands.manager import MIN_SURFACE_COPIES, CommandManager, NotRetryable, RateLimited
+from backend.mission_log.store import MissionLog
+from backend.telemetry import TelemetryHub
+from codec import Encoded, Frame, copies_for, delivery_probability, encode_frame
+from station.link import Capability, Link
+
+CIRCLE = encode_frame("circle", {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"})
+HOVER = encode_frame("hover", {"duration": 60, "depth": 2, "heading": 90})
+SURFACE = encode_frame("surface", {})
+INTERVAL_S = 0.02
+
+
+class FakeLink(Link):
+    """Frames out into a list (in order, with their time); ``fail`` makes them fail."""
+
+    def __init__(self, capability: Capability) -> None:
+        super().__init__("fake://vehicle")
+        self.capability = capability
+        self.frames: list[tuple[float, str]] = []
+        self.fail: str | None = None
+
+    @property
+    def connected(self) -> bool:
+        return True
+
+    async def transmit(self, frame: Frame) -> str | None:
+        await asyncio.sleep(0)
+        if self.fail is not None:
+            return self.fail
+        self.frames.append((time.monotonic(), frame.hex))
+        return None
+
+    def count(self, enc: Encoded) -> int:
+        return sum(h == enc.frame.hex for _, h in self.frames)
+
+
+class RecordingHub(TelemetryHub):
+    """Keeps every command state it is asked to announce."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.states: dict[int, list[str]] = {}
+
+    def publish(self, event: dict[str, Any]) -> None:
+        if event.get("type") == "command":
+            record = event["command"]
+            self.states.setdefault(record["id"], []).append(record["state"])
+
+
+class Rig:
+    def __init__(self, tmp_path: Path, capability: Capability, ber: float = 1e-2) -> None:
+        self.log = MissionLog(tmp_path / "missions.sqlite3")
+        self.dive = self.log.new_dive("fake")
+        self.link = FakeLink(capability)
+        self.hub = RecordingHub()
+        self.ber = ber
+        self.cm = CommandManager(
+            self.log,
+            self.link,
+            self.hub,
+            dive=lambda: self.dive,
+            operator="op",
+            ack_timeout_s=0.3,
+            surface_repeat_s=INTERVAL_S,
+            max_sends_per_minute=5,
+            copy_interval_s=INTERVAL_S,
+            link_ber=lambda: (self.ber, 0.0),
+        )
+
+    def state(self, command_id: int) -> str:
+        record = self.log.command(command_id)
+        assert record is not None
+        return str(record["state"])
+
+    def record(self, command_id: int) -> dict[str, Any]:
+        record = self.log.command(command_id)
+        assert record is not None
+        return record
+
+    async def until_state(self, command_id: int, *states: str, timeout_s: float = 5.0) -> None:
+        await until(lambda: self.state(command_id) in states, timeout_s)
+
+    def ack(self, enc: Encoded, outcome: str = "accepted", reason: str | None = None) -> None:
+        self.cm.on_mission(
+            {
+                "frame_hex": enc.frame.hex,
+                "outcome": outcome,
+                "reason": reason,
+                "detail": None if reason is None else f"{reason} detail",
+                "active": None,
+            }
+        )
+
+
+async def until(probe: Callable[[], bool], timeout_s: float = 5.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not probe():
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout_s} s")
+        await asyncio.sleep(0.002)
+
+
+def run(tmp_path: Path, capability: Capability, scenario: Callable[[Rig], Awaitable[None]]) -> Rig:
+    rig = Rig(tmp_path, capability)
+
+    async def main() -> None:
+        try:
+            await scenario(rig)
+        finally:
+            await rig.cm.close()
+
+    coro: Coroutine[Any, Any, None] = main()
+    asyncio.run(coro)
+    return rig
+
+
+ONE_WAY = Capability.NONE
+TWO_WAY = Capability.ACKS_AND_TELEMETRY
+
+
+# --- one-way links ----------------------------------------------------------------------------
+
+
+def test_one_way_sends_copies_chosen_from_the_ber_then_ends_sent(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE)
+        r = copies_for(1e-2, 0.999)
+        assert r == 3 and rec["copies"] == r and rec["state"] == "queued"
+        assert rec["two_way"] is False and rec["ber"] == 1e-2
+        await rig.until_state(rec["id"], "sent")
+        done = rig.record(rec["id"])
+        assert done["copies_sent"] == r and done["attempts"] == r
+        assert done["p_delivered"] == pytest.approx(delivery_probability(1e-2, r))
+        assert rig.link.count(CIRCLE) == r
+        times = [t for t, _ in rig.link.frames]
+        assert all(b - a >= INTERVAL_S * 0.9 for a, b in itertools.pairwise(times))
+        assert rig.hub.states[rec["id"]] == ["queued", *["transmitted"] * r, "sent"]
+        totals = rig.cm.ledger.totals()
+        assert totals.dive.frames == r and totals.dive.sent == r
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_operator_copies_override(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE, copies=5)
+        await rig.until_state(rec["id"], "sent")
+        assert rig.link.count(CIRCLE) == 5 and rig.record(rec["id"])["copies_sent"] == 5
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_no_copy_leaves_the_station_failed(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rig.link.fail = "connection refused"
+        rec = await rig.cm.submit(CIRCLE, copies=2)
+        await rig.until_state(rec["id"], "failed")
+        done = rig.record(rec["id"])
+        assert done["attempts"] == 2 and done["copies_sent"] == 0 and done["p_delivered"] == 0
+        assert "connection refused" in done["reason"]
+        assert rig.hub.states[rec["id"]] == ["queued", "queued", "queued", "failed"]
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_some_copies_failing_still_ends_sent_with_what_went_out(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rig.link.fail = "timeout"
+        rec = await rig.cm.submit(CIRCLE, copies=3)
+        await until(lambda: rig.record(rec["id"])["attempts"] == 1)
+        rig.link.fail = None
+        await rig.until_state(rec["id"], "sent")
+        done = rig.record(rec["id"])
+        assert done["attempts"] == 3 and done["copies_sent"] == 2 and done["reason"] is None
+        assert done["p_delivered"] == pytest.approx(delivery_probability(1e-2, 2))
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_a_newer_command_supersedes_one_still_repeating(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        old = await rig.cm.submit(CIRCLE, copies=20)
+        await until(lambda: rig.link.count(CIRCLE) >= 2)
+        new = await rig.cm.submit(HOVER, copies=2)
+        assert rig.state(old["id"]) == "superseded"  # at once, before any hover frame
+        await rig.until_state(new["id"], "sent")
+        gone = rig.record(old["id"])
+        assert gone["superseded_by"] == new["id"] and f"command {new['id']}" in gone["reason"]
+        hexes = [h for _, h in rig.link.frames]
+        first_new = hexes.index(HOVER.frame.hex)
+        assert CIRCLE.frame.hex not in hexes[first_new:]
+        assert gone["copies_sent"] == rig.link.count(CIRCLE) < 20
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_surface_on_a_one_way_link_is_bounded(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.surface()
+        expected = copies_for(1e-2, 0.999999, minimum=MIN_SURFACE_COPIES)
+        assert rec["copies"] == expected >= MIN_SURFACE_COPIES
+        await rig.until_state(rec["id"], "sent")
+        assert rig.link.count(SURFACE) == expected
+        assert rig.record(rec["id"])["p_delivered"] >= 0.999999
+        rig.ber = 0.0  # a clean link still gets the minimum
+        assert rig.cm.surface_copies_now() == MIN_SURFACE_COPIES
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_surface_pressed_during_a_surface_joins_it(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        first = await rig.cm.surface()
+        await until(lambda: rig.link.count(SURFACE) >= 1)
+        presses = await asyncio.gather(*(rig.cm.surface() for _ in range(20)))
+        assert {p["id"] for p in presses} == {first["id"]}
+        await rig.until_state(first["id"], "sent")
+        done = rig.record(first["id"])
+        assert done["copies"] == done["copies_sent"] == rig.link.count(SURFACE)
+        assert done["copies"] > first["copies"]
+        assert len(rig.log.commands()) == 1  # one record, never an orphan queued
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_a_command_supersedes_a_repeating_surface(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rig.cm.surface_repeat_s = 0.2
+        surface = await rig.cm.surface()
+        await until(lambda: rig.link.count(SURFACE) >= 1)
+        hover = await rig.cm.submit(HOVER, copies=1)
+        await rig.until_state(hover["id"], "sent")
+        assert rig.state(surface["id"]) == "superseded"
+        await asyncio.sleep(0.5)  # two more Surface intervals: nothing more may go out
+        hexes = [h for _, h in rig.link.frames]
+        assert hexes[-1] == HOVER.frame.hex and hexes.count(SURFACE.frame.hex) == 1
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_shutdown_during_repeats_interrupts(tmp_path: Path) -> None:
+    ids: list[int] = []
+
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE, copies=20)
+        ids.append(rec["id"])
+        await until(lambda: rig.link.count(CIRCLE) >= 2)
+        await rig.cm.close()
+        out = rig.link.count(CIRCLE)
+        await asyncio.sleep(5 * INTERVAL_S)
+        assert rig.link.count(CIRCLE) == out  # nothing after shutdown
+
+    rig = run(tmp_path, ONE_WAY, scenario)
+    done = rig.record(ids[0])
+    assert done["state"] == "interrupted" and "shut down" in done["reason"]
+
+
+def test_rate_limit_never_applies_to_surface(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        for _ in range(5):
+            await rig.cm.submit(CIRCLE, copies=1)
+        with pytest.raises(RateLimited):
+            await rig.cm.submit(CIRCLE, copies=1)
+        assert (await rig.cm.surface())["kind"] == "surface"
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+# --- two-way links ----------------------------------------------------------------------------
+
+
+def test_two_way_accepted(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE)
+        assert rec["copies"] == 1 and rec["two_way"] is True
+        await until(lambda: rig.link.count(CIRCLE) == 1)
+        rig.ack(CIRCLE)
+        assert rig.state(rec["id"]) == "acknowledged"
+        assert rig.hub.states[rec["id"]] == ["queued", "transmitted", "acknowledged"]
+        assert rig.cm.ledger.totals().recent.acknowledged == 1
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+def test_two_way_rejected_for_its_content(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE, copies=3)
+        await until(lambda: rig.link.count(CIRCLE) == 1)
+        rig.ack(CIRCLE, "rejected", "limit_violation")
+        assert rig.state(rec["id"]) == "rejected"
+        assert rig.record(rec["id"])["reason"].startswith("limit_violation")
+        await asyncio.sleep(3 * INTERVAL_S)
+        assert rig.link.count(CIRCLE) == 1  # no more copies of a rejected command
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+def test_two_way_damaged_copy_waits_for_the_next(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rig.cm.copy_interval_s = 0.2
+        rec = await rig.cm.submit(CIRCLE, copies=3)
+        await until(lambda: rig.link.count(CIRCLE) == 1)
+        rig.ack(CIRCLE, "rejected", "uncorrectable")
+        assert rig.state(rec["id"]) == "transmitted"
+        assert "damaged" in rig.record(rec["id"])["reason"]
+        await until(lambda: rig.link.count(CIRCLE) == 2)
+        rig.ack(CIRCLE)
+        assert rig.state(rec["id"]) == "acknowledged"
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+def test_two_way_timeout_after_the_last_copy(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE, copies=2)
+        await rig.until_state(rec["id"], "timed_out")
+        done = rig.record(rec["id"])
+        assert done["copies_sent"] == 2 and "no acknowledgement" in done["reason"]
+        late = rig.record(rec["id"])
+        rig.ack(CIRCLE)  # a late acknowledgement never reopens a terminal record
+        assert rig.record(rec["id"]) == late
+        recent = rig.cm.ledger.totals().recent
+        assert recent.timed_out == 2
+        level, problems = assess(
+            connected=True,
+            connection_problem=None,
+            capability=TWO_WAY,
+            capability_problems=[],
+            telemetry_age_s=0.1,
+            recent=recent,
+            unknown_recent=0,
+        )
+        assert level == "red" and "2 of the last 2 answered frames timed out" in problems[0]
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+def test_a_command_awaiting_its_ack_is_not_superseded(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        old = await rig.cm.submit(CIRCLE)
+        await until(lambda: rig.link.count(CIRCLE) == 1)
+        new = await rig.cm.submit(HOVER)
+        assert rig.state(old["id"]) == "transmitted"  # all its copies are out: it waits
+        await until(lambda: rig.link.count(HOVER) == 1)
+        rig.ack(CIRCLE)
+        rig.ack(HOVER)
+        assert (rig.state(old["id"]), rig.state(new["id"])) == ("acknowledged", "acknowledged")
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+def test_two_way_surface_repeats_until_acknowledged(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rig.cm.ack_timeout_s = 0.01  # per-copy timeouts must not end a Surface
+        rec = await rig.cm.surface()
+        assert rec["copies"] is None
+        await until(lambda: rig.link.count(SURFACE) >= 5)
+        assert rig.state(rec["id"]) == "transmitted"
+        rig.ack(SURFACE)
+        assert rig.state(rec["id"]) == "acknowledged"
+        out = rig.link.count(SURFACE)
+        await asyncio.sleep(5 * INTERVAL_S)
+        assert rig.link.count(SURFACE) == out
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+def test_two_way_surface_is_superseded_by_a_newer_command(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        surface = await rig.cm.surface()
+        await until(lambda: rig.link.count(SURFACE) >= 2)
+        hover = await rig.cm.submit(HOVER)
+        await until(lambda: rig.link.count(HOVER) == 1)
+        rig.ack(SURFACE)  # a late acknowledgement of a replaced Surface changes nothing
+        assert rig.state(surface["id"]) == "superseded"
+        rig.ack(HOVER)
+        assert rig.state(hover["id"]) == "acknowledged"
+        hexes = [h for _, h in rig.link.frames]
+        assert SURFACE.frame.hex not in hexes[hexes.index(HOVER.frame.hex) :]
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+def test_reset_during_a_surface_stops_it_and_a_late_ack_changes_nothing(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.surface()
+        await until(lambda: rig.link.count(SURFACE) >= 2)
+        rig.cm.reset_vehicle()
+        assert rig.state(rec["id"]) == "interrupted"
+        assert "reset" in rig.record(rec["id"])["reason"]
+        out = rig.link.count(SURFACE)
+        await asyncio.sleep(5 * INTERVAL_S)
+        assert rig.link.count(SURFACE) == out
+        rig.ack(SURFACE)
+        assert rig.state(rec["id"]) == "interrupted"
+        assert rig.cm.ledger.totals().dive.frames == 0  # a new dive counts afresh
+
+    run(tmp_path, TWO_WAY, scenario)
+
+
+# --- retry ------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("state", ["interrupted", "timed_out", "failed", "rejected", "superseded"])
+def test_retry_of_each_retryable_state(tmp_path: Path, state: str) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE, copies=1)
+        await rig.until_state(rec["id"], "sent")
+        rig.log.update_command(rec["id"], state=state, reason="made so by the test")
+        again = await rig.cm.retry(rec["id"], copies=2)
+        assert again["id"] == rec["id"] and again["state"] == "queued"
+        assert again["copies"] == 3 and again["reason"] is None  # 1 before, 2 now
+        await rig.until_state(rec["id"], "sent")
+        done = rig.record(rec["id"])
+        assert done["copies_sent"] == 3 and rig.link.count(CIRCLE) == 3
+        assert rig.hub.states[rec["id"]][-4:] == ["queued", "transmitted", "transmitted", "sent"]
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+@pytest.mark.parametrize("state", ["sent", "acknowledged", "queued", "transmitted"])
+def test_retry_refuses_other_states(tmp_path: Path, state: str) -> None:
+    async def scenario(rig: Rig) -> None:
+        rec = await rig.cm.submit(CIRCLE, copies=1)
+        await rig.until_state(rec["id"], "sent")
+        rig.log.update_command(rec["id"], state=state)
+        with pytest.raises(NotRetryable, match="superseded"):
+            await rig.cm.retry(rec["id"])
+        with pytest.raises(KeyError):
+            await rig.cm.retry(999)
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_retry_supersedes_what_is_repeating(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        old = await rig.cm.submit(HOVER, copies=1)
+        await rig.until_state(old["id"], "sent")
+        rig.log.update_command(old["id"], state="interrupted")
+        repeating = await rig.cm.submit(CIRCLE, copies=20)
+        await until(lambda: rig.link.count(CIRCLE) >= 1)
+        await rig.cm.retry(old["id"], copies=1)
+        assert rig.state(repeating["id"]) == "superseded"
+        assert rig.record(repeating["id"])["superseded_by"] == old["id"]
+        await rig.until_state(old["id"], "sent")
+
+    run(tmp_path, ONE_WAY, scenario)

@@ -1,0 +1,1 @@
+"""tests.backend.mission_log package."""

@@ -1,0 +1,1 @@
+"""tests.rosbridge package."""

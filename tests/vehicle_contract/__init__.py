@@ -1,0 +1,1 @@
+"""tests.vehicle_contract package."""
