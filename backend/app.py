@@ -24,6 +24,7 @@ from backend.api import view as view_api
 from backend.api.openapi import security_schemes
 from backend.bounded_input import BodyLimit, shorten, validation_errors
 from backend.commands.manager import RateLimited
+from backend.commands.service import SendRefused, refusal_detail
 from backend.console import Console
 from backend.security import HostGuard, allowed_hosts, install_redaction
 from backend.settings import Settings
@@ -103,6 +104,11 @@ def _errors(app: FastAPI) -> None:
             {"detail": [{"loc": loc, "msg": shorten(str(err)), "type": "plan_error"}]},
             status_code=422,
         )
+
+    @app.exception_handler(SendRefused)
+    async def send_refused(_request: Request, err: SendRefused) -> JSONResponse:
+        """The command service's refusals, with the status every path gives them."""
+        return JSONResponse({"detail": refusal_detail(err)}, status_code=err.status)
 
     @app.exception_handler(RateLimited)
     async def rate_limited(_request: Request, err: RateLimited) -> JSONResponse:

@@ -12,7 +12,7 @@ import asyncio
 import contextlib
 import logging
 import secrets
-from collections.abc import Coroutine
+from collections.abc import Coroutine, Mapping
 from dataclasses import replace
 from typing import Any
 
@@ -25,6 +25,7 @@ from backend.chart.reach import active_path_doc, add_geo, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
 from backend.commands.health import LinkHealth, link_health_of
 from backend.commands.manager import CommandManager
+from backend.commands.service import Assessment, CommandService, Violation
 from backend.mission_log.opening import open_checked
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
@@ -73,6 +74,8 @@ class Console:
         self.link: Link | None = None
         self.hub = TelemetryHub(settings.telemetry_hz)
         self.commands: CommandManager | None = None
+        #: The one checked path to the vehicle (every frame leaves through it).
+        self.service: CommandService | None = None
         self.viewer: Any = None  # backend.viewer.viewer.Viewer
         self.runner: Any = None  # backend.scripts.operations.ScriptRunner while a script runs
         self._runner_task: asyncio.Task[None] | None = None
@@ -141,6 +144,7 @@ class Console:
             airtime_s=airtime_s(s.bitrate_bps),
             target=s.target,
         )
+        self.service = CommandService(self.commands, self.assess, s.operator)
         link.on_mission = self._on_mission
         self.commands.vehicle.on_plan = self._show_active
         await link.start()
@@ -350,9 +354,14 @@ class Console:
         """
         return self._preview(pattern, params, show=show and view is not None, view=view)[1]
 
-    def prepare(self, pattern: str, params: dict[str, Any]) -> tuple[Encoded, dict[str, Any]]:
-        """For a send: the frame, and its preview (not drawn) to check the limits on."""
-        return self._preview(pattern, params, show=False)
+    def assess(self, pattern: str, params: Mapping[str, Any]) -> Assessment:
+        """The checks of a send from where the vehicle is now (the command service's).
+
+        Raises:
+            codec.EncodeError / planner.PlanError: naming the parameter at fault.
+        """
+        enc, doc = self._preview(pattern, dict(params), show=False)
+        return Assessment(enc, tuple(_violation(v) for v in doc["violations"]))
 
     def _preview(
         self, pattern: str, params: dict[str, Any], *, show: bool, view: str | None = None
@@ -400,3 +409,17 @@ class Console:
             self.viewer.reset_track()
         self._show_active(None)
         return self.dive
+
+
+def _violation(v: Mapping[str, Any]) -> Violation:
+    """A violation of the preview document, as the command service takes it."""
+    return Violation(
+        check=str(v.get("check") or v["param"]),
+        param=str(v["param"]),
+        kind="soft" if v["overridable"] else "hard",
+        message=str(v["message"]),
+        value=v.get("value"),
+        limit=v.get("limit"),
+        unit=str(v.get("unit") or ""),
+        allowed=str(v.get("allowed") or ""),
+    )

@@ -10,13 +10,14 @@ from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
-from backend.api.deps import ConsoleDep, IdField, IdPath, OperatorDep
+from backend.api.deps import ConsoleDep, IdField, IdPath, OperatorDep, ServiceDep
 from backend.api.models import LinkIn, RetryIn, SendIn
 from backend.api.schemas import (
     OPERATOR,
     CommandRecord,
     DiveDetail,
     DiveSummary,
+    ErrorDetail,
     LimitViolationError,
     ReplayResult,
     ValidationErrorResponse,
@@ -26,17 +27,11 @@ from backend.api.schemas import (
 from backend.api.view import ViewHeader
 from backend.chart.reach import track_lat_lon
 from backend.commands.health import LinkHealth
-from backend.commands.manager import CommandManager, NotRetryable
+from backend.commands.service import SendRequest
 from backend.mission_log.export import csv_rows
 from backend.mission_log.store import STATES
 
 router = APIRouter(prefix="/api", tags=["commands"])
-
-
-def _manager(console: ConsoleDep) -> CommandManager:
-    if console.commands is None:
-        raise HTTPException(503, "the console is starting")
-    return console.commands
 
 
 @router.post(
@@ -53,23 +48,14 @@ def _manager(console: ConsoleDep) -> CommandManager:
         },
     ),
 )
-async def send(body: SendIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
-    """Queue a command for transmission (logged first). 422: limits that cannot be
-    overridden or bad values; 409: overridable limits without ``override``; 429: rate limit."""
-    enc, doc = console.prepare(body.pattern, dict(body.params))
-    hard = [v for v in doc["violations"] if not v["overridable"]]
-    soft = [v for v in doc["violations"] if v["overridable"]]
-    if hard:
-        raise HTTPException(422, {"message": "limit violation", "violations": hard})
-    if soft and not body.override:
-        raise HTTPException(
-            409,
-            {
-                "message": "limit violation: send with override to accept it",
-                "violations": soft,
-            },
-        )
-    return await _manager(console).submit(enc, copies=body.copies)
+async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> dict[str, Any]:
+    """Queue a command for transmission (logged first), through the command service's checks.
+    422: limits that cannot be overridden or bad values; 409: overridable limits without
+    ``override`` (an override is recorded in the log with who gave it); 429: rate limit."""
+    request = SendRequest(
+        body.pattern, body.params, "api", override=body.override, copies=body.copies
+    )
+    return (await service.send(request)).record
 
 
 @router.post(
@@ -79,11 +65,11 @@ async def send(body: SendIn, console: ConsoleDep, _op: OperatorDep) -> dict[str,
     response_model_exclude_unset=True,
     responses=errors((*OPERATOR, 503)),
 )
-async def surface(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+async def surface(service: ServiceDep, _op: OperatorDep) -> dict[str, Any]:
     """Abort: send surface now and again every ``surface_repeat_s``: until acknowledged on a
     two-way link, a bounded number of times on a one-way link. It replaces any command still
     being repeated; pressed while another Surface is on its way, it joins that one."""
-    return await _manager(console).surface()
+    return (await service.surface("surface")).record
 
 
 @router.post(
@@ -93,20 +79,26 @@ async def surface(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     response_model_exclude_unset=True,
     responses=errors(
         (*OPERATOR, 404, 409, 413, 422, 429, 503),
-        why={409: "the command is not in a retryable state"},
+        models={
+            409: LimitViolationError | ErrorDetail,
+            422: ValidationErrorResponse | LimitViolationError,
+        },
+        why={
+            409: "the command is not in a retryable state, or overridable limits without "
+            "override: true",
+            422: "invalid input, or limits no operator can override",
+        },
     ),
 )
 async def retry(
-    command_id: IdPath, console: ConsoleDep, _op: OperatorDep, body: RetryIn | None = None
+    command_id: IdPath, service: ServiceDep, _op: OperatorDep, body: RetryIn | None = None
 ) -> dict[str, Any]:
-    """A new attempt of an interrupted, timed-out, failed, rejected or superseded command
-    (the same record); it replaces any command still being repeated."""
-    try:
-        return await _manager(console).retry(command_id, body.copies if body else None)
-    except KeyError:
-        raise HTTPException(404, f"no command {command_id}") from None
-    except NotRetryable as err:
-        raise HTTPException(409, str(err)) from None
+    """A new command with the values of an interrupted, timed-out, failed, rejected or
+    superseded one (a new record, created now, ``retry_of`` naming it), checked as any send
+    from where the vehicle is now; it replaces any command still being repeated."""
+    override = body.override if body else False
+    copies = body.copies if body else None
+    return (await service.retry(command_id, override=override, copies=copies)).record
 
 
 StateQ = Annotated[str | None, Query(pattern="^(" + "|".join(STATES) + ")$")]

@@ -9,6 +9,7 @@ from typing import Annotated
 from fastapi import Depends, HTTPException, Path, Request, status
 from pydantic import Field
 
+from backend.commands.service import CommandService
 from backend.console import Console
 
 
@@ -19,6 +20,16 @@ async def get_console(request: Request) -> Console:
 
 
 ConsoleDep = Annotated[Console, Depends(get_console)]
+
+
+async def get_service(console: ConsoleDep) -> CommandService:
+    """The one checked path to the vehicle; 503 while the console starts."""
+    if console.service is None:
+        raise HTTPException(503, "the console is starting")
+    return console.service
+
+
+ServiceDep = Annotated[CommandService, Depends(get_service)]
 
 #: The largest integer SQLite stores (signed 64-bit); beyond it a query would raise
 #: ``OverflowError`` (a 500): every integer that reaches the log is bounded to 422 first.

@@ -13,7 +13,9 @@ from backend.api.deps import token_ok
 from backend.api.models import check_copies
 from backend.bounded_input import shorten
 from backend.commands.manager import RateLimited
+from backend.commands.service import SendRefused, SendRequest
 from backend.console import Console
+from backend.mission_log.store import LogWriteError
 from backend.security import origin_allowed
 from codec import CodecError
 from planner import PlanError
@@ -124,29 +126,49 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
         }
     if not authed:
         return {"type": "error", "detail": "token required: send {type: auth, token} first"}
-    assert console.commands is not None
+    service = console.service
+    if service is None:
+        return {"type": "error", "detail": "the console is starting", "status": 503}
     try:
         if kind == "surface":
-            record = await console.commands.surface()
+            outcome = await service.surface("ws")
         else:
-            pattern, params = msg.get("pattern"), msg.get("params", {})
-            if not isinstance(pattern, str) or not isinstance(params, dict):
-                return {"type": "error", "detail": "send needs a pattern (str) and params (object)"}
-            copies = msg.get("copies")
-            try:
-                check_copies(copies)
-            except ValueError as err:
-                return {"type": "error", "detail": str(err), "field": "copies"}
-            enc, doc = console.prepare(pattern, params)
-            if doc["violations"]:
-                return {
-                    "type": "error",
-                    "detail": "; ".join(v["message"] for v in doc["violations"]),
-                }
-            record = await console.commands.submit(enc, copies=copies)
+            request = _send_request(msg)
+            if isinstance(request, dict):
+                return request
+            outcome = await service.send(request)
     except (CodecError, PlanError) as err:
         field = getattr(err, "field", None)
-        return {"type": "error", "detail": shorten(str(err)), "field": field}
+        return {"type": "error", "detail": shorten(str(err)), "field": field, "status": 422}
+    except SendRefused as err:
+        violations = [v.as_json() for v in err.violations]
+        detail = "; ".join([err.message, *(v["message"] for v in violations)])
+        return {"type": "error", "detail": detail, "violations": violations, "status": err.status}
     except RateLimited as err:
-        return {"type": "error", "detail": str(err)}
-    return {"type": "queued", "command": record}
+        return {"type": "error", "detail": str(err), "status": 429}
+    except LogWriteError as err:
+        return {"type": "error", "detail": str(err), "status": 503}
+    return {"type": "queued", "command": outcome.record}
+
+
+def _send_request(msg: dict[str, Any]) -> SendRequest | dict[str, Any]:
+    """A ``send`` message as the command service takes it, or the error reply naming the
+    field: ``pattern`` (str), ``params`` (object), ``override`` (bool), ``copies``."""
+    pattern, params = msg.get("pattern"), msg.get("params", {})
+    if not isinstance(pattern, str) or not isinstance(params, dict):
+        return _bad("send needs a pattern (str) and params (object)", "pattern")
+    override = msg.get("override", False)
+    if not isinstance(override, bool):
+        return _bad(
+            f"override must be true or false, got {shorten(repr(override), 40)}", "override"
+        )
+    copies = msg.get("copies")
+    try:
+        check_copies(copies)
+    except ValueError as err:
+        return _bad(str(err), "copies")
+    return SendRequest(pattern, params, "ws", override=override, copies=copies)
+
+
+def _bad(detail: str, field: str) -> dict[str, Any]:
+    return {"type": "error", "detail": detail, "field": field, "status": 422}

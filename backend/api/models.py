@@ -97,6 +97,8 @@ class SendIn(CommandIn):
 
 
 class RetryIn(Strict):
+    #: the operator accepts the overridable limits the retry breaks from where it is now
+    override: bool = False
     copies: CopiesIn = None
 
 

@@ -14,6 +14,7 @@ from pydantic import BaseModel, ConfigDict
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.schemas import OPERATOR, OnboardScript, RunState, errors
 from backend.api.view import ViewHeader
+from backend.commands.service import SendRequest
 from backend.console import Console
 from backend.mission_log.store import FINAL_STATES
 from backend.scripts.operations import (
@@ -27,7 +28,6 @@ from backend.scripts.operations import (
     onboard_csv,
     preview,
 )
-from codec import encode_frame
 
 router = APIRouter(prefix="/api/scripts", tags=["scripts"])
 
@@ -180,12 +180,14 @@ def run_stop(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
 
 async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
     step = runner.script.steps[index]
-    assert console.commands is not None
-    try:
-        enc = encode_frame(step.pattern, dict(step.params))
-        record = await console.commands.submit(enc, kind="script")
-    except Exception as err:  # rate limit, link down: the run stops with the reason
-        runner.mark_failed(index, str(err))
+    assert console.service is not None
+    request = SendRequest(
+        step.pattern, step.params, "script", override=step.override, kind="script"
+    )
+    try:  # checked again now: the vehicle may have moved since the script was authored
+        record = (await console.service.send(request)).record
+    except Exception as err:  # refused, rate limit, log, link: the run stops with the reason
+        runner.mark_failed(index, f"not sent: {err}")
         return
     console.script_commands[index] = record["id"]
     runner.mark_sent(index)

@@ -22,8 +22,8 @@ from backend.api.schemas import (
     errors,
 )
 from backend.api.schemas.errors import ERROR_TEXT
+from backend.commands.service import SendRequest
 from backend.console import SCENARIO_PRESETS
-from codec import encode_frame
 
 router = APIRouter(prefix="/api/training", tags=["training"])
 
@@ -123,8 +123,9 @@ async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str
     sc = SCENARIOS[name]
     dive = console.reset_vehicle(start_z_m=sc.start_z_m)
     first, retask = sc.commands[0], sc.commands[sc.retask]
-    assert console.commands is not None
-    record = await console.commands.submit(encode_frame(first.pattern, dict(first.params)))
+    assert console.service is not None
+    request = SendRequest(first.pattern, dict(first.params), "scenario")
+    record = (await console.service.send(request)).record
     return {
         "dive": dive,
         "scenario": name,

@@ -52,13 +52,12 @@ class Event(StrEnum):
     SUPERSEDED = "superseded"
     #: Shutdown, a crash found at the next start, or a training reset.
     INTERRUPTED = "interrupted"
-    #: The operator retries it: a new attempt of the same record.
-    RETRY = "retry"
 
 
 #: States a command is still on its way in (the rest are terminal).
 ON_ITS_WAY: Final = frozenset({State.QUEUED, State.TRANSMITTED})
-#: Terminal states the operator may retry.
+#: Terminal states the operator may retry: a retry is a new command (``retry_of`` names the
+#: old one), and the old record keeps its state.
 RETRYABLE: Final = frozenset(
     {State.INTERRUPTED, State.TIMED_OUT, State.FAILED, State.REJECTED, State.SUPERSEDED}
 )
@@ -76,7 +75,6 @@ TRANSITIONS: Final = MappingProxyType(
         Event.ACK_TIMEOUT: (frozenset({State.TRANSMITTED}), State.TIMED_OUT),
         Event.SUPERSEDED: (ON_ITS_WAY, State.SUPERSEDED),
         Event.INTERRUPTED: (ON_ITS_WAY, State.INTERRUPTED),
-        Event.RETRY: (RETRYABLE, State.QUEUED),
     }
 )
 

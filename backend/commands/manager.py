@@ -41,12 +41,12 @@ from backend.commands.delivery import (
     best_match,
     planned_copies,
 )
-from backend.commands.lifecycle import ON_ITS_WAY, RETRYABLE, Event, advance
+from backend.commands.lifecycle import ON_ITS_WAY, Event, advance
 from backend.commands.mirror import VehicleMirror
 from backend.commands.records import CommandRecords
 from backend.mission_log.store import LogWriteError, MissionLog, now_iso
 from backend.telemetry import TelemetryHub
-from codec import Encoded, delivery_probability, encode_frame
+from codec import Encoded, delivery_probability
 from onboard.agent import command_json
 from planner import Plan
 from station.link import Link
@@ -57,13 +57,8 @@ __all__ = [
     "MIN_SURFACE_COPIES",
     "SURFACE_DELIVERY_TARGET",
     "CommandManager",
-    "NotRetryable",
     "RateLimited",
 ]
-
-
-class NotRetryable(Exception):
-    """The command cannot be retried in its state."""
 
 
 class CommandManager(CommandRecords):
@@ -104,7 +99,8 @@ class CommandManager(CommandRecords):
         self._rate = RateLimiter(max_sends_per_minute)
         self._tx_lock = asyncio.Lock()
         self.last_ack_s: float | None = None  # monotonic arrival of the last acknowledgement
-        self.last_sent: dict[str, Any] | None = None
+        #: The command whose first copy left most recently (wire order), from the log at start.
+        self.last_sent: dict[str, Any] | None = log.last_sent()
         self.vehicle = VehicleMirror(hub, dive)
 
     # --- the vehicle mirror, as the console reads it ---------------------------------------
@@ -165,11 +161,20 @@ class CommandManager(CommandRecords):
     # --- sending ----------------------------------------------------------------------------
 
     async def submit(
-        self, enc: Encoded, kind: str = "command", copies: int | None = None
+        self,
+        enc: Encoded,
+        kind: str = "command",
+        copies: int | None = None,
+        *,
+        origin: str = "api",
+        retry_of: int | None = None,
+        overrides: dict[str, Any] | None = None,
     ) -> dict[str, Any]:
         """Log the command (queued) with the values asked for (``enc.snaps``), then deliver it
         in the background, replacing whatever is still being repeated; returns the record.
-        ``copies``: the operator's count (1..20), else chosen from the link.
+        ``copies``: the operator's count (1..20), else chosen from the link. ``origin``,
+        ``retry_of`` and ``overrides`` are written into the record as the command service
+        gives them (:mod:`backend.commands.service` is the only caller in the console).
 
         Raises:
             RateLimited: too many transmissions in the last minute (never for surface).
@@ -201,14 +206,14 @@ class CommandManager(CommandRecords):
                     "copies": copies,
                     "ber": ber,
                     "two_way": two_way,
+                    "origin": origin,
+                    "retry_of": retry_of,
+                    "overrides": overrides,
                 },
             )
             self._announce(record)
             self._begin(record["id"], enc, kind, copies)
         return record
-
-    async def surface(self) -> dict[str, Any]:
-        return await self.submit(encode_frame("surface", {}), kind="surface")
 
     def _join_surface(self) -> dict[str, Any] | None:
         """A Surface pressed while another is on its way: the same record, sent again now,
@@ -228,43 +233,6 @@ class CommandManager(CommandRecords):
                 raise
             d.copies += more
         d.wake.set()
-        return record
-
-    async def retry(self, command_id: int, copies: int | None = None) -> dict[str, Any]:
-        """A new attempt of a retryable record, under the same supersede rule.
-
-        Raises:
-            KeyError: no such command. NotRetryable: not in a retryable state.
-            RateLimited: too many transmissions (never for surface).
-        """
-        record = self.log.command(command_id)
-        if record is None:
-            raise KeyError(command_id)
-        if record["state"] not in RETRYABLE:
-            raise NotRetryable(
-                f"command {command_id} is {record['state']}; only "
-                f"{', '.join(sorted(RETRYABLE))} commands can be retried"
-            )
-        kind = _delivery_kind(record["kind"], record["pattern"])
-        if kind != "surface":
-            self._rate.take()
-        if copies is None:
-            copies = self.surface_copies_now() if kind == "surface" else self.copies_now()
-        ber, _loss = self.link_ber()
-        # planned: what went out before, and this attempt's copies
-        planned = None if copies is None else record["copies_sent"] + copies
-        enc = encode_frame(record["pattern"], record["params"])
-        with self._atomic():  # the new attempt and what it supersedes, or nothing
-            record = self._update(
-                command_id,
-                state=advance(record["state"], Event.RETRY),
-                reason=None,
-                superseded_by=None,
-                copies=planned,
-                ber=ber,
-                two_way=self.link.acknowledges,
-            )
-            self._begin(command_id, enc, kind, copies)
         return record
 
     def _begin(self, command_id: int, enc: Encoded, kind: str, copies: int | None) -> None:
@@ -334,15 +302,20 @@ class CommandManager(CommandRecords):
             return
         live = self._live.get(cid) is d
         sent = record["copies_sent"] + 1
+        stamp = now_iso()
         fields.update(
             copies_sent=sent,
             p_delivered=delivery_probability(d.ber, sent, loss=d.loss),
-            sent_at=now_iso(),
+            sent_at=stamp,
         )
+        first = record["first_sent_at"] is None
+        if first:  # wire order: "last sent", the list and the CSV follow the first copy out
+            fields["first_sent_at"] = stamp
         if live and record["state"] in ON_ITS_WAY:
             fields.update(state=advance(record["state"], Event.COPY_SENT), reason=None)
         self.ledger.frame_out(cid, answer_expected=live and d.two_way)
-        self.last_sent = {"id": cid, **command_json(d.enc.command)}
+        if first:
+            self.last_sent = {"id": cid, **command_json(d.enc.command)}
         self._update(cid, **fields)
         if live and d.two_way:
             self._await_ack(cid, d.enc)

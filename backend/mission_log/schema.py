@@ -35,7 +35,11 @@ CREATE TABLE IF NOT EXISTS commands (
     p_delivered REAL NOT NULL DEFAULT 0,
     ber REAL,
     two_way INTEGER,
-    superseded_by INTEGER
+    superseded_by INTEGER,
+    origin TEXT,
+    retry_of INTEGER,
+    overrides TEXT,
+    first_sent_at TEXT
 );
 CREATE INDEX IF NOT EXISTS commands_dive ON commands(dive);
 CREATE TABLE IF NOT EXISTS track (
@@ -66,6 +70,12 @@ ADDED_COLUMNS = (
     ("ber", "REAL"),
     ("two_way", "INTEGER"),
     ("superseded_by", "INTEGER"),
+    # issue 19: the path a command came by, the command a retry retries, the operator's
+    # overrides (JSON: who, which violations), the time its first copy left (wire order)
+    ("origin", "TEXT"),
+    ("retry_of", "INTEGER"),
+    ("overrides", "TEXT"),
+    ("first_sent_at", "TEXT"),
 )
 
 

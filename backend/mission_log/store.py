@@ -35,7 +35,7 @@ TRACK_BATCH = 10
 TRACK_BUFFER_MAX = 3600
 
 #: Columns holding JSON text.
-_JSON = ("params", "requested", "ack")
+_JSON = ("params", "requested", "ack", "overrides")
 #: Columns holding booleans (SQLite integers).
 _BOOL = ("two_way",)
 #: Columns a command update may set.
@@ -53,8 +53,11 @@ _UPDATABLE = frozenset(
         "ber",
         "two_way",
         "superseded_by",
+        "first_sent_at",
     }
 )
+#: Wire order: by the time a command's first copy left (one never sent: when it was made).
+WIRE_ORDER = "COALESCE(first_sent_at, created_at) {0}, id {0}"
 STATES = tuple(State)
 FINAL_STATES = frozenset(str(s) for s in TERMINAL)
 
@@ -295,11 +298,29 @@ class MissionLog:
         sql = "SELECT * FROM commands"
         if where:
             sql += " WHERE " + " AND ".join(where)
-        sql += f" ORDER BY id {'ASC' if oldest_first else 'DESC'} LIMIT ?"
+        sql += " ORDER BY " + WIRE_ORDER.format("ASC" if oldest_first else "DESC") + " LIMIT ?"
         args.append(limit)
         with self._lock:
             rows = self._db.execute(sql, args).fetchall()
         return [_record(r) for r in rows]
+
+    def last_sent(self) -> dict[str, Any] | None:
+        """The command whose first copy left most recently (of any dive), as
+        ``{id, pattern, pattern_id, params}``; None: nothing has left yet."""
+        with self._lock:
+            row = self._db.execute(
+                "SELECT id, pattern, pattern_id, params FROM commands "
+                "WHERE first_sent_at IS NOT NULL ORDER BY first_sent_at DESC, id DESC LIMIT 1"
+            ).fetchone()
+        if row is None:
+            return None
+        params = json.loads(row["params"])
+        return {
+            "id": row["id"],
+            "pattern": row["pattern"],
+            "pattern_id": row["pattern_id"],
+            "params": params,
+        }
 
     # --- events: what the vehicle did that the console did not cause ------------------------
 

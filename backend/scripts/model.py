@@ -91,6 +91,11 @@ class ScriptStep(BaseModel):
     pattern: str
     params: dict[str, float | str] = Field(default_factory=dict)
     trigger: Trigger
+    override: bool = Field(
+        False,
+        description="the operator accepts this step's overridable limit violations (recorded "
+        "with its command); a hard one refuses the script whatever this says",
+    )
 
     @field_validator("params", mode="before")
     @classmethod

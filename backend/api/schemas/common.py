@@ -3,7 +3,7 @@ limit violation."""
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, Field, WithJsonSchema
 
@@ -39,11 +39,15 @@ class VehicleStateOut(BaseModel):
 
 
 class LimitViolation(BaseModel):
-    """One broken limit; ``overridable`` is false for the depth rating."""
+    """One broken limit: ``kind`` hard (refused on every path: the depth rating) or soft
+    (needs the operator's override; ``overridable`` says the same)."""
 
+    check: str = Field("", description="which check found it (depth_rating, reach, ...)")
     param: str
-    value: float
+    kind: Literal["hard", "soft"] = "soft"
+    value: float | None
     limit: float | None = Field(description="null for a polygon geofence (see message)")
     unit: str
     message: str
     overridable: bool
+    allowed: str = Field("", description="what is allowed, in words")

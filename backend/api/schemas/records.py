@@ -44,6 +44,19 @@ class Ack(BaseModel):
     )
 
 
+class OverriddenViolation(BaseModel):
+    check: str
+    param: str
+    message: str
+
+
+class Overrides(BaseModel):
+    """Who overrode which limit violations to send a command."""
+
+    by: str = Field(description="the operator")
+    violations: list[OverriddenViolation]
+
+
 class CommandRecord(BaseModel):
     """A command of the mission log (docs/api.md: "Command record")."""
 
@@ -74,6 +87,16 @@ class CommandRecord(BaseModel):
     ber: float | None = Field(description="the bit-error rate the copies were chosen from")
     two_way: bool | None = Field(description="an acknowledgement was expected")
     superseded_by: int | None
+    origin: Literal["api", "ws", "surface", "retry", "script", "scenario", "cli"] | None = Field(
+        None, description="the path it came by (null: a record from before paths were logged)"
+    )
+    retry_of: int | None = Field(None, description="the command this one retries")
+    overrides: Overrides | None = Field(
+        None, description="the limit violations the operator overrode to send it, and who"
+    )
+    first_sent_at: str | None = Field(
+        None, description="when its first copy left (ISO 8601, UTC): the log's wire order"
+    )
 
 
 class DiveSummary(BaseModel):

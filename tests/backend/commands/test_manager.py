@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 
 from backend.commands.health import assess
-from backend.commands.manager import MIN_SURFACE_COPIES, CommandManager, NotRetryable, RateLimited
+from backend.commands.manager import MIN_SURFACE_COPIES, CommandManager, RateLimited
 from backend.mission_log.store import MissionLog
 from backend.telemetry import TelemetryHub
 from codec import Encoded, Frame, copies_for, delivery_probability, encode_frame
@@ -81,6 +81,10 @@ class Rig:
             copy_interval_s=INTERVAL_S,
             link_ber=lambda: (self.ber, 0.0),
         )
+
+    async def surface(self) -> dict[str, Any]:
+        """A Surface, as the command service hands it to the manager."""
+        return await self.cm.submit(encode_frame("surface", {}), kind="surface", origin="surface")
 
     def state(self, command_id: int) -> str:
         record = self.log.command(command_id)
@@ -211,7 +215,7 @@ def test_a_newer_command_supersedes_one_still_repeating(tmp_path: Path) -> None:
 
 def test_surface_on_a_one_way_link_is_bounded(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
-        rec = await rig.cm.surface()
+        rec = await rig.surface()
         expected = copies_for(1e-2, 0.999999, minimum=MIN_SURFACE_COPIES)
         assert rec["copies"] == expected >= MIN_SURFACE_COPIES
         await rig.until_state(rec["id"], "sent")
@@ -225,9 +229,9 @@ def test_surface_on_a_one_way_link_is_bounded(tmp_path: Path) -> None:
 
 def test_surface_pressed_during_a_surface_joins_it(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
-        first = await rig.cm.surface()
+        first = await rig.surface()
         await until(lambda: rig.link.count(SURFACE) >= 1)
-        presses = await asyncio.gather(*(rig.cm.surface() for _ in range(20)))
+        presses = await asyncio.gather(*(rig.surface() for _ in range(20)))
         assert {p["id"] for p in presses} == {first["id"]}
         await rig.until_state(first["id"], "sent")
         done = rig.record(first["id"])
@@ -241,7 +245,7 @@ def test_surface_pressed_during_a_surface_joins_it(tmp_path: Path) -> None:
 def test_a_command_supersedes_a_repeating_surface(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         rig.cm.surface_repeat_s = 0.2
-        surface = await rig.cm.surface()
+        surface = await rig.surface()
         await until(lambda: rig.link.count(SURFACE) >= 1)
         hover = await rig.cm.submit(HOVER, copies=1)
         await rig.until_state(hover["id"], "sent")
@@ -276,7 +280,7 @@ def test_rate_limit_never_applies_to_surface(tmp_path: Path) -> None:
             await rig.cm.submit(CIRCLE, copies=1)
         with pytest.raises(RateLimited):
             await rig.cm.submit(CIRCLE, copies=1)
-        assert (await rig.cm.surface())["kind"] == "surface"
+        assert (await rig.surface())["kind"] == "surface"
 
     run(tmp_path, ONE_WAY, scenario)
 
@@ -367,7 +371,7 @@ def test_a_command_awaiting_its_ack_is_not_superseded(tmp_path: Path) -> None:
 def test_two_way_surface_repeats_until_acknowledged(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         rig.cm.ack_timeout_s = 0.01  # per-copy timeouts must not end a Surface
-        rec = await rig.cm.surface()
+        rec = await rig.surface()
         assert rec["copies"] is None
         await until(lambda: rig.link.count(SURFACE) >= 5)
         assert rig.state(rec["id"]) == "transmitted"
@@ -382,7 +386,7 @@ def test_two_way_surface_repeats_until_acknowledged(tmp_path: Path) -> None:
 
 def test_two_way_surface_is_superseded_by_a_newer_command(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
-        surface = await rig.cm.surface()
+        surface = await rig.surface()
         await until(lambda: rig.link.count(SURFACE) >= 2)
         hover = await rig.cm.submit(HOVER)
         await until(lambda: rig.link.count(HOVER) == 1)
@@ -398,7 +402,7 @@ def test_two_way_surface_is_superseded_by_a_newer_command(tmp_path: Path) -> Non
 
 def test_reset_during_a_surface_stops_it_and_a_late_ack_changes_nothing(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
-        rec = await rig.cm.surface()
+        rec = await rig.surface()
         await until(lambda: rig.link.count(SURFACE) >= 2)
         rig.cm.reset_vehicle()
         assert rig.state(rec["id"]) == "interrupted"
@@ -411,52 +415,3 @@ def test_reset_during_a_surface_stops_it_and_a_late_ack_changes_nothing(tmp_path
         assert rig.cm.ledger.totals().dive.frames == 0  # a new dive counts afresh
 
     run(tmp_path, TWO_WAY, scenario)
-
-
-# --- retry ------------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("state", ["interrupted", "timed_out", "failed", "rejected", "superseded"])
-def test_retry_of_each_retryable_state(tmp_path: Path, state: str) -> None:
-    async def scenario(rig: Rig) -> None:
-        rec = await rig.cm.submit(CIRCLE, copies=1)
-        await rig.until_state(rec["id"], "sent")
-        rig.log.update_command(rec["id"], state=state, reason="made so by the test")
-        again = await rig.cm.retry(rec["id"], copies=2)
-        assert again["id"] == rec["id"] and again["state"] == "queued"
-        assert again["copies"] == 3 and again["reason"] is None  # 1 before, 2 now
-        await rig.until_state(rec["id"], "sent")
-        done = rig.record(rec["id"])
-        assert done["copies_sent"] == 3 and rig.link.count(CIRCLE) == 3
-        assert rig.hub.states[rec["id"]][-4:] == ["queued", "transmitted", "transmitted", "sent"]
-
-    run(tmp_path, ONE_WAY, scenario)
-
-
-@pytest.mark.parametrize("state", ["sent", "acknowledged", "queued", "transmitted"])
-def test_retry_refuses_other_states(tmp_path: Path, state: str) -> None:
-    async def scenario(rig: Rig) -> None:
-        rec = await rig.cm.submit(CIRCLE, copies=1)
-        await rig.until_state(rec["id"], "sent")
-        rig.log.update_command(rec["id"], state=state)
-        with pytest.raises(NotRetryable, match="superseded"):
-            await rig.cm.retry(rec["id"])
-        with pytest.raises(KeyError):
-            await rig.cm.retry(999)
-
-    run(tmp_path, ONE_WAY, scenario)
-
-
-def test_retry_supersedes_what_is_repeating(tmp_path: Path) -> None:
-    async def scenario(rig: Rig) -> None:
-        old = await rig.cm.submit(HOVER, copies=1)
-        await rig.until_state(old["id"], "sent")
-        rig.log.update_command(old["id"], state="interrupted")
-        repeating = await rig.cm.submit(CIRCLE, copies=20)
-        await until(lambda: rig.link.count(CIRCLE) >= 1)
-        await rig.cm.retry(old["id"], copies=1)
-        assert rig.state(repeating["id"]) == "superseded"
-        assert rig.record(repeating["id"])["superseded_by"] == old["id"]
-        await rig.until_state(old["id"], "sent")
-
-    run(tmp_path, ONE_WAY, scenario)

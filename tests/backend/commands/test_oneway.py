@@ -182,7 +182,8 @@ def test_a_surface_frame_sent_as_a_command_is_delivered_as_a_surface(
     pressed meanwhile joins it."""
     client = make_client(target=wire.target, surface_repeat_s=0.15, link_ber=1e-3)
     rec = post_command(client, "surface", {})
-    assert rec["kind"] == "command" and rec["copies"] == 3  # not the 1 copy of a command
+    assert rec["kind"] == "surface" and rec["origin"] == "api"
+    assert rec["copies"] == 3  # not the 1 copy of a command
     wait_for_frames(wire, rec["hex"], 1)
     assert post_surface(client)["id"] == rec["id"]  # joined, not a second record
     done = wait_state(client, rec["id"])

@@ -36,7 +36,7 @@ from tests.backend.scripts.test_scripts import (
     step,
 )
 
-REPO = Path(__file__).resolve().parents[2]
+REPO = Path(__file__).resolve().parents[3]
 #: The issue's case: a hover, then a circle "when the previous pattern completes".
 HOVER_THEN_CIRCLE = doc(step("hover", HOVER, "at", 0), step("circle", CIRCLE, "after_previous"))
 #: How far the run's send times may be from the plan's, in vehicle seconds: the simulator's

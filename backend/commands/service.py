@@ -1,0 +1,285 @@
+"""The command service: the one way a frame leaves the console.
+
+Every path that transmits (the REST send, the ``/ws`` send, Surface from the button, the
+shortcut, the API or ``/ws``, a retry, a mission script's step, a training scenario) calls
+:meth:`CommandService.send`, :meth:`CommandService.retry` or :meth:`CommandService.surface`;
+``nemesys send`` runs the same policy (:func:`decide`) in its own process. One policy:
+
+* the checks (:class:`Assessment`): the dictionary's ranges and snapping (the codec refuses
+  what it cannot carry, naming the field), the depth rating and the depth and speed limits,
+  the vehicle profile (top speed, endurance against the battery now), the geofence and the
+  ME link's reach; the rate limit (not for Surface);
+* a **hard** violation is refused on every path (:class:`LimitRefused`, 422); a **soft** one
+  needs an explicit override on every path (:class:`OverrideNeeded`, 409), and an override is
+  written into the record: who gave it and for which violations;
+* the record is written to the mission log before the first copy leaves; a log that cannot
+  be written refuses the send (:class:`backend.mission_log.store.LogWriteError`, 503 on every
+  path), and nothing is transmitted;
+* a retry is a new command: a new record, created now, naming the one it retries
+  (``retry_of``), checked as any other send from where the vehicle is now.
+
+Surface is never refused by the checks: it is the way out.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Literal, Protocol
+
+from backend.commands.lifecycle import RETRYABLE
+from backend.commands.manager import CommandManager
+from codec import Encoded, encode_frame
+
+#: The ways a frame can leave the console, as the record's ``origin`` names them.
+Origin = Literal["api", "ws", "surface", "retry", "script", "scenario", "cli"]
+ORIGINS: tuple[Origin, ...] = ("api", "ws", "surface", "retry", "script", "scenario", "cli")
+
+
+@dataclass(frozen=True)
+class Violation:
+    """One broken rule of a send, as the checks found it.
+
+    Attributes:
+        check: which check (``depth_rating``, ``depth_limit``, ``speed_limit``, ``top_speed``,
+            ``endurance``, ``reach``, ``geofence``).
+        param: the command parameter at fault (``depth``, ``speed``, ``radius``...).
+        kind: ``hard``: refused on every path; ``soft``: needs the operator's override.
+        message: a sentence for the operator.
+        value, limit, unit: the figure and the limit it breaks (``limit`` None: see message).
+        allowed: what is allowed, in words (e.g. "0 to 100 m").
+    """
+
+    check: str
+    param: str
+    kind: Literal["hard", "soft"]
+    message: str
+    value: float | None = None
+    limit: float | None = None
+    unit: str = ""
+    allowed: str = ""
+
+    def as_json(self) -> dict[str, Any]:
+        return {
+            "check": self.check,
+            "param": self.param,
+            "kind": self.kind,
+            "overridable": self.kind == "soft",
+            "message": self.message,
+            "value": self.value,
+            "limit": self.limit,
+            "unit": self.unit,
+            "allowed": self.allowed,
+        }
+
+
+@dataclass(frozen=True)
+class Assessment:
+    """A command as the checks see it: the frame that would leave, and what it breaks."""
+
+    enc: Encoded
+    violations: tuple[Violation, ...] = ()
+
+    @property
+    def hard(self) -> tuple[Violation, ...]:
+        return tuple(v for v in self.violations if v.kind == "hard")
+
+    @property
+    def soft(self) -> tuple[Violation, ...]:
+        return tuple(v for v in self.violations if v.kind == "soft")
+
+
+class SendRefused(Exception):
+    """A send the policy refused; nothing was written or transmitted. ``status``: the HTTP
+    status every path reports it with."""
+
+    status = 422
+
+    def __init__(self, message: str, violations: Sequence[Violation] = ()) -> None:
+        super().__init__(message)
+        self.message = message
+        self.violations = tuple(violations)
+
+    def __str__(self) -> str:
+        return "; ".join([self.message, *(v.message for v in self.violations)])
+
+    def as_json(self) -> dict[str, Any]:
+        return {"message": self.message, "violations": [v.as_json() for v in self.violations]}
+
+
+def refusal_detail(err: SendRefused) -> dict[str, Any] | str:
+    """The ``detail`` of a refusal: the violations when the checks refused, else the words."""
+    return err.as_json() if err.violations else err.message
+
+
+class LimitRefused(SendRefused):
+    """Limits no operator can override (the depth rating): refused on every path."""
+
+    status = 422
+
+
+class OverrideNeeded(SendRefused):
+    """Limits an operator may override, sent without ``override``."""
+
+    status = 409
+
+
+class UnknownCommand(SendRefused):
+    """A retry of a command the log does not hold."""
+
+    status = 404
+
+
+class NotRetryableCommand(SendRefused):
+    """A retry of a command that is not in a retryable state."""
+
+    status = 409
+
+
+def decide(assessment: Assessment, override: bool) -> tuple[Violation, ...]:
+    """The policy on what the checks found: the violations the operator overrode (empty when
+    there were none).
+
+    Raises:
+        LimitRefused: a hard violation (whatever ``override`` says).
+        OverrideNeeded: a soft violation without ``override``.
+    """
+    if assessment.hard:
+        raise LimitRefused("limit violation: no operator can override it", assessment.violations)
+    if assessment.soft and not override:
+        raise OverrideNeeded("limit violation: send with override to accept it", assessment.soft)
+    return assessment.soft
+
+
+@dataclass(frozen=True)
+class SendRequest:
+    """What a path asks the service to send.
+
+    Attributes:
+        pattern, params: the command as the operator wrote it (the codec checks and snaps).
+        origin: the path it came by (written into the record).
+        override: the operator accepts the soft violations.
+        copies: the operator's number of copies (None: chosen from the link).
+        kind: the record's kind (``script`` for a script's step).
+        retry_of: the command this one retries.
+    """
+
+    pattern: str
+    params: Mapping[str, Any]
+    origin: Origin
+    override: bool = False
+    copies: int | None = None
+    kind: Literal["command", "script"] = "command"
+    retry_of: int | None = None
+
+
+@dataclass(frozen=True)
+class SendOutcome:
+    """The record as written (queued, or a Surface joined), and what the operator overrode."""
+
+    record: dict[str, Any]
+    overridden: tuple[Violation, ...] = field(default=())
+
+
+class Assessor(Protocol):
+    def __call__(self, pattern: str, params: Mapping[str, Any]) -> Assessment: ...
+
+
+class CommandService:
+    """The one checked path to the vehicle (see the module's docstring)."""
+
+    def __init__(self, manager: CommandManager, assess: Assessor, operator: str) -> None:
+        self.manager = manager
+        self.assess = assess
+        self.operator = operator
+        #: Called with every record the service hands to the manager (scripts count theirs).
+        self.on_sent: Callable[[dict[str, Any]], None] | None = None
+
+    async def send(self, request: SendRequest) -> SendOutcome:
+        """Check ``request`` and hand it to the manager (written first, then transmitted).
+
+        Raises:
+            codec.EncodeError / planner.PlanError: a value the frame cannot carry, named.
+            LimitRefused / OverrideNeeded: the policy (:func:`decide`).
+            RateLimited: too many transmissions in the last minute (never Surface).
+            LogWriteError: the mission log cannot be written; nothing was transmitted.
+        """
+        if request.pattern == "surface":
+            return await self.surface(request.origin, retry_of=request.retry_of)
+        assessment = self.assess(request.pattern, dict(request.params))
+        overridden = decide(assessment, request.override)
+        record = await self.manager.submit(
+            assessment.enc,
+            kind=request.kind,
+            copies=request.copies,
+            origin=request.origin,
+            retry_of=request.retry_of,
+            overrides=self._overrides(overridden),
+        )
+        return SendOutcome(record, overridden)
+
+    async def surface(self, origin: Origin = "surface", retry_of: int | None = None) -> SendOutcome:
+        """Surface: never refused by the checks (pressed while another Surface is on its way,
+        it joins that one)."""
+        enc = encode_frame("surface", {})
+        record = await self.manager.submit(enc, kind="surface", origin=origin, retry_of=retry_of)
+        return SendOutcome(record)
+
+    async def retry(
+        self, command_id: int, *, override: bool = False, copies: int | None = None
+    ) -> SendOutcome:
+        """A new command with the values of ``command_id`` (a retryable record), checked as
+        any other send from where the vehicle is now.
+
+        Raises:
+            UnknownCommand: no such record. NotRetryableCommand: not in a retryable state.
+            The errors of :meth:`send`.
+        """
+        old = self.manager.log.command(command_id)
+        if old is None:
+            raise UnknownCommand(f"no command {command_id}")
+        if old["state"] not in RETRYABLE:
+            raise NotRetryableCommand(
+                f"command {command_id} is {old['state']}; only "
+                f"{', '.join(sorted(RETRYABLE))} commands can be retried"
+            )
+        kind: Literal["command", "script"] = "command"
+        return await self.send(
+            SendRequest(
+                old["pattern"],
+                old["params"],
+                "retry",
+                override=override,
+                copies=copies,
+                kind=kind,
+                retry_of=command_id,
+            )
+        )
+
+    def _overrides(self, overridden: Sequence[Violation]) -> dict[str, Any] | None:
+        if not overridden:
+            return None
+        return {
+            "by": self.operator,
+            "violations": [
+                {"check": v.check, "param": v.param, "message": v.message} for v in overridden
+            ],
+        }
+
+
+__all__ = [
+    "ORIGINS",
+    "Assessment",
+    "CommandService",
+    "LimitRefused",
+    "NotRetryableCommand",
+    "Origin",
+    "OverrideNeeded",
+    "SendOutcome",
+    "SendRefused",
+    "SendRequest",
+    "UnknownCommand",
+    "Violation",
+    "decide",
+    "refusal_detail",
+]
