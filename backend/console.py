@@ -16,6 +16,7 @@ from collections.abc import Coroutine, Mapping
 from dataclasses import replace
 from typing import Any
 
+from backend.authoring.assess import assessment_of
 from backend.authoring.predict import TwinWorker
 from backend.authoring.preview import frame_doc, plan_doc
 from backend.authoring.profile import VehicleProfile, profile_for
@@ -25,7 +26,7 @@ from backend.chart.reach import active_path_doc, add_geo, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
 from backend.commands.health import LinkHealth, link_health_of
 from backend.commands.manager import CommandManager
-from backend.commands.service import Assessment, CommandService, Violation
+from backend.commands.service import Assessment, CommandService
 from backend.mission_log.opening import open_checked
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
@@ -361,7 +362,7 @@ class Console:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
         enc, doc = self._preview(pattern, dict(params), show=False)
-        return Assessment(enc, tuple(_violation(v) for v in doc["violations"]))
+        return assessment_of(enc, doc["violations"])
 
     def _preview(
         self, pattern: str, params: dict[str, Any], *, show: bool, view: str | None = None
@@ -409,17 +410,3 @@ class Console:
             self.viewer.reset_track()
         self._show_active(None)
         return self.dive
-
-
-def _violation(v: Mapping[str, Any]) -> Violation:
-    """A violation of the preview document, as the command service takes it."""
-    return Violation(
-        check=str(v.get("check") or v["param"]),
-        param=str(v["param"]),
-        kind="soft" if v["overridable"] else "hard",
-        message=str(v["message"]),
-        value=v.get("value"),
-        limit=v.get("limit"),
-        unit=str(v.get("unit") or ""),
-        allowed=str(v.get("allowed") or ""),
-    )

@@ -15,21 +15,31 @@ import json
 import os
 import sys
 from collections.abc import Callable, Sequence
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from cli import contract as contract_cli
+from cli import send as send_cli
 from cli import sim as sim_cli
+from cli.common import (
+    EXIT_INTERNAL,
+    EXIT_OK,
+    EXIT_REJECTED,
+    EXIT_USAGE,
+    UsageError,
+    encoded_json,
+    parse_assignments,
+    positive_rate,
+    write_snaps,
+)
+from cli.send import cmd_send
 from codec import (
     DEFAULT_BITRATE_BPS,
     DICTIONARY,
     CodecError,
     Decoded,
     DecodeError,
-    Encoded,
     EncodeError,
-    Snap,
     airtime_s,
     decode_frame,
     describe_dictionary,
@@ -41,17 +51,7 @@ from codec._fields import fmt
 from onboard.agent import command_json
 
 if TYPE_CHECKING:
-    from station.transmit import SendResult
-
-EXIT_OK = 0
-EXIT_REJECTED = 1
-EXIT_USAGE = 2
-EXIT_INTERNAL = 70  # EX_SOFTWARE
-
-
-class UsageError(Exception):
-    """Bad command-line input; reported on stderr with exit status 2."""
-
+    pass
 
 # --- patterns -----------------------------------------------------------------------------
 
@@ -79,67 +79,15 @@ def cmd_patterns(args: argparse.Namespace, out: TextIO) -> int:
 # --- encode -------------------------------------------------------------------------------
 
 
-def _parse_assignments(items: Sequence[str]) -> dict[str, str]:
-    params: dict[str, str] = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        name = name.strip()
-        if not sep or not name:
-            raise UsageError(f"parameters are name=value, got {item!r}")
-        if name in params:
-            raise UsageError(f"parameter {name!r} given twice")
-        params[name] = value
-    return params
-
-
-def _positive_rate(text: str) -> float:
-    try:
-        rate = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"bit rate must be a number in b/s, got {text!r}"
-        ) from None
-    if not rate > 0 or rate == float("inf"):
-        raise argparse.ArgumentTypeError(f"bit rate must be a positive number in b/s, got {text}")
-    return rate
-
-
-def _number_or_text(value: object) -> object:
-    if isinstance(value, str):
-        try:
-            return float(value)
-        except ValueError:
-            return value
-    return value
-
-
-def _write_snaps(out: TextIO, snaps: Sequence[Snap]) -> None:
-    """One line per parameter: the value sent, and what was asked for if it was snapped."""
-    for snap in snaps:
-        sent = snap.sent if isinstance(snap.sent, str) else fmt(snap.sent)
-        unit = f" {snap.unit}" if snap.unit else ""
-        note = f"   (requested {snap.requested}{unit})" if snap.changed else ""
-        out.write(f"  {snap.field:<15} {sent}{unit}{note}\n")
-
-
-def _command_json(enc: Encoded) -> dict[str, Any]:
-    """The encoded command as JSON: pattern, values sent, values requested, what was snapped."""
-    return {
-        **command_json(enc.command),
-        "requested": {s.field: _number_or_text(s.requested) for s in enc.snaps},
-        "snapped": [str(s) for s in enc.snaps if s.changed],
-    }
-
-
 def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
-    enc = encode_frame(args.pattern, _parse_assignments(args.params))
+    enc = encode_frame(args.pattern, parse_assignments(args.params))
     cmd, frame = enc.command, enc.frame
     airtime_ms = airtime_s(args.bitrate) * 1e3
     bits = frame.bits
     secs = sections(cmd.pattern)
     if args.json:
         doc: dict[str, Any] = {
-            **_command_json(enc),
+            **encoded_json(enc),
             "units": {f.name: f.unit for f in cmd.pattern.fields},
             "bits": bits,
             "hex": frame.hex,
@@ -154,7 +102,7 @@ def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
         out.write("\n")
         return EXIT_OK
     out.write(f"{cmd.pattern.name} (ID {cmd.pattern.id})\n")
-    _write_snaps(out, enc.snaps)
+    write_snaps(out, enc.snaps)
     out.write(f"bits     {frame.grouped(cmd.pattern)}\n")
     for s in secs:
         out.write(f"  {s.name:<15} bits {s.start:>2}-{s.start + s.length - 1:<3} ")
@@ -213,111 +161,6 @@ def cmd_decode(args: argparse.Namespace, out: TextIO) -> int:
 
 
 # --- send ---------------------------------------------------------------------------------
-
-#: Where ``nemesys send`` transmits by default: the simulator's rosbridge (``nemesys sim``).
-#: Equal to ``station.transmit.DEFAULT_ROSBRIDGE_URL`` (not imported: it pulls in asyncio,
-#: websockets and pyserial, which the other subcommands don't need).
-DEFAULT_SEND_TO = "ws://127.0.0.1:9090"
-DEFAULT_SEND_TIMEOUT_S = 5.0
-
-
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"timeout must be seconds, got {text!r}") from None
-    if not 0 <= value < float("inf"):
-        raise argparse.ArgumentTypeError(f"timeout must be 0 or more seconds, got {text}")
-    return value
-
-
-def _utc(t: float) -> str:
-    return datetime.fromtimestamp(t, UTC).isoformat(timespec="milliseconds")
-
-
-def _command_text(command: object) -> str:
-    """An acknowledgement's ``command`` ({pattern, params}) as ``circle speed=0.5 m/s ...``."""
-    if not isinstance(command, dict):
-        return str(command)
-    try:
-        return encode_frame(command["pattern"], command["params"]).command.describe()
-    except (CodecError, KeyError, TypeError, ValueError):
-        params = command.get("params") or {}
-        words = [str(command.get("pattern"))]
-        words += [f"{k}={v}" for k, v in params.items()] if isinstance(params, dict) else []
-        return " ".join(words)
-
-
-def _ack_lines(result: SendResult) -> list[str]:
-    ack = result.ack or {}
-    seq = f"ack #{ack.get('seq')}"
-    if result.accepted:
-        note = ", already active: not replanned" if ack.get("duplicate") else ""
-        lines = [f"accepted {_command_text(ack.get('command'))}  ({seq}{note})"]
-        corrected = ack.get("corrected_bits")
-        bits = "bit" if corrected == 1 else "bits"
-        lines.append(f"         corrected {corrected} {bits}, sync errors {ack.get('sync_errors')}")
-        timing = [
-            f"{name} {value:.2f} ms"
-            for name in ("decode", "replan")
-            if isinstance(value := ack.get(f"{name}_latency_ms"), int | float)
-        ]
-        if isinstance(waypoints := ack.get("waypoints"), int):
-            timing.append(f"{waypoints} waypoints")
-        if timing:
-            lines.append("         " + ", ".join(timing))
-    else:
-        field = f" (field {ack['field']})" if ack.get("field") else ""
-        lines = [f"rejected {ack.get('reason')}{field}: {ack.get('detail')}  ({seq})"]
-    if result.ack_match != "exact":
-        lines.append(f"         {result.detail}")
-    return lines
-
-
-def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
-    from station.transmit import open_transmitter
-
-    try:
-        transmitter = open_transmitter(args.to, bitrate_bps=args.bitrate)
-    except ValueError as err:
-        raise UsageError(f"--to: {err}") from None
-    enc = encode_frame(args.pattern, _parse_assignments(args.params))
-    cmd, frame = enc.command, enc.frame
-    airtime_ms = airtime_s(args.bitrate) * 1e3
-    if not args.json:
-        out.write(f"send     {cmd.pattern.name} (ID {cmd.pattern.id}) to {args.to}\n")
-        _write_snaps(out, enc.snaps)
-        out.write(f"hex      {frame.hex}\n")
-        out.write(f"airtime  {airtime_ms:.3f} ms at {fmt(args.bitrate)} b/s\n")
-        out.flush()
-    with transmitter:
-        result = transmitter.send(frame, wait_ack_s=args.timeout)
-    if args.json:
-        doc: dict[str, Any] = {
-            **_command_json(enc),
-            "hex": frame.hex,
-            "bitrate_bps": args.bitrate,
-            "airtime_ms": airtime_ms,
-            "to": args.to,
-            **result.to_json(),
-        }
-        json.dump(doc, out)
-        out.write("\n")
-    elif result.sent_t is not None:
-        out.write(f"sent     {_utc(result.sent_t)} via {result.transport}\n")
-        if result.ack is not None:
-            out.write("\n".join(_ack_lines(result)) + "\n")
-        elif result.ok:
-            out.write(f"         {result.detail}\n")
-    if not result.ok:
-        print(f"nemesys send: failed: {result.reason}: {result.detail}", file=sys.stderr)
-        return EXIT_REJECTED
-    if result.accepted is False:
-        ack = result.ack or {}
-        print(f"nemesys send: rejected: {ack.get('reason')}: {ack.get('detail')}", file=sys.stderr)
-        return EXIT_REJECTED
-    return EXIT_OK
-
 
 # --- bench --------------------------------------------------------------------------------
 
@@ -417,7 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--bitrate",
-        type=_positive_rate,
+        type=positive_rate,
         default=float(DEFAULT_BITRATE_BPS),
         metavar="BPS",
         help=f"link bit rate for the airtime (default {DEFAULT_BITRATE_BPS})",
@@ -432,39 +275,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("frame", nargs="+", metavar="BITS", help="the frame, or - for stdin")
     p.add_argument("--json", action="store_true", help="machine-readable output")
 
-    p = sub.add_parser(
-        "send",
-        help="encode a command and transmit it to the vehicle",
-        description="Encode PATTERN (parameters as name=value, as for encode), transmit it to "
-        "--to and print the vehicle's acknowledgement when the target gives one. Exit status 0 "
-        "accepted (or sent, for targets without acknowledgements), 1 rejected, not sent or not "
-        "acknowledged in time, 2 bad input.",
-    )
-    p.add_argument("pattern", metavar="PATTERN", help=", ".join(DICTIONARY))
-    p.add_argument("params", nargs="*", metavar="name=value")
-    p.add_argument(
-        "--to",
-        default=DEFAULT_SEND_TO,
-        metavar="TARGET",
-        help="ws://host:port[/path] (rosbridge), serial:///dev/ttyUSB0[?baud=115200], "
-        f"tcp://host:port (modem gateway), loop:// (default {DEFAULT_SEND_TO})",
-    )
-    p.add_argument(
-        "--timeout",
-        type=_seconds,
-        default=DEFAULT_SEND_TIMEOUT_S,
-        metavar="S",
-        help="seconds to wait for the acknowledgement; 0 does not wait "
-        f"(default {DEFAULT_SEND_TIMEOUT_S:g})",
-    )
-    p.add_argument("--json", action="store_true", help="machine-readable output")
-    p.add_argument(
-        "--bitrate",
-        type=_positive_rate,
-        default=float(DEFAULT_BITRATE_BPS),
-        metavar="BPS",
-        help=f"link bit rate: airtime and the gap between frames (default {DEFAULT_BITRATE_BPS})",
-    )
+    send_cli.add_parser(sub)
 
     sim_cli.add_parsers(sub)
     _serve().add_parser(sub)

@@ -17,6 +17,7 @@ from analysis import ber, results, results_paper
 from analysis.ber import BerConfig
 from analysis.decode_spread import reruns
 from cli import main as cli
+from cli.common import EXIT_OK
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -131,7 +132,7 @@ def test_cli_results_passes_its_options(monkeypatch: pytest.MonkeyPatch, tmp_pat
     out = io.StringIO()
     md = tmp_path / "r.md"
     argv = ["results", "--quick", "--out", str(md), "--img-dir", str(tmp_path / "i")]
-    assert cli.main(argv, out) == cli.EXIT_OK
+    assert cli.main(argv, out) == EXIT_OK
     assert seen == {"out_md": md, "img_dir": tmp_path / "i", "quick": True}
     assert out.getvalue().strip() == str(md)
     args = cli.build_parser().parse_args(["results"])

@@ -11,7 +11,8 @@ from typing import Any
 
 import pytest
 
-from cli.main import EXIT_OK, EXIT_REJECTED, EXIT_USAGE, main
+from cli.common import EXIT_OK, EXIT_REJECTED, EXIT_USAGE
+from cli.main import main
 from codec import DICTIONARY, FRAME_BITS, decode_frame, encode_frame, markdown_tables
 
 SQUARE = ["square", "speed=0.5", "depth=2", "side_span=12.34", "direction=cw"]

@@ -16,22 +16,17 @@ from typing import Any
 
 import pytest
 
-from cli.main import (
-    DEFAULT_SEND_TIMEOUT_S,
-    DEFAULT_SEND_TO,
-    EXIT_OK,
-    EXIT_REJECTED,
-    EXIT_USAGE,
-    build_parser,
-    main,
-)
+from bench._gateway import FrameGateway
+from cli.common import EXIT_OK, EXIT_REJECTED, EXIT_USAGE
+from cli.main import build_parser, main
+from cli.send import DEFAULT_SEND_TIMEOUT_S, DEFAULT_SEND_TO
 from codec import FRAME_BYTES, GUARD_BITS, Frame, decode_frame, encode_frame
 from station.transmit import DEFAULT_ACK_TIMEOUT_S, DEFAULT_ROSBRIDGE_URL
 from tests.rosbridge.fake_rosbridge import FakeRosbridge, ack_for, mission
 from tests.rosbridge.helpers import free_port
 
-CIRCLE = ["circle", "speed=0.5", "depth=2", "radius=5.1", "direction=cw"]
-SENT = encode_frame("circle", speed=0.5, depth=2, radius=5.1, direction="cw")
+CIRCLE = ["circle", "speed=0.18", "depth=2", "radius=5.1", "direction=cw"]
+SENT = encode_frame("circle", speed=0.18, depth=2, radius=5.1, direction="cw")
 
 
 def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
@@ -121,7 +116,7 @@ def test_send_accepted_prints_the_acknowledgement(
     lines = out.splitlines()
     assert lines[0] == f"send     circle (ID 3) to {fake.url}"
     assert any(ln.startswith("sent     ") and ln.endswith("via rosbridge") for ln in lines)
-    assert "accepted circle speed=0.5 m/s depth=2 m radius=5 m direction=cw  (ack #1)" in lines
+    assert "accepted circle speed=0.18 m/s depth=2 m radius=5 m direction=cw  (ack #1)" in lines
     assert "         corrected 0 bits, sync errors 0" in lines
     assert lines[-1] == "         decode 0.25 ms, replan 3.50 ms, 12 waypoints"
 
@@ -308,3 +303,49 @@ def test_console_script_failure_is_one_line() -> None:
         f"nemesys send: failed: connection refused: {url}: Connection refused"
     ]
     assert proc.stdout.splitlines()[0] == f"send     circle (ID 3) to {url}"
+
+
+# --- the console's send policy, run in this process --------------------------------------------
+
+
+@pytest.fixture
+def modem() -> Iterator[FrameGateway]:
+    """A one-way TCP modem gateway on loopback that decodes every byte it is given."""
+    gateway = FrameGateway()
+    try:
+        yield gateway
+    finally:
+        gateway.close()
+
+
+def test_send_refuses_the_depth_rating_whatever_the_override(
+    capsys: pytest.CaptureFixture[str], modem: FrameGateway
+) -> None:
+    for extra in ([], ["--override"]):
+        argv = ["send", "straight", "speed=0.18", "depth=105", "heading=0", "duration=60"]
+        status, out, err = run([*argv, "--to", modem.target, "--timeout", "0", *extra], capsys)
+        assert status == EXIT_USAGE and "refused, nothing transmitted" in err
+        assert "depth" in err and "100 m" in err
+        assert out == ""
+    assert modem.connections == 0 and modem.count() == 0
+
+
+def test_send_needs_the_override_for_a_soft_violation(
+    capsys: pytest.CaptureFixture[str], modem: FrameGateway
+) -> None:
+    fast = ["send", "circle", "speed=0.5", "depth=2", "radius=5", "direction=cw"]
+    status, _out, err = run([*fast, "--to", modem.target, "--timeout", "0"], capsys)
+    assert status == EXIT_USAGE and "--override accepts it" in err and "top speed" in err
+    assert modem.count() == 0
+    status, out, err = run([*fast, "--to", modem.target, "--timeout", "0", "--override"], capsys)
+    assert status == EXIT_OK, err
+    assert any(line.startswith("override speed 0.5 m/s exceeds") for line in out.splitlines())
+    sent = encode_frame("circle", speed=0.5, depth=2, radius=5, direction="cw")
+    wait_for(lambda: modem.count(sent.frame.hex) == 1)
+
+
+def wait_for(probe: Any, timeout_s: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not probe():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.01)
