@@ -16,7 +16,7 @@ from collections.abc import Coroutine, Mapping
 from dataclasses import replace
 from typing import Any
 
-from backend.authoring.assess import assessment_of
+from backend.authoring.assess import assessment_of, violation_of
 from backend.authoring.predict import TwinWorker
 from backend.authoring.preview import frame_doc, plan_doc
 from backend.authoring.profile import VehicleProfile, profile_for
@@ -26,7 +26,7 @@ from backend.chart.reach import active_path_doc, add_geo, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
 from backend.commands.health import LinkHealth, link_health_of
 from backend.commands.manager import CommandManager
-from backend.commands.service import Assessment, CommandService
+from backend.commands.service import Assessment, CommandService, Violation
 from backend.mission_log.opening import open_checked
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
@@ -354,6 +354,13 @@ class Console:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
         return self._preview(pattern, params, show=show and view is not None, view=view)[1]
+
+    def plan_violations(self, new: Plan) -> tuple[Violation, ...]:
+        """The send policy's checks of a planned command (a mission script's step), with the
+        battery as it is now."""
+        soc = number((self.hub.status or {}).get("battery_pct"))
+        doc = plan_doc(new, None, self.limits, self.profile, soc)
+        return tuple(violation_of(v) for v in doc["violations"])
 
     def assess(self, pattern: str, params: Mapping[str, Any]) -> Assessment:
         """The checks of a send from where the vehicle is now (the command service's).

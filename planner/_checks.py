@@ -47,12 +47,15 @@ def top_speed(
     """The violation of a plan asking for more than the vehicle's top speed (m/s), or
     ``None`` (also when the top speed is unknown, or the plan never moves horizontally).
 
-    The speed is the command's ``speed``; a pattern without one (hover) is checked at the
-    fastest its path moves. Overridable: the vehicle flies it at top speed, only slower.
+    Only a commanded ``speed`` is checked: a pattern without one (hover's approach at the
+    planner's own pace) asks the operator for nothing to override, and the vehicle flies it
+    as fast as it can (the estimate's duration says how long). Overridable: the vehicle flies
+    a commanded speed above its top speed at top speed, only slower.
     """
-    from planner._estimate import estimate, planned_speed_mps
+    from planner._estimate import estimate
 
-    speed = planned_speed_mps(plan)
+    commanded = plan.command.params.get("speed")
+    speed = float(commanded) if isinstance(commanded, int | float) else None
     if top_speed_mps is None or speed is None or speed <= top_speed_mps:
         return None
     if est is None:  # the plan's estimate at the flyable speed, when not given

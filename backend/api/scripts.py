@@ -12,11 +12,20 @@ from fastapi.responses import JSONResponse, Response
 from pydantic import BaseModel, ConfigDict
 
 from backend.api.deps import ConsoleDep, OperatorDep
-from backend.api.schemas import OPERATOR, OnboardScript, RunState, errors
+from backend.api.schemas import (
+    OPERATOR,
+    ErrorDetail,
+    LimitViolationError,
+    OnboardScript,
+    RunState,
+    ValidationErrorResponse,
+    errors,
+)
 from backend.api.view import ViewHeader
 from backend.commands.service import SendRequest
 from backend.console import Console
 from backend.mission_log.store import FINAL_STATES
+from backend.scripts.checks import refuse_unsafe, step_violations
 from backend.scripts.operations import (
     MissionScript,
     ScriptError,
@@ -28,6 +37,7 @@ from backend.scripts.operations import (
     onboard_csv,
     preview,
 )
+from planner import Plan
 
 router = APIRouter(prefix="/api/scripts", tags=["scripts"])
 
@@ -73,7 +83,7 @@ def script_preview(
     drawn in the caller's own 3D view (``X-Nemesys-View``)."""
     mirror = console.commands.mirror if console.commands else None
     try:
-        doc = preview(script, console.vehicle_state(), mirror)
+        doc = preview(script, console.vehicle_state(), mirror, console.plan_violations)
     except ScriptError as err:
         raise _plan_error(err) from None
     if console.viewer is not None:
@@ -90,7 +100,14 @@ def script_preview(
     "/export",
     response_class=Response,
     responses={
-        **errors((413, 422)),
+        **errors(
+            (409, 413, 422),
+            models={409: LimitViolationError, 422: ValidationErrorResponse | LimitViolationError},
+            why={
+                409: "a step breaks an overridable limit without its override",
+                422: "invalid script, or a step breaks a limit no operator can override",
+            },
+        ),
         200: {
             "description": "the onboard script: JSON (format=json) or CSV t_s,pattern,hex "
             "(format=csv), as an attachment",
@@ -105,6 +122,7 @@ def script_export(
     """The onboard script the paper's field trials used: a timed list of frames."""
     mirror = console.commands.mirror if console.commands else None
     name = "".join(c if c.isalnum() else "-" for c in script.name)
+    _refuse_unsafe(console, script, mirror)
     try:
         if format == "csv":
             return Response(
@@ -118,6 +136,15 @@ def script_export(
     return JSONResponse(
         doc, headers={"Content-Disposition": f'attachment; filename="{name}-onboard.json"'}
     )
+
+
+def _refuse_unsafe(console: Console, script: MissionScript, mirror: Plan | None) -> None:
+    """The send policy on the whole script (LimitRefused 422 / OverrideNeeded 409)."""
+    try:
+        expanded = expand(script, console.vehicle_state(), mirror)
+    except ScriptError as err:
+        raise _plan_error(err) from None
+    refuse_unsafe(script, step_violations(expanded, console.plan_violations))
 
 
 def _state(console: Console) -> dict[str, Any]:
@@ -134,7 +161,18 @@ def run_state(console: ConsoleDep) -> dict[str, Any]:
 @router.post(
     "/run",
     response_model=RunState,
-    responses=errors((*OPERATOR, 409, 413, 422), why={409: "a script is already running"}),
+    responses=errors(
+        (*OPERATOR, 409, 413, 422),
+        models={
+            409: LimitViolationError | ErrorDetail,
+            422: ValidationErrorResponse | LimitViolationError,
+        },
+        why={
+            409: "a script is already running, or a step breaks an overridable limit "
+            "without its override",
+            422: "invalid script, or a step breaks a limit no operator can override",
+        },
+    ),
 )
 async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
     """Run a script against the vehicle: ``auto`` sends each step at its trigger; ``step``
@@ -148,6 +186,7 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, A
         raise HTTPException(
             422, [{**e, "loc": ["body", "script", *e["loc"]]} for e in err.errors()]
         ) from None
+    refuse_unsafe(body.script, step_violations(expanded, console.plan_violations))
     console.runner = ScriptRunner.planned(
         body.script, expanded, body.mode, clock=run_clock(console)
     )

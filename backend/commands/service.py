@@ -48,6 +48,7 @@ class Violation:
         message: a sentence for the operator.
         value, limit, unit: the figure and the limit it breaks (``limit`` None: see message).
         allowed: what is allowed, in words (e.g. "0 to 100 m").
+        step: the mission script's step it belongs to (0-based), when a script was checked.
     """
 
     check: str
@@ -58,9 +59,12 @@ class Violation:
     limit: float | None = None
     unit: str = ""
     allowed: str = ""
+    #: The mission script's step it belongs to (0-based), when a script was checked.
+    step: int | None = None
 
     def as_json(self) -> dict[str, Any]:
         return {
+            "step": self.step,
             "check": self.check,
             "param": self.param,
             "kind": self.kind,

@@ -10,9 +10,13 @@ when each step takes effect and when a finite one completes (the completion rule
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
+from typing import Literal
 
 from pydantic import BaseModel, Field
 
+from backend.commands.service import Violation
+from backend.scripts.checks import PlanCheck, step_violations, step_warning
 from backend.scripts.expand import ExpandedStep, describe_trigger, expand
 from backend.scripts.model import MissionScript, Trigger
 from planner import Path, Plan, VehicleState
@@ -42,6 +46,20 @@ class StartPose(BaseModel):
     t_s: float
 
 
+class StepViolation(BaseModel):
+    """A limit the step breaks, from where the expansion has the vehicle then: ``hard``
+    refuses the script; ``soft`` needs the step's ``override``."""
+
+    check: str
+    param: str
+    kind: Literal["hard", "soft"]
+    message: str
+    value: float | None
+    limit: float | None
+    unit: str
+    allowed: str
+
+
 class StepPreview(BaseModel):
     index: int
     pattern: str
@@ -62,6 +80,10 @@ class StepPreview(BaseModel):
     waypoints: int
     start: StartPose
     warnings: list[str]
+    violations: list[StepViolation] = Field(
+        default_factory=list, description="the send policy's checks of this step"
+    )
+    override: bool = Field(False, description="the step's override of soft violations")
 
 
 class PreviewPath(BaseModel):
@@ -244,7 +266,7 @@ def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
     return events
 
 
-def _step_preview(s: ExpandedStep, t0_abs_s: float) -> StepPreview:
+def _step_preview(s: ExpandedStep, t0_abs_s: float, violations: Sequence[Violation]) -> StepPreview:
     enc = s.encoded
     return StepPreview(
         index=s.index,
@@ -268,17 +290,25 @@ def _step_preview(s: ExpandedStep, t0_abs_s: float) -> StepPreview:
         waypoints=len(s.plan.path),
         start=StartPose.model_validate({**s.state.as_dict(), "t_s": s.state.t_s - t0_abs_s}),
         warnings=list(s.warnings),
+        violations=[
+            StepViolation.model_validate(v.as_json()) for v in violations if v.step == s.index
+        ],
+        override=s.step.override,
     )
 
 
 def preview(
-    script: MissionScript, start: VehicleState, current: Plan | None = None
+    script: MissionScript,
+    start: VehicleState,
+    current: Plan | None = None,
+    check: PlanCheck | None = None,
 ) -> ScriptPreview:
     """Expand ``script`` from ``start`` (see :func:`expand`) into the operator's preview.
 
     Each step's values are the decoded frame's (snapped); its path starts where the previous
     step has the vehicle when it triggers. ``duration_s`` runs to the end of the last plan
-    (one lap when it repeats, ``path.repeats``).
+    (one lap when it repeats, ``path.repeats``). With ``check`` (the send policy's checks),
+    every step lists its violations, and the warnings name them.
 
     Raises:
         ScriptError: the planner cannot expand a step.
@@ -286,9 +316,11 @@ def preview(
     expanded = expand(script, start, current)
     last = expanded[-1]
     warnings = [f"step {s.index + 1}: {w}" for s in expanded for w in s.warnings]
+    found = step_violations(expanded, check) if check is not None else []
+    warnings += [step_warning(v) for v in found]
     return ScriptPreview(
         name=script.name,
-        steps=[_step_preview(s, start.t_s) for s in expanded],
+        steps=[_step_preview(s, start.t_s, found) for s in expanded],
         path=_combined_path(expanded, start, current),
         duration_s=last.t_start_s + last.duration_s,
         timeline=_timeline(expanded),

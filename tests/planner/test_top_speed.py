@@ -8,10 +8,11 @@ from itertools import pairwise
 
 import pytest
 
-from codec import DICTIONARY, make_command
+from codec import DICTIONARY, encode_frame, make_command
 from planner import Plan, VehicleState, compare, estimate, plan
 from planner._estimate import flyable_times, planned_speed_mps
 from planner._limits import top_speed
+from planner._plan import HOVER_APPROACH_MPS
 
 #: Level with the patterns' depth and facing north: a straight north is one segment.
 LEVEL = VehicleState(0.0, 0.0, 2.0, 0.0)
@@ -52,10 +53,16 @@ def test_an_unknown_top_speed_checks_nothing() -> None:
     assert top_speed(p, None) is None
 
 
-def test_patterns_without_a_speed_use_their_paths_own() -> None:
+def test_patterns_without_a_speed_are_not_checked() -> None:
     hover = planned("hover", duration=30, depth=3, heading=0)
     assert planned_speed_mps(hover) is None
     assert top_speed(hover, 0.05) is None
+    # a hover with an approach (the planner's 0.2 m/s) asks the operator for nothing
+    away = plan(
+        encode_frame("hover", {"duration": 30, "depth": 3, "heading": 0}).command,
+        VehicleState(20.0, 0.0, 3.0),
+    )
+    assert top_speed(away, HOVER_APPROACH_MPS / 2) is None
     surface = planned("surface")
     assert top_speed(surface, 0.01) is None
 

@@ -51,3 +51,4 @@ class LimitViolation(BaseModel):
     message: str
     overridable: bool
     allowed: str = Field("", description="what is allowed, in words")
+    step: int | None = Field(None, description="a mission script's step (0-based), if any")
