@@ -14,8 +14,8 @@ from bench._gateway import FrameGateway
 from tests.backend.conftest import AUTH, MakeClient, wait_until
 from tests.backend.scripts.test_scripts import HOVER, doc, step
 
-DEEP = {"speed": 0.18, "depth": 105, "duration": 40, "heading": 90}
-FAST = {"speed": 0.5, "depth": 2, "duration": 40, "heading": 90}
+DEEP: dict[str, float | str] = {"speed": 0.18, "depth": 105, "duration": 40, "heading": 90}
+FAST: dict[str, float | str] = {"speed": 0.5, "depth": 2, "duration": 40, "heading": 90}
 
 
 @pytest.fixture
