@@ -364,8 +364,11 @@ class Console:
         new = plan(cmd, state, current)
         path = new.path
         soc = number((self.hub.status or {}).get("battery_pct"))
-        doc.update(plan_doc(new, current, self.limits, self.profile, soc))
-        add_geo(doc, self.datum, self.station(), self.settings.me_range_m)  # lat/lon, reach
+        station, range_m = self.station(), self.settings.me_range_m
+        doc.update(
+            plan_doc(new, current, self.limits, self.profile, soc, station=station, range_m=range_m)
+        )
+        add_geo(doc, self.datum, station, range_m)  # lat/lon, the chart's reach
         doc["from"] = state.as_dict()
         if self.commands is not None:
             # what sending it now would do: copies chosen from the link, and their odds
