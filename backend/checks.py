@@ -19,7 +19,9 @@ The checks, in the report's order:
   pattern the duration is the join and one lap: the first lap is never finished otherwise;
 * ``geofence``: the path leaving the geofence (soft);
 * ``reach``: the path going farther from the ME transmitter than the link's range (soft:
-  the next retask could not reach the vehicle there).
+  the next retask could not reach the vehicle there);
+* ``onboard_limit``: only when :func:`planner.validate` reports a violation none of the
+  checks above names (a limit added to the planner later): never dropped unnamed.
 
 Surface is never held back for the battery or the link's reach: it is what an empty battery
 or a vehicle out of range calls for, and its path only rises from where the vehicle is.
@@ -52,6 +54,7 @@ CheckName = Literal[
     "endurance",
     "geofence",
     "reach",
+    "onboard_limit",
 ]
 
 _DEPTH_PARAMS: Final = ("depth", "start_depth", "end_depth")
@@ -162,6 +165,15 @@ def check_plan(
         _geofence(plan, limits),
         _reach(plan, station, range_m),
     ]
+    claimed = {*_DEPTH_PARAMS, "speed"} | ({"radius"} if plan.pattern in _ROUND_PATTERNS else set())
+    other = tuple(
+        _violation(v, "onboard_limit", "within the vehicle's limits")
+        for v in found
+        if v.param not in claimed
+    )
+    if other:
+        detail = "; ".join(v.message for v in other)
+        results.append((CheckLine("onboard_limit", "violated", detail), other))
     return CheckReport(
         tuple(line for line, _ in results), tuple(v for _, vs in results for v in vs)
     )

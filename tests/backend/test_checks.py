@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
+from backend import checks
 from backend.checks import CheckReport, check_plan
 from backend.gps import Station
 from backend.preview import plan_doc
@@ -21,7 +22,16 @@ from backend.profile import (
     twin_profile,
 )
 from codec import decode_frame, encode_frame
-from planner import CircleFence, Limits, Plan, VehicleState, estimate, plan, turn_radius_m
+from planner import (
+    CircleFence,
+    Limits,
+    Plan,
+    VehicleState,
+    Violation,
+    estimate,
+    plan,
+    turn_radius_m,
+)
 from sim_bridge.environment import SOC_FAST_PCT, SOC_FAST_TAU_H, SOC_LINEAR_PCT_PER_H, BatteryConfig
 from sim_bridge.model import VehicleParams
 
@@ -186,6 +196,20 @@ def test_a_circle_tighter_than_the_vehicle_turns_is_soft() -> None:
     assert "turn_radius" not in status(
         run(planned("straight", {"speed": 0.18, "depth": 2, "duration": 60, "heading": 0}))
     )
+
+
+def test_a_limit_no_check_names_is_never_dropped(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A violation the planner's validate adds later (here ``laps``) still stops the send."""
+    p = planned(
+        "lawnmower", {"speed": 0.18, "depth": 2, "sweep_length": 10, "lane_spacing": 2, "laps": 2}
+    )
+    assert "onboard_limit" not in status(run(p))
+    extra = Violation("laps", 2.0, 1.0, "", "laps 2 is more than 1")
+    monkeypatch.setattr(checks, "validate", lambda plan, limits: (extra,))
+    report = run(p)
+    (v,) = report.violations
+    assert (v.check, v.param, v.kind, v.message) == ("onboard_limit", "laps", "soft", extra.message)
+    assert status(report)["onboard_limit"] == "violated"
 
 
 def test_geofence_is_soft_and_named() -> None:
