@@ -16,7 +16,6 @@ from collections.abc import Coroutine, Mapping
 from dataclasses import replace
 from typing import Any
 
-from backend.authoring.assess import assessment_of, violation_of
 from backend.authoring.predict import TwinWorker
 from backend.authoring.preview import frame_doc, plan_doc
 from backend.authoring.profile import VehicleProfile, profile_for
@@ -24,9 +23,10 @@ from backend.chart.geo import Datum, initial_datum
 from backend.chart.gps import GpsFix, GpsReader, Station, parse_gps, station_of
 from backend.chart.reach import active_path_doc, add_geo, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
+from backend.commands.checks import CheckReport, SendViolation, check_plan
 from backend.commands.health import LinkHealth, link_health_of
 from backend.commands.manager import CommandManager
-from backend.commands.service import Assessment, CommandService, Violation
+from backend.commands.service import Assessment, CommandService
 from backend.mission_log.opening import open_checked
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
@@ -355,12 +355,10 @@ class Console:
         """
         return self._preview(pattern, params, show=show and view is not None, view=view)[1]
 
-    def plan_violations(self, new: Plan) -> tuple[Violation, ...]:
+    def plan_violations(self, new: Plan) -> tuple[SendViolation, ...]:
         """The send policy's checks of a planned command (a mission script's step), with the
         battery as it is now."""
-        soc = number((self.hub.status or {}).get("battery_pct"))
-        doc = plan_doc(new, None, self.limits, self.profile, soc)
-        return tuple(violation_of(v) for v in doc["violations"])
+        return self._report(new).violations
 
     def assess(self, pattern: str, params: Mapping[str, Any]) -> Assessment:
         """The checks of a send from where the vehicle is now (the command service's).
@@ -368,8 +366,21 @@ class Console:
         Raises:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
-        enc, doc = self._preview(pattern, dict(params), show=False)
-        return assessment_of(enc, doc["violations"])
+        enc = encode_frame(pattern, dict(params))
+        cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
+        current = self.commands.mirror if self.commands else None
+        report = self._report(plan(cmd, self.vehicle_state(), current))
+        return Assessment(enc, report.violations, report.lines)
+
+    def _report(self, new: Plan) -> CheckReport:
+        return check_plan(
+            new,
+            limits=self.limits,
+            profile=self.profile,
+            soc_pct=number((self.hub.status or {}).get("battery_pct")),
+            station=self.station(),
+            range_m=self.settings.me_range_m,
+        )
 
     def _preview(
         self, pattern: str, params: dict[str, Any], *, show: bool, view: str | None = None
@@ -381,8 +392,11 @@ class Console:
         new = plan(cmd, state, current)
         path = new.path
         soc = number((self.hub.status or {}).get("battery_pct"))
-        doc.update(plan_doc(new, current, self.limits, self.profile, soc))
-        add_geo(doc, self.datum, self.station(), self.settings.me_range_m)  # lat/lon, reach
+        station, range_m = self.station(), self.settings.me_range_m
+        doc.update(
+            plan_doc(new, current, self.limits, self.profile, soc, station=station, range_m=range_m)
+        )
+        add_geo(doc, self.datum, station, range_m)  # lat/lon, the chart's reach
         doc["from"] = state.as_dict()
         if self.commands is not None:
             # what sending it now would do: copies chosen from the link, and their odds

@@ -5,6 +5,7 @@ import { api, ApiError } from "./api.js";
 import { initCopies, readCopies, copiesLine } from "./copies.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
 import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite, emit, latLon } from "./ui.js";
+import { confirmChecks, isHard, kindText, skippedTitle, withinLimits } from "./checks.js";
 
 const state = {
   form: null,
@@ -123,7 +124,7 @@ function renderPreview(r) {
   state.form.setSnaps(r.snaps);
   state.form.setErrors(new Map());
   state.form.setWarnings(new Set(violations.map((v) => v.param)));
-  renderChecks(violations.map(violationItem), violations.length ? "" : "within limits");
+  renderChecks(violations.map(violationItem), violations.length ? "" : withinLimits(r), skippedTitle(r));
 }
 
 function renderPreviewError(err) {
@@ -141,19 +142,36 @@ function renderPreviewError(err) {
 
 function violationItem(v) {
   const unit = v.unit || unitOf(state.pattern, v.param);
-  const facts = v.limit !== undefined ? ` (${withUnit(v.value, unit)}, limit ${withUnit(v.limit, unit)})` : "";
+  const facts = v.allowed ? ` (allowed: ${v.allowed})`
+    : v.limit !== undefined ? ` (${withUnit(v.value, unit)}, limit ${withUnit(v.limit, unit)})` : "";
+  const hard = isHard(v);
   return {
     param: v.param,
-    kind: v.overridable ? "warn" : "error",
+    kind: hard ? "error" : "warn",
     // the planner's message usually names the parameter itself ("depth = 150 m ..."): once
-    text: `${v.message && v.message.startsWith(v.param) ? "" : `${v.param}: `}${v.message || "outside the limits"}${facts}${v.overridable ? " [overridable]" : ""}`,
+    text: `${v.message && v.message.startsWith(v.param) ? "" : `${v.param}: `}${v.message || "outside the limits"}${facts} [${kindText(hard)}]`,
   };
 }
 
-function renderChecks(items, okText) {
+/** A repeating pattern has no end, so no total duration: its one lap instead. */
+function durationText(e) {
+  if (!e.repeats) return withUnit(e.duration_s, "s", 1);
+  const lap = Number(e.lap_duration_s);
+  return `repeats until retasked (one lap ${Number.isFinite(lap) ? Math.round(lap).toLocaleString("en-US") : "unknown"} s)`;
+}
+
+/** One estimate row; for a repeating pattern the duration spans the row, and the length and
+ *  battery use say on hover that they are the join and one lap. */
+function estimateRow(e, key, value) {
+  const lap = e.repeats && (key === "length" || key === "battery use");
+  return el("div", { dataset: { key }, class: e.repeats && key === "duration" ? "wide" : null, title: lap ? "the join and one lap" : null },
+    el("dt", {}, key), el("dd", {}, value));
+}
+
+function renderChecks(items, okText, okTitle) {
   const list = $("violations");
   if (!items.length) {
-    list.replaceChildren(el("li", { class: "ok" }, okText || "–"));
+    list.replaceChildren(el("li", { class: "ok", title: okTitle || null }, okText || "–"));
     return;
   }
   list.replaceChildren(...items.map((i) => el("li", { class: i.kind, dataset: { param: i.param || "" } }, i.text)));
@@ -168,12 +186,12 @@ function renderEstimates(e) {
   const depth = e.depth_min_m == null ? "–" : `${num(e.depth_min_m, 2)} to ${num(e.depth_max_m, 2)} m`;
   const rows = [
     ["length", withUnit(e.length_m, "m", 1)],
-    ["duration", e.duration_s == null ? "repeats (no end)" : withUnit(e.duration_s, "s", 1)],
+    ["duration", durationText(e)],
     ["battery use", withUnit(e.battery_pct, "%", 2)],
     ["depth range", depth],
     ["join", `${withUnit(e.join_length_m, "m", 1)}, ${withUnit(e.join_duration_s, "s", 1)}`],
   ];
-  box.replaceChildren(...rows.map(([k, v]) => el("div", { dataset: { key: k } }, el("dt", {}, k), el("dd", {}, v))));
+  box.replaceChildren(...rows.map(([k, v]) => estimateRow(e, k, v)));
 }
 
 // ---- the confirm step ----
@@ -228,12 +246,9 @@ function renderConfirm(preview, command) {
     }
     parts.push(el("p", { class: "hint" }, `frame ${preview.hex || "–"}, ${num(preview.airtime_ms, 3)} ms on air`));
     const violations = Array.isArray(preview.violations) ? preview.violations : [];
-    if (violations.length) {
-      parts.push(el("ul", { class: "violations", testid: "confirm-violations" },
-        ...violations.map(violationItem).map((i) => el("li", { class: i.kind }, i.text))));
-    }
-    overrideBox.hidden = !violations.some((v) => v.overridable);
-    body.dataset.hard = violations.some((v) => !v.overridable) ? "1" : "0";
+    parts.push(...confirmChecks(preview, violations));
+    overrideBox.hidden = !violations.some((v) => !isHard(v));
+    body.dataset.hard = violations.some(isHard) ? "1" : "0";
   }
   parts.push(copiesLine(preview));
   $("confirm-title").textContent = `Send ${command.pattern}?`;
@@ -254,14 +269,14 @@ function firstCommand(preview) {
 function confirmEstimates(preview) {
   const e = preview.estimate || {};
   const rows = [
-    ["duration", e.duration_s == null ? "repeats (no end)" : withUnit(e.duration_s, "s", 1)],
+    ["duration", durationText(e)],
     ["length", withUnit(e.length_m, "m", 1)],
     ["depth range", e.depth_min_m == null ? "unknown" : `${num(e.depth_min_m, 2)} to ${num(e.depth_max_m, 2)} m`],
     ["battery use", withUnit(e.battery_pct, "%", 2)],
   ];
   // the copies and p(delivered): the line below (copies.js copiesLine), once
   return el("dl", { class: "kv estimates confirm-estimates", testid: "confirm-estimates" },
-    ...rows.map(([k, v]) => el("div", { dataset: { key: k } }, el("dt", {}, k), el("dd", {}, v))));
+    ...rows.map(([k, v]) => estimateRow(e, k, v)));
 }
 
 function changeText(c, pattern) {

@@ -8,10 +8,11 @@ from __future__ import annotations
 from typing import Any
 
 from backend.authoring.profile import VehicleProfile, battery_use_pct
+from backend.chart.gps import Station
+from backend.commands.checks import check_plan
 from codec import FRAME_BITS, Encoded, airtime_s, sections
 from onboard.agent import command_json
-from planner import Limits, Plan, compare, estimate, validate
-from planner._limits import top_speed
+from planner import Limits, Plan, compare, estimate
 
 
 def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
@@ -55,23 +56,32 @@ def plan_doc(
     limits: Limits,
     profile: VehicleProfile | None = None,
     soc_pct: float | None = None,
+    *,
+    station: Station | None = None,
+    range_m: float | None = None,
 ) -> dict[str, Any]:
-    """The plan: path (NED, m; arrival times, s), estimates, violations, diff from ``current``.
+    """The plan: path (NED, m; arrival times, s), estimates, the checks (every check's line
+    and every violation, :func:`backend.commands.checks.check_plan`), diff from ``current``.
 
     With the vehicle's ``profile``, durations are at the speed it can fly (the planned ones
-    beside them), a speed above its top speed is a violation, and the checks its unknown
-    figures prevent are listed; the battery use starts from ``soc_pct`` (None: full).
+    beside them), a speed above its top speed and a path longer than the battery lasts from
+    ``soc_pct`` (None: full) are violations, and the checks its unknown figures prevent are
+    listed; the battery use starts from ``soc_pct``. With the ME transmitter's ``station``
+    and the link's ``range_m``, a path leaving the range is a violation.
     """
     top = profile.top_speed_mps if profile is not None else None
     heave = profile.heave_rate_mps if profile is not None else None
     est = estimate(new, top, heave)
     path = new.path
-    violations = list(validate(new, limits))
-    # below the maximum speed only: above it the vehicle refuses the command onboard, so it
-    # would not fly it at top speed either (the maximum's violation says enough)
-    too_fast = None if any(v.param == "speed" for v in violations) else top_speed(new, top, est)
-    if too_fast is not None:
-        violations.append(too_fast)
+    report = check_plan(
+        new,
+        limits=limits,
+        profile=profile,
+        soc_pct=soc_pct,
+        station=station,
+        range_m=range_m,
+        estimate=est,
+    )
     diff = None
     if current is not None:
         d = compare(current, new, top, heave)
@@ -98,19 +108,16 @@ def plan_doc(
             **{k: v for k, v in est.as_dict().items() if isinstance(v, int | float | None)},
             "join_length_m": est.transit_length_m,
             "join_duration_s": est.transit_duration_s,
+            # a repeating pattern flies until retasked: its duration is the join and one lap,
+            # never a total
+            "repeats": est.repeats,
             # the whole battery fit, from the charge now, over the flyable duration
             "battery_pct": battery_use_pct(est.duration_s, soc_pct),
         },
-        "violations": [
-            {
-                "param": v.param,
-                "value": v.value,
-                "limit": v.limit,
-                "unit": v.unit,
-                "message": v.message,
-                "overridable": v.overridable,
-            }
-            for v in violations
+        "violations": [v.as_json() for v in report.violations],
+        "checks": [
+            {"check": line.check, "status": line.status, "detail": line.detail}
+            for line in report.lines
         ],
         "skipped_checks": profile.skipped_checks() if profile is not None else [],
         "diff": diff,

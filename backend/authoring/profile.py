@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Literal
+from typing import Final, Literal
 
 from backend.settings import Settings
 from sim.environment import (
@@ -61,18 +61,24 @@ class VehicleProfile:
 
     def skipped_checks(self) -> list[str]:
         """What cannot be checked or estimated for lack of a figure, in words."""
-        out = []
-        if self.top_speed_mps is None:
-            out.append(
-                "top speed unknown (setting top_speed_mps): speeds are not checked against "
-                "it and durations are at the commanded speed"
-            )
-        if self.heave_rate_mps is None:
-            out.append(
-                "heave rate unknown (setting heave_rate_mps): depth changes are timed at the "
-                "planner's rates"
-            )
-        return out
+        return [why for figure, why in UNKNOWN.items() if getattr(self, figure) is None]
+
+
+#: What an unknown figure of the profile prevents, by figure, in words (the preview's
+#: ``skipped_checks``, the send checks' skipped lines).
+UNKNOWN: Final[dict[str, str]] = {
+    "top_speed_mps": (
+        "top speed unknown (setting top_speed_mps): speeds are not checked against it and "
+        "durations are at the commanded speed"
+    ),
+    "heave_rate_mps": (
+        "heave rate unknown (setting heave_rate_mps): depth changes are timed at the planner's "
+        "rates"
+    ),
+    "endurance_s": (
+        "endurance unknown (setting endurance_s): durations are not checked against the battery"
+    ),
+}
 
 
 def top_speed_mps(params: VehicleParams) -> float:
@@ -188,3 +194,34 @@ def battery_use_pct(duration_s: float, soc_pct: float | None = None) -> float:
     nominal load, from a battery now at ``soc_pct`` (``None``: full, the dearest case)."""
     t0 = 0.0 if soc_pct is None else hours_run(soc_pct)
     return paper_soc_pct(t0) - paper_soc_pct(t0 + max(0.0, duration_s) / 3600.0)
+
+
+def endurance_left_s(endurance_s: float, soc_pct: float | None, cutoff_pct: float = 0.0) -> float:
+    """Time left at cruise (s) from a battery now at ``soc_pct`` (%; None: full), for a vehicle
+    whose full battery lasts ``endurance_s`` at cruise down to ``cutoff_pct``.
+
+    The fit's shape (:func:`endurance_s`): its linear term set so that a full battery reaches
+    the cut-off at ``endurance_s`` (for the twin, exactly the cruise load the figure was found
+    at; for a setting's figure, the load it implies), less the time that shape takes to fall
+    from 100 % to ``soc_pct``. The fit's fast initial term is spent first: half the charge
+    left is less than half the endurance.
+    """
+    if soc_pct is None or soc_pct >= 100.0:
+        return endurance_s
+    if soc_pct <= cutoff_pct or endurance_s <= 0.0:
+        return 0.0
+    total_h = endurance_s / 3600.0
+    fast_pct = SOC_FAST_PCT * -math.expm1(-total_h / SOC_FAST_TAU_H)
+    linear_pct_per_h = max(0.0, (100.0 - cutoff_pct - fast_pct) / total_h)
+
+    def soc(t_h: float) -> float:
+        return 100.0 - linear_pct_per_h * t_h - SOC_FAST_PCT * -math.expm1(-t_h / SOC_FAST_TAU_H)
+
+    lo, hi = 0.0, total_h
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        if soc(mid) > soc_pct:
+            lo = mid
+        else:
+            hi = mid
+    return max(0.0, endurance_s - (lo + hi) / 2 * 3600.0)

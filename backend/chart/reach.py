@@ -7,8 +7,9 @@ range from the transmitter (at the surface, the station's NED position) to the w
 are segments of waypoint indices. Between two waypoints the range is largest at one of
 them (the distance to a point is convex along a straight leg), so the worst class over the
 waypoints is the worst along the path. A path that leaves range gets a warning in words:
-a command sent while the vehicle is out there would not reach it. It is a warning, not a
-limit violation: the operator may mean it (a Surface still works once it is back).
+a command sent while the vehicle is out there would not reach it. The send checks
+(:mod:`backend.commands.checks`) make it an overridable violation from the same distances: the
+operator may mean it (a Surface still works once it is back).
 
 Lat/lon: every conversion goes through :mod:`backend.chart.geo`, a whole path in one call.
 """
@@ -19,6 +20,7 @@ from collections.abc import Sequence
 from typing import Any, Final, Literal
 
 import numpy as np
+import numpy.typing as npt
 
 from backend.chart.geo import Datum, ned_to_geodetic
 from backend.chart.gps import Station
@@ -84,6 +86,31 @@ def track_lat_lon(track: list[dict[str, Any]], datum: Datum | None) -> list[dict
     return track
 
 
+def distances_m(
+    xs: Sequence[float], ys: Sequence[float], zs: Sequence[float], station: Station
+) -> npt.NDArray[np.float64] | None:
+    """Every waypoint's slant range from the transmitter (m); None when the station's NED
+    position is not known (its lat/lon is, but there is no datum to place it) or a distance is
+    not finite (a vehicle reporting 1e200 m)."""
+    if station.x_m is None or station.y_m is None:
+        return None
+    dx = np.asarray(xs, dtype=np.float64) - station.x_m
+    dy = np.asarray(ys, dtype=np.float64) - station.y_m
+    dz = np.asarray(zs, dtype=np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        distance = np.sqrt(dx * dx + dy * dy + dz * dz)
+    return distance if np.isfinite(distance).all() else None
+
+
+def out_of_range_message(farthest_m: float, range_m: float) -> str:
+    """The sentence for a path that leaves the ME range (the chart's warning, the check's
+    violation: one wording)."""
+    return (
+        f"the path goes {farthest_m:,.0f} m from the transmitter, beyond the ME link's "
+        f"{range_m:,.0f} m range: the next retask could not reach the vehicle there"
+    )
+
+
 def link_reach(
     xs: Sequence[float],
     ys: Sequence[float],
@@ -93,16 +120,10 @@ def link_reach(
 ) -> dict[str, Any] | None:
     """The path's reach from the transmitter; None when the station's NED position is not
     known (its lat/lon is, but there is no datum to place it) or a distance is not finite."""
-    if station.x_m is None or station.y_m is None:
+    distance = distances_m(xs, ys, zs, station)
+    if distance is None:
         return None
     marginal_m = MARGINAL_FRACTION * range_m
-    dx = np.asarray(xs, dtype=np.float64) - station.x_m
-    dy = np.asarray(ys, dtype=np.float64) - station.y_m
-    dz = np.asarray(zs, dtype=np.float64)
-    with np.errstate(over="ignore", invalid="ignore"):
-        distance = np.sqrt(dx * dx + dy * dy + dz * dz)
-    if not np.isfinite(distance).all():
-        return None  # a position no number can measure (a vehicle reporting 1e200 m)
     classes = (distance > marginal_m).astype(np.int8) + (distance > range_m).astype(np.int8)
     segments: list[dict[str, Any]] = []
     if classes.size:
@@ -115,12 +136,7 @@ def link_reach(
         ]
     worst = int(classes.max()) if classes.size else 0
     farthest = float(distance.max()) if distance.size else 0.0
-    warning = None
-    if worst == 2:
-        warning = (
-            f"the path goes {farthest:.0f} m from the transmitter, beyond the {range_m:.0f} m "
-            "ME range: the next retask could not reach the vehicle there"
-        )
+    warning = out_of_range_message(farthest, range_m) if worst == 2 else None
     return {
         "range_m": range_m,
         "marginal_m": marginal_m,

@@ -27,6 +27,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
+from backend.commands.checks import CheckLine, SendViolation
 from backend.commands.lifecycle import RETRYABLE
 from backend.commands.manager import CommandManager
 from codec import Encoded, encode_frame
@@ -37,59 +38,20 @@ ORIGINS: tuple[Origin, ...] = ("api", "ws", "surface", "retry", "script", "scena
 
 
 @dataclass(frozen=True)
-class Violation:
-    """One broken rule of a send, as the checks found it.
-
-    Attributes:
-        check: which check (``depth_rating``, ``depth_limit``, ``speed_limit``, ``top_speed``,
-            ``endurance``, ``reach``, ``geofence``).
-        param: the command parameter at fault (``depth``, ``speed``, ``radius``...).
-        kind: ``hard``: refused on every path; ``soft``: needs the operator's override.
-        message: a sentence for the operator.
-        value, limit, unit: the figure and the limit it breaks (``limit`` None: see message).
-        allowed: what is allowed, in words (e.g. "0 to 100 m").
-        step: the mission script's step it belongs to (0-based), when a script was checked.
-    """
-
-    check: str
-    param: str
-    kind: Literal["hard", "soft"]
-    message: str
-    value: float | None = None
-    limit: float | None = None
-    unit: str = ""
-    allowed: str = ""
-    #: The mission script's step it belongs to (0-based), when a script was checked.
-    step: int | None = None
-
-    def as_json(self) -> dict[str, Any]:
-        return {
-            "step": self.step,
-            "check": self.check,
-            "param": self.param,
-            "kind": self.kind,
-            "overridable": self.kind == "soft",
-            "message": self.message,
-            "value": self.value,
-            "limit": self.limit,
-            "unit": self.unit,
-            "allowed": self.allowed,
-        }
-
-
-@dataclass(frozen=True)
 class Assessment:
     """A command as the checks see it: the frame that would leave, and what it breaks."""
 
     enc: Encoded
-    violations: tuple[Violation, ...] = ()
+    violations: tuple[SendViolation, ...] = ()
+    #: Every check's line (what the confirm dialog shows).
+    lines: tuple[CheckLine, ...] = ()
 
     @property
-    def hard(self) -> tuple[Violation, ...]:
+    def hard(self) -> tuple[SendViolation, ...]:
         return tuple(v for v in self.violations if v.kind == "hard")
 
     @property
-    def soft(self) -> tuple[Violation, ...]:
+    def soft(self) -> tuple[SendViolation, ...]:
         return tuple(v for v in self.violations if v.kind == "soft")
 
 
@@ -99,7 +61,7 @@ class SendRefused(Exception):
 
     status = 422
 
-    def __init__(self, message: str, violations: Sequence[Violation] = ()) -> None:
+    def __init__(self, message: str, violations: Sequence[SendViolation] = ()) -> None:
         super().__init__(message)
         self.message = message
         self.violations = tuple(violations)
@@ -140,7 +102,7 @@ class NotRetryableCommand(SendRefused):
     status = 409
 
 
-def decide(assessment: Assessment, override: bool) -> tuple[Violation, ...]:
+def decide(assessment: Assessment, override: bool) -> tuple[SendViolation, ...]:
     """The policy on what the checks found: the violations the operator overrode (empty when
     there were none).
 
@@ -182,7 +144,7 @@ class SendOutcome:
     """The record as written (queued, or a Surface joined), and what the operator overrode."""
 
     record: dict[str, Any]
-    overridden: tuple[Violation, ...] = field(default=())
+    overridden: tuple[SendViolation, ...] = field(default=())
 
 
 class Assessor(Protocol):
@@ -260,7 +222,7 @@ class CommandService:
             )
         )
 
-    def _overrides(self, overridden: Sequence[Violation]) -> dict[str, Any] | None:
+    def _overrides(self, overridden: Sequence[SendViolation]) -> dict[str, Any] | None:
         if not overridden:
             return None
         return {
@@ -283,7 +245,6 @@ __all__ = [
     "SendRefused",
     "SendRequest",
     "UnknownCommand",
-    "Violation",
     "decide",
     "refusal_detail",
 ]

@@ -11,21 +11,22 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 
-from backend.commands.service import LimitRefused, OverrideNeeded, Violation
+from backend.commands.checks import SendViolation
+from backend.commands.service import LimitRefused, OverrideNeeded
 from backend.scripts.expand import ExpandedStep
 from backend.scripts.model import MissionScript
 from planner import Plan
 
 #: The checks of one planned step (the console's, with its limits and vehicle profile).
-PlanCheck = Callable[[Plan], tuple[Violation, ...]]
+PlanCheck = Callable[[Plan], tuple[SendViolation, ...]]
 
 
-def step_violations(expanded: Sequence[ExpandedStep], check: PlanCheck) -> list[Violation]:
+def step_violations(expanded: Sequence[ExpandedStep], check: PlanCheck) -> list[SendViolation]:
     """Every step's violations, each naming its step (``step``: 0-based index)."""
     return [replace(v, step=s.index) for s in expanded for v in check(s.plan)]
 
 
-def refuse_unsafe(script: MissionScript, found: Sequence[Violation]) -> None:
+def refuse_unsafe(script: MissionScript, found: Sequence[SendViolation]) -> None:
     """The send policy on a whole script, before it is exported or run.
 
     Raises:
@@ -42,11 +43,11 @@ def refuse_unsafe(script: MissionScript, found: Sequence[Violation]) -> None:
         )
 
 
-def _overridden(script: MissionScript, v: Violation) -> bool:
+def _overridden(script: MissionScript, v: SendViolation) -> bool:
     return v.step is not None and script.steps[v.step].override
 
 
-def step_warning(v: Violation) -> str:
+def step_warning(v: SendViolation) -> str:
     """A violation as a line of the preview's warnings."""
     kind = "cannot be overridden" if v.kind == "hard" else "needs the step's override"
     step = "" if v.step is None else f"step {v.step + 1}: "

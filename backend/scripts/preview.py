@@ -15,7 +15,7 @@ from typing import Literal
 
 from pydantic import BaseModel, Field
 
-from backend.commands.service import Violation
+from backend.commands.checks import SendViolation
 from backend.scripts.checks import PlanCheck, step_violations, step_warning
 from backend.scripts.expand import ExpandedStep, describe_trigger, expand
 from backend.scripts.model import MissionScript, Trigger
@@ -266,7 +266,9 @@ def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
     return events
 
 
-def _step_preview(s: ExpandedStep, t0_abs_s: float, violations: Sequence[Violation]) -> StepPreview:
+def _step_preview(
+    s: ExpandedStep, t0_abs_s: float, violations: Sequence[SendViolation]
+) -> StepPreview:
     enc = s.encoded
     return StepPreview(
         index=s.index,

@@ -1,8 +1,8 @@
 """Response models: what every endpoint returns, as the OpenAPI (``/openapi.json``) shows it.
 
 They mirror the handlers' output exactly (a field missing here would be dropped from the
-response): ``common`` (parameters, a command, limit violations), ``errors`` (error bodies and
-each route's ``responses``), ``records`` (the mission log, dives, the vehicle),
+response): ``common`` (parameters, a command, limit violations, check lines), ``errors``
+(error bodies and each route's ``responses``), ``records`` (the mission log, dives, the vehicle),
 ``authoring``, ``chart``, ``training`` and ``scripts``. Shapes the vehicle sends (its status, its
 acknowledgements) stay open: fields outside the contract are kept.
 """
@@ -15,7 +15,13 @@ from backend.api.schemas.authoring import (
     Session,
 )
 from backend.api.schemas.chart import ChartDoc, DatumIn, LinkReach
-from backend.api.schemas.common import CommandJson, LimitViolation, Params, ParamValue
+from backend.api.schemas.common import (
+    CheckLineDoc,
+    CommandJson,
+    LimitViolation,
+    Params,
+    ParamValue,
+)
 from backend.api.schemas.errors import (
     OPERATOR,
     DecodeFailure,
@@ -48,6 +54,7 @@ __all__ = [
     "Ack",
     "ChannelSettings",
     "ChartDoc",
+    "CheckLineDoc",
     "CommandJson",
     "CommandRecord",
     "CurrentSettings",

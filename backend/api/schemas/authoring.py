@@ -8,6 +8,7 @@ from pydantic import BaseModel, Field
 
 from backend.api.schemas.chart import DatumDoc, LinkReach
 from backend.api.schemas.common import (
+    CheckLineDoc,
     CommandJson,
     LimitViolation,
     Number,
@@ -197,6 +198,10 @@ class PlanEstimate(BaseModel):
     y_max_m: float
     join_length_m: float
     join_duration_s: float
+    repeats: bool = Field(
+        description="the pattern repeats its lap until retasked: ``duration_s`` is the join "
+        "and one lap (``lap_duration_s``), never a total"
+    )
     battery_pct: float = Field(
         description="charge used (percentage points): the whole battery fit from the charge now"
     )
@@ -222,12 +227,16 @@ class PlanDiff(BaseModel):
 
 class PreviewDoc(EncodeDoc):
     """The frame and the path the vehicle would fly from where it is now, with estimates,
-    limit violations, the diff against the active pattern, and what sending it now would do
-    (``two_way``, ``copies``, ``p_delivered``: absent while the console starts)."""
+    the checks and their violations, the diff against the active pattern, and what sending
+    it now would do (``two_way``, ``copies``, ``p_delivered``: absent while the console starts)."""
 
     path: PlannedPath
     estimate: PlanEstimate
     violations: list[LimitViolation]
+    checks: list[CheckLineDoc] = Field(
+        description="every check a send runs (backend/commands/checks.py), in order, with its "
+        "status"
+    )
     skipped_checks: list[str] = Field(
         description="checks and estimates the vehicle profile's unknown figures prevent"
     )

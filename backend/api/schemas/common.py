@@ -1,11 +1,13 @@
 """Shapes shared by several responses: parameter values, a command, a vehicle state, a
-limit violation."""
+limit violation, a check's line."""
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated
 
 from pydantic import BaseModel, Field, WithJsonSchema
+
+from backend.commands.checks import CheckName, CheckStatus, ViolationKind
 
 #: A number as the source gave it: an integer stays an integer (``3``), a float a float.
 Number = Annotated[int | float, WithJsonSchema({"type": "number"})]
@@ -39,16 +41,25 @@ class VehicleStateOut(BaseModel):
 
 
 class LimitViolation(BaseModel):
-    """One broken limit: ``kind`` hard (refused on every path: the depth rating) or soft
-    (needs the operator's override; ``overridable`` says the same)."""
+    """One broken rule (``backend/commands/checks.py``): ``kind`` hard (the depth rating) is refused
+    on every path; soft needs an explicit override. ``overridable``: the kind is soft."""
 
-    check: str = Field("", description="which check found it (depth_rating, reach, ...)")
-    param: str
-    kind: Literal["hard", "soft"] = "soft"
-    value: float | None
+    check: CheckName = Field(description="the check that found it")
+    param: str = Field(description="the command parameter at fault")
+    kind: ViolationKind = Field(description="hard: never sent; soft: sent only with override")
+    value: float
     limit: float | None = Field(description="null for a polygon geofence (see message)")
     unit: str
+    allowed: str = Field(description='the allowed range in words ("0 to 100 m")')
     message: str
     overridable: bool
-    allowed: str = Field("", description="what is allowed, in words")
     step: int | None = Field(None, description="a mission script's step (0-based), if any")
+
+
+class CheckLineDoc(BaseModel):
+    """One check of a plan before a send: it passed (``ok``), found a violation
+    (``violated``), or could not run (``skipped``: ``detail`` says why)."""
+
+    check: CheckName
+    status: CheckStatus
+    detail: str = Field(description="what the check found, or why it could not run")

@@ -87,7 +87,7 @@ def test_a_real_vehicles_profile_comes_from_the_settings(tmp_path: Path) -> None
         None,
         None,
     )
-    assert [c.split(" ")[0] for c in p.skipped_checks()] == ["heave"]
+    assert [c.split(" ")[0] for c in p.skipped_checks()] == ["heave", "endurance"]
     unknown = profile_for(settings_for(tmp_path / "m.sqlite3", target="ws://127.0.0.1:9"))
     assert unknown.top_speed_mps is None
     assert any(c.startswith("top speed unknown") for c in unknown.skipped_checks())
@@ -120,6 +120,11 @@ def test_a_real_vehicle_preview_says_which_checks_it_skips(make_client: MakeClie
     assert doc["violations"] == []
     assert any(c.startswith("top speed unknown") for c in doc["skipped_checks"])
     assert doc["estimate"]["duration_s"] == doc["estimate"]["planned_duration_s"]
+    # the checks' lines say the same, in the same words
+    lines = {c["check"]: c for c in doc["checks"]}
+    for check in ("top_speed", "endurance"):
+        assert lines[check]["status"] == "skipped"
+        assert lines[check]["detail"] in doc["skipped_checks"]
 
 
 def test_the_top_speed_violation_is_named_and_overridable(make_client: MakeClient) -> None:

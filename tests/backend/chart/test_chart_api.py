@@ -246,7 +246,9 @@ def test_a_path_in_range(client: TestClient) -> None:
     assert len(reach["segments"]) == 1
 
 
-def test_a_path_that_leaves_range_warns_but_is_not_a_violation(make_client: MakeClient) -> None:
+def test_a_path_that_leaves_range_warns_and_is_an_overridable_violation(
+    make_client: MakeClient,
+) -> None:
     client = make_client(me_range_m=20)
     doc = preview(client, "straight", STRAIGHT)
     reach = check_reach(doc, 20.0)
@@ -254,12 +256,16 @@ def test_a_path_that_leaves_range_warns_but_is_not_a_violation(make_client: Make
     assert [s["state"] for s in reach["segments"]][-1] == "out_of_range"
     far = reach["max_distance_m"]
     assert 25 < far < 40
-    assert reach["warning"] == (
-        f"the path goes {far:.0f} m from the transmitter, beyond the 20 m ME range: the next "
-        "retask could not reach the vehicle there"
+    sentence = (
+        f"the path goes {far:.0f} m from the transmitter, beyond the ME link's 20 m range: the "
+        "next retask could not reach the vehicle there"
     )
-    # a warning, not a limit violation
-    assert not [v for v in doc["violations"] if "range" in v["message"] + v["param"]]
+    assert reach["warning"] == sentence
+    # the send checks name it from the same distances (backend/commands/checks.py): soft,
+    # overridable
+    (v,) = [v for v in doc["violations"] if v["check"] == "reach"]
+    assert (v["param"], v["kind"], v["overridable"]) == ("duration", "soft", True)
+    assert (v["value"], v["limit"], v["message"]) == (far, 20.0, sentence)
     assert client.get("/api/chart").json()["me_range_m"] == 20.0
 
 
@@ -278,7 +284,7 @@ def test_link_reach_classes_and_segments() -> None:
         {"state": "marginal", "start": 7, "end": 7},  # slant range: 99 m down
     ]
     assert reach["state"] == "out_of_range" and reach["max_distance_m"] == 120.0
-    assert "120 m from the transmitter, beyond the 100 m ME range" in reach["warning"]
+    assert "120 m from the transmitter, beyond the ME link's 100 m range" in reach["warning"]
     # exactly at the range is still in range (marginal), as the simulator's channel has it
     edge = link_reach([175.0, 200.0], [0.0, 0.0], [0.0, 0.0], station, 100.0)
     assert edge is not None

@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from backend.commands.checks import SendViolation
 from backend.commands.service import (
     Assessment,
     CommandService,
@@ -17,17 +18,34 @@ from backend.commands.service import (
     OverrideNeeded,
     SendRequest,
     UnknownCommand,
-    Violation,
     decide,
 )
 from codec import encode_frame
 from tests.backend.commands.test_manager import CIRCLE, HOVER, ONE_WAY, Rig, run, until
 
-DEEP = Violation("depth_rating", "depth", "hard", "depth 105 m is beyond the 100 m rating")
-FAST = Violation("top_speed", "speed", "soft", "speed 0.5 m/s exceeds the 0.19 m/s top speed")
+DEEP = SendViolation(
+    "depth_rating",
+    "depth",
+    "hard",
+    "depth 105 m is beyond the 100 m rating",
+    105,
+    100,
+    "m",
+    "0 to 100 m",
+)
+FAST = SendViolation(
+    "top_speed",
+    "speed",
+    "soft",
+    "speed 0.5 m/s exceeds the 0.19 m/s top speed",
+    0.5,
+    0.19,
+    "m/s",
+    "up to 0.19 m/s",
+)
 
 
-def assessor(found: Mapping[str, tuple[Violation, ...]]) -> Any:
+def assessor(found: Mapping[str, tuple[SendViolation, ...]]) -> Any:
     """Checks that find ``found[pattern]`` (nothing for the others)."""
 
     def assess(pattern: str, params: Mapping[str, Any]) -> Assessment:
@@ -37,7 +55,7 @@ def assessor(found: Mapping[str, tuple[Violation, ...]]) -> Any:
 
 
 def service_of(
-    rig: Rig, found: Mapping[str, tuple[Violation, ...]] | None = None
+    rig: Rig, found: Mapping[str, tuple[SendViolation, ...]] | None = None
 ) -> CommandService:
     return CommandService(rig.cm, assessor(found or {}), "op")
 
