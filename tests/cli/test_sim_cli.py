@@ -156,7 +156,11 @@ def test_nemesys_send_prints_the_vehicles_acknowledgement(sim_port: int) -> None
     result = json.loads(done.stdout)
     ack = result["ack"]
     assert ack["outcome"] == "accepted" and ack["command"]["pattern"] == "hover"
-    done = _send(sim_port, "straight", "speed=2.5", "depth=1", "duration=10", "heading=0")
+    args = ("straight", "speed=2.5", "depth=1", "duration=10", "heading=0")
+    done = _send(sim_port, *args)  # the console's policy: nothing sent without the override
+    assert done.returncode == 2 and "--override accepts it" in done.stderr
+    assert _status(sim_port)["pattern"] == "hover"
+    done = _send(sim_port, *args, "--override")  # sent: the vehicle's own check refuses it
     assert done.returncode == 1
     assert "limit_violation" in done.stdout + done.stderr
     assert _status(sim_port)["pattern"] == "hover"
