@@ -122,11 +122,11 @@ def test_control_without_auth_is_refused_and_the_socket_stays_open(
     assert client.get("/api/commands").json() == []
 
 
-def test_wrong_token_is_an_error(client: TestClient) -> None:
+def test_wrong_token_is_refused(client: TestClient) -> None:
     with client.websocket_connect("/ws") as ws:
         for token in (WRONG_TOKEN, "", None, 42):
             answer = reply(ws, {"type": "auth", "token": token})
-            assert answer == {"type": "error", "detail": "wrong operator token"}
+            assert answer == {"type": "auth_refused", "detail": "wrong operator token"}
         assert reply(ws, {"type": "surface"})["detail"].startswith("token required")
         receive_until(ws, is_telemetry)
     assert client.get("/api/commands").json() == []
