@@ -36,11 +36,15 @@ def receive_until(
             raise AssertionError(f"timed out after {timeout_s} s; got {kinds[-20:]}")
 
 
+#: The server's own messages, which may come between a control message and its answer.
+NEWS = ("telemetry", "command", "vehicle", "active_path", "link")
+
+
 def reply(ws: WebSocketTestSession, control: Message | str) -> Message:
-    """Send a control message; its answer (the first message that is not telemetry, command
-    or vehicle news)."""
+    """Send a control message; its answer (the first message that is not news: telemetry,
+    a command, the vehicle, its active path or the link)."""
     ws.send_text(control if isinstance(control, str) else json.dumps(control))
-    seen = receive_until(ws, lambda m: m["type"] not in ("telemetry", "command", "vehicle"))
+    seen = receive_until(ws, lambda m: m["type"] not in NEWS)
     return seen[-1]
 
 
