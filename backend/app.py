@@ -28,6 +28,7 @@ from backend.commands.service import SendRefused, refusal_detail
 from backend.console import Console
 from backend.security import HostGuard, allowed_hosts, install_redaction
 from backend.settings import Settings
+from backend.token_file import with_kept_token
 from codec import EncodeError
 from planner import PlanError
 
@@ -41,8 +42,10 @@ VENDOR = {
 
 
 def create_app(settings: Settings | None = None, *, viewer: bool = True) -> FastAPI:
-    """The FastAPI app for ``settings`` (default: from the environment)."""
-    cfg = settings or Settings.load()
+    """The FastAPI app for ``settings`` (default: from the environment). Without an explicit
+    token it takes the one kept beside the mission log, so that pages keep working across a
+    restart (``backend.token_file.TokenFileError`` if that file is unsafe or unreadable)."""
+    cfg = with_kept_token(settings or Settings.load())
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:

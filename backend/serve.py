@@ -14,10 +14,14 @@ import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TextIO
 
+from backend.token_file import TokenFileError, token_path, with_kept_token
+
 if TYPE_CHECKING:
     import uvicorn
 
-#: The exit status of bad input (``cli.main.EXIT_USAGE``): a setting, the mission log,
+    from backend.settings import Settings
+
+#: The exit status of bad input (``cli.common.EXIT_USAGE``): a setting, the mission log,
 #: the port.
 EXIT_USAGE = 2
 
@@ -42,6 +46,12 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "--db", dest="db_path", help="mission log file (default .nemesys/missions.sqlite3)"
     )
     p.add_argument("--time-scale", dest="sim_time_scale", type=float, help="simulator speed-up")
+    p.add_argument(
+        "--new-token",
+        action="store_true",
+        help="write a new operator token (kept owner-only beside the mission log, reused at "
+        "every start); pages holding the old one become read-only",
+    )
 
 
 def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
@@ -72,28 +82,25 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     from backend.mission_log.opening import ELSEWHERE, LogError, open_checked
     from backend.mission_log.store import LogWriteError
 
-    # before the URL: the log is usable, and what an earlier run left on its way is
-    # interrupted, not stuck
+    # before the URL: the log is usable, what an earlier run left on its way is interrupted,
+    # not stuck, and the token kept beside the log is read (or made, or replaced)
     try:
         log = open_checked(settings.db_path)
     except LogError as err:
         return _usage(str(err))
     try:
         recovered = log.recover_interrupted()
+        settings, kept = _with_token(settings, rotate=args.new_token)
     except LogWriteError as err:
         return _usage(
             f"mission log {settings.db_path} cannot be written ({err.reason}): free some space "
             f"or make it writable, {ELSEWHERE}"
         )
+    except TokenFileError as err:
+        return _usage(str(err))
     finally:
         log.close()
-    if recovered:
-        one = recovered == 1
-        out.write(
-            f"{recovered} command{'' if one else 's'} an earlier run left queued or transmitted "
-            f"{'is' if one else 'are'} now interrupted (retry {'it' if one else 'them'} from "
-            "the log)\n"
-        )
+    _report_recovered(recovered, out)
     try:
         sockets = listen_sockets(settings.host, settings.port)
     except OSError as err:
@@ -106,7 +113,7 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         out.write(
             f"NemeSys console, {mode}; mission log {settings.db_path}\n"
             f"Open this URL (it holds the operator token; without it the page is read-only):\n"
-            f"    {url}\n"
+            f"    {url}\n{kept}"
         )
         out.flush()
 
@@ -136,6 +143,38 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         for sock in sockets:
             sock.close()
     return 0
+
+
+def _report_recovered(recovered: int, out: TextIO) -> None:
+    """Say how many commands an earlier run left on their way (now interrupted), if any."""
+    if recovered:
+        one = recovered == 1
+        out.write(
+            f"{recovered} command{'' if one else 's'} an earlier run left queued or transmitted "
+            f"{'is' if one else 'are'} now interrupted (retry {'it' if one else 'them'} from "
+            "the log)\n"
+        )
+
+
+def _with_token(settings: Settings, *, rotate: bool) -> tuple[Settings, str]:
+    """``settings`` with the token kept beside the log (unless set explicitly: the URL a page
+    was opened with stays good across restarts, until ``--new-token``), and the line that says
+    so under the URL.
+
+    Raises:
+        backend.token_file.TokenFileError: the file is unsafe or unreadable.
+    """
+    explicit = "token" in settings.model_fields_set
+    settings = with_kept_token(settings, rotate=rotate)
+    if rotate:
+        return settings, (
+            "New operator token: pages opened with the old one are read-only until opened with "
+            "this URL.\n"
+        )
+    if explicit:
+        return settings, ""
+    where = token_path(settings.db_path)
+    return settings, f"(the token is kept in {where}; --new-token replaces it)\n"
 
 
 def _usage(message: str) -> int:

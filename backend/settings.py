@@ -86,7 +86,8 @@ class Settings(BaseSettings):
     sim_seed: int = 0
     sim_time_scale: Annotated[float, Field(ge=0, le=50)] = 1.0
     db_path: Path = Path(".nemesys/missions.sqlite3")
-    #: The operator token; a fresh random one per start when not set.
+    #: The operator token. Not set: the one kept beside the mission log, made on first use
+    #: (backend/token_file.py: ``create_app`` and ``nemesys console`` put it here).
     token: Annotated[str, Field(min_length=16)] = Field(
         default_factory=lambda: secrets.token_urlsafe(24)
     )

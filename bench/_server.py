@@ -86,16 +86,20 @@ class ConsoleProcess:
 
 def start_console(
     log_path: Path,
-    token: str,
+    token: str | None,
     *args: str,
     env: Mapping[str, str] | None = None,
     timeout_s: float = START_TIMEOUT_S,
+    port: int | None = None,
 ) -> ConsoleProcess:
-    """Start ``nemesys console --port <free> --viewer-port 0 *args`` with ``NEMESYS_TOKEN``
-    ``token`` and ``env`` added to the environment; return it once ``/api/session`` answers."""
-    port = free_port()
+    """Start ``nemesys console --port <port> --viewer-port 0 *args`` with ``NEMESYS_TOKEN``
+    ``token`` (None: none, the console uses the token kept beside its log) and ``env`` added
+    to the environment; return it once ``/api/session`` answers. ``port``: a free one if not
+    given (a restart passes the one of the console it replaces)."""
+    port = port or free_port()
     child_env = {k: v for k, v in os.environ.items() if not k.startswith("NEMESYS_")}
-    child_env["NEMESYS_TOKEN"] = token
+    if token is not None:
+        child_env["NEMESYS_TOKEN"] = token
     child_env.update(env or {})
     cmd = [sys.executable, "-m", "cli.main", "console", "--port", str(port)]
     cmd += ["--viewer-port", "0", *args]

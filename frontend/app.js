@@ -47,7 +47,7 @@ function renderSession(s) {
     auth.textContent = "read-only (observer)";
     auth.className = "auth-ro";
   } else if (rejected) {
-    auth.textContent = "token rejected (403): read-only";
+    auth.textContent = "token refused: read-only";
     auth.className = "auth-bad";
   } else {
     // the role, and the operator's name when it is not just "operator" again
@@ -61,7 +61,30 @@ function renderSession(s) {
   setAssumptionsMode(mode);
   $("token-form").hidden = token && !rejected;
   $("token-clear").hidden = !token;
+  const notice = $("auth-notice");
+  notice.hidden = !rejected;
+  notice.textContent = rejected
+    ? "The console refuses this page's operator token (a console restarted with --new-token " +
+      "has a new one): this page is read-only. To operate, open the URL with the new token that the " +
+      `console printed (${window.location.origin}/?token=…), or paste that token above.`
+    : "";
   applyAuth(token && !rejected);
+}
+
+/** The console refused the token on (re)connecting /ws: read-only now, not at the next press. */
+function tokenRefused() {
+  if (!hasToken() || (session && session.authenticated === false)) return;
+  if (!session) {
+    loadSession(); // not known yet: it says the same
+    return;
+  }
+  session = { ...session, authenticated: false };
+  renderSession(session);
+}
+
+/** Accepted on (re)connecting: operator again if it had been refused (e.g. a token pasted). */
+function tokenAccepted() {
+  if (session && session.authenticated === false && hasToken()) loadSession();
 }
 
 async function loadSession() {
@@ -170,6 +193,8 @@ async function main() {
       emit("vehicle", { msg: m });
     },
     link: (m) => renderLink(m.link),
+    auth_ok: tokenAccepted,
+    auth_refused: tokenRefused,
     active_path: (m) => emit("active_path", { path: m.active_path }),
     open: () => {
       if (opened) {

@@ -64,8 +64,9 @@ def _no_constant(name: str) -> Any:
 @router.websocket("/ws")
 async def live(websocket: WebSocket) -> None:
     """Server -> client: ``telemetry`` (10 Hz, latest wins), ``command``, ``vehicle`` and
-    ``error`` messages. Client -> server: ``auth`` then ``surface`` or ``send``; control
-    without the token is refused (the connection stays, read-only). A browser page from
+    ``error`` messages. Client -> server: ``auth`` (answered ``auth_ok`` or ``auth_refused``)
+    then ``surface`` or ``send``; control without the token is refused (the connection stays,
+    read-only). A browser page from
     another origin is refused at the handshake (403)."""
     console: Console = websocket.app.state.console
     headers = websocket.headers
@@ -118,7 +119,9 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
         token = msg.get("token")
         if isinstance(token, str) and token_ok(console, token):
             return {"type": "auth_ok"}
-        return {"type": "error", "detail": "wrong operator token"}
+        # a type of its own: a page told this on (re)connecting goes read-only at once (the
+        # console restarted with a new token), not at the operator's next press
+        return {"type": "auth_refused", "detail": "wrong operator token"}
     if kind not in ("surface", "send"):
         return {
             "type": "error",

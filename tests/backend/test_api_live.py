@@ -35,11 +35,15 @@ def receive_until(
             raise AssertionError(f"timed out after {timeout_s} s; got {kinds[-20:]}")
 
 
+#: The server's own messages, which may come between a control message and its answer.
+NEWS = ("telemetry", "command", "vehicle", "active_path", "link")
+
+
 def reply(ws: WebSocketTestSession, control: Message | str) -> Message:
-    """Send a control message; its answer (the first message that is not telemetry, command
-    or vehicle news)."""
+    """Send a control message; its answer (the first message that is not news: telemetry,
+    a command, the vehicle, its active path or the link)."""
     ws.send_text(control if isinstance(control, str) else json.dumps(control))
-    seen = receive_until(ws, lambda m: m["type"] not in ("telemetry", "command", "vehicle"))
+    seen = receive_until(ws, lambda m: m["type"] not in NEWS)
     return seen[-1]
 
 
@@ -121,11 +125,11 @@ def test_control_without_auth_is_refused_and_the_socket_stays_open(
     assert client.get("/api/commands").json() == []
 
 
-def test_wrong_token_is_an_error(client: TestClient) -> None:
+def test_wrong_token_is_refused(client: TestClient) -> None:
     with client.websocket_connect("/ws") as ws:
         for token in (WRONG_TOKEN, "", None, 42):
             answer = reply(ws, {"type": "auth", "token": token})
-            assert answer == {"type": "error", "detail": "wrong operator token"}
+            assert answer == {"type": "auth_refused", "detail": "wrong operator token"}
         assert reply(ws, {"type": "surface"})["detail"].startswith("token required")
         receive_until(ws, is_telemetry)
     assert client.get("/api/commands").json() == []
