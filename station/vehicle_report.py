@@ -23,9 +23,8 @@ from vehicle_contract.contract import (
     TOPICS,
     Direction,
     topic,
-    validate_ack,
-    validate_status,
 )
+from vehicle_contract.payloads import validate_ack, validate_status
 
 Result = Literal["pass", "fail", "skipped"]
 

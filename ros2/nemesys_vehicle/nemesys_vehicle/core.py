@@ -37,9 +37,10 @@ from nemesys_vehicle.frames import EnuPose, NedPose, enu_to_ned, ned_to_enu, yaw
 from nemesys_vehicle.frames import yaw_quaternion as yaw_q
 from nemesys_vehicle.stream import FrameStream
 from onboard.agent import OnboardAgent, command_json
-from onboard.guidance import Guidance, Mode, Reference
+from onboard.guidance import Guidance, Reference
 from planner import VehicleState
 from rosbridge.protocol import stamp
+from vehicle_contract.codes import Mode
 from vehicle_contract.contract import FRAME_TOPIC, POSE_FRAME_ID, topic
 
 #: Frames held while waiting for the first odometry (the frame topic's history depth).
