@@ -20,7 +20,7 @@ from jsonschema import Draft202012Validator
 from backend.commands.manager import CommandManager
 from backend.commands.mirror import VehicleMirror
 from backend.mission_log.store import MissionLog
-from backend.telemetry import STATUS_NUMBERS, TelemetryHub, status_from_message
+from backend.telemetry import TelemetryHub
 from cli.main import main
 from codec import Encoded, Frame, encode_frame
 from onboard.agent import command_json
@@ -31,6 +31,7 @@ from station.link import Capability, Link
 from tests.onboard.test_agent import REJECTS
 from vehicle_contract import codes, contract, payloads
 from vehicle_contract.doc import DOC_PATH, REGENERATE, render_markdown
+from vehicle_contract.messages import STATUS_NUMBERS, status_from_message
 
 ROOT = Path(__file__).resolve().parents[2]
 CIRCLE = encode_frame("circle", speed=0.2, depth=2, radius=3, direction="cw")
