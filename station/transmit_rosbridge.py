@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import threading
 import time
 from collections.abc import Coroutine
@@ -54,6 +55,13 @@ T = TypeVar("T")
 
 #: What an acknowledgement queue holds: an acknowledgement, or None when the connection closed.
 _Acks = asyncio.Queue[dict[str, Any] | None]
+
+
+def _why(exc: BaseException) -> str:
+    """A connection failure in words: an OS error's own words for its errno (asyncio's text
+    is "Connect call failed (address)", and the detail names the URL already)."""
+    code = exc.errno if isinstance(exc, OSError) else None
+    return os.strerror(code) if isinstance(code, int) and code > 0 else _message(exc)
 
 
 def _log_wait(wait: SubscriberWait | None, url: str) -> None:
@@ -242,7 +250,7 @@ class RosbridgeTransmitter(Transmitter):
             await self._publish(message)
         except (OSError, WebSocketException, TimeoutError) as exc:
             await self._drop()
-            return self._failed(failure_reason(exc), f"{self.url}: {_message(exc)}")
+            return self._failed(failure_reason(exc), f"{self.url}: {_why(exc)}")
         acks = self._acks
         wait, self._wait = self._wait, None
         sent_t = time.time()
