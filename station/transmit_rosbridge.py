@@ -3,7 +3,7 @@ vehicle, or a real vehicle behind a rosbridge) on ``/nemesys/frame`` and waits f
 acknowledgement on ``/nemesys/mission`` (matched as :mod:`station.transmit_acks` says).
 Import it from :mod:`station.transmit`.
 
-``send`` is blocking and thread-safe, as ``nemesys send`` and the settings check want it; the
+``send`` is blocking and thread-safe, as ``nemesys send`` wants it; the
 connection is the one rosbridge client (:mod:`rosbridge.transport`), on an event loop that the
 transmitter runs in a thread of its own from the first send to :meth:`close`.
 
