@@ -30,7 +30,7 @@ from backend.commands.service import Assessment, CommandService
 from backend.mission_log.opening import open_checked
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
-from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
+from backend.telemetry import TelemetryHub
 from backend.viewer.draw_queue import PreviewDrawer
 from codec import (
     Encoded,
@@ -41,6 +41,7 @@ from codec import (
 )
 from planner import Limits, Plan, VehicleState, plan
 from station.link import Link, RosbridgeLink, open_link
+from vehicle_contract.messages import number, pose_from_message, position_known
 
 logger = logging.getLogger("backend.console")
 
