@@ -166,7 +166,7 @@ class BridgeServer:
             compression=None,  # tornado's default: no permessage-deflate
             process_request=self._check_path,
         )
-        self._tick_task = asyncio.create_task(self._tick_loop(), name="sim_bridge tick")
+        self._tick_task = asyncio.create_task(self._tick_loop(), name="rosbridge tick")
         logger.info(
             "rosbridge server on ws://%s:%d (time scale %g, pose %.4g Hz, status %.4g Hz)",
             self._host,
@@ -221,7 +221,7 @@ class BridgeServer:
         self._clients.add(client)
         self._log.node(name, f"Client connected. {len(self._clients)} clients total.")
         self._publish_clients()
-        writer = asyncio.create_task(client.run_writer(), name=f"sim_bridge writer {name}")
+        writer = asyncio.create_task(client.run_writer(), name=f"rosbridge writer {name}")
         try:
             async for message in ws:
                 try:
