@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 
 from codec._record import Record, init
-from planner._plan import turn_radius_m
+from planner._build import turn_radius_m
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
