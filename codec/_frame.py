@@ -22,7 +22,7 @@ its memory).
 
 from __future__ import annotations
 
-from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
+from codec._bch import BCHCode, TableDecoder
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
@@ -31,10 +31,10 @@ from codec._dictionary import (
     CommandDictionary,
     Pattern,
 )
-from codec._errors import DecodeError, RejectReason
-from codec._fields import FIELD_BITS
+from codec._errors import UNCORRECTABLE, DecodeError, RejectReason
 from codec._gf2 import ChunkedRemainder
 from codec._record import Record, init
+from codec._scales import FIELD_BITS
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
