@@ -17,7 +17,6 @@ from codec._dictionary import (
     Pattern,
 )
 from codec._errors import EncodeError
-from codec._fields import FIELD_BITS, ParamValue
 from codec._frame import (
     CODE,
     CODEWORD_BITS,
@@ -34,6 +33,7 @@ from codec._frame import (
     Frame,
 )
 from codec._record import Record, init
+from codec._scales import FIELD_BITS, ParamValue
 from codec._snap import Snap
 
 TYPE_CHECKING = False
