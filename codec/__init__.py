@@ -12,7 +12,7 @@ Typical use::
     dec.command.params, dec.corrected
 """
 
-from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
+from codec._bch import BCHCode, TableDecoder
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
@@ -22,15 +22,8 @@ from codec._dictionary import (
     CommandDictionary,
     Pattern,
 )
-from codec._errors import CodecError, DecodeError, EncodeError, RejectReason
-from codec._fields import (
-    FIELD_BITS,
-    ChoiceScale,
-    Field,
-    NumericScale,
-    ParamValue,
-    Segment,
-)
+from codec._errors import UNCORRECTABLE, CodecError, DecodeError, EncodeError, RejectReason
+from codec._fields import Field
 from codec._frame import (
     CODE,
     CODEWORD_BITS,
@@ -57,6 +50,7 @@ from codec._frame import (
     crc4,
     decode_codeword,
 )
+from codec._scales import FIELD_BITS, ChoiceScale, NumericScale, ParamValue, Segment
 from codec._sync import Accepted, Event, FrameReceiver, Rejected
 
 TYPE_CHECKING = False

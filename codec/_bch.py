@@ -22,6 +22,7 @@ from __future__ import annotations
 
 from types import MappingProxyType
 
+from codec._errors import UNCORRECTABLE
 from codec._gf2 import ChunkedRemainder, GF2m, degree, linear_table, poly_mul
 
 TYPE_CHECKING = False
@@ -30,9 +31,6 @@ if TYPE_CHECKING:
 
 #: Primitive polynomial of GF(2^8): x^8 + x^4 + x^3 + x^2 + 1 (bchlib's and galois' default).
 PRIM_POLY_GF256 = 0x11D
-
-#: ``n_corrected`` returned for a word the decoder cannot correct (galois' convention).
-UNCORRECTABLE = -1
 
 
 class BCHCode:

@@ -9,7 +9,11 @@ cross-check the fast one against, the batch path's table, and codes with t > 2.
 
 from __future__ import annotations
 
-from codec._bch import UNCORRECTABLE, BCHCode
+from codec._errors import UNCORRECTABLE
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from codec._bch import BCHCode
 
 
 def syndromes(code: BCHCode, rem: int) -> list[int]:

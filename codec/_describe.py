@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from codec._dictionary import DICTIONARY, CommandDictionary
-from codec._fields import ChoiceScale
+from codec._scales import ChoiceScale
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:

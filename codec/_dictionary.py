@@ -246,7 +246,7 @@ class CommandDictionary(Mapping[str, Pattern]):
             EncodeError: no such pattern; the message quotes (the start of) what was given
                 and lists the known ones.
         """
-        from codec._wire import lookup_pattern  # the console's: not loaded onboard
+        from codec._lookup import lookup_pattern  # the console's: not loaded onboard
 
         return lookup_pattern(self, pattern)
 

@@ -4,11 +4,18 @@
 missing or unknown parameter, value outside a field's range). ``DecodeError``: the received bits
 are not a frame the vehicle may execute; ``reason`` says which check failed. Nothing else leaves
 the codec's public decode functions, whatever they are given.
+
+:data:`UNCORRECTABLE` is the decoders' count of corrected bits for a word beyond their reach:
+the table decoder (:mod:`codec._bch`) and the textbook one (:mod:`codec._berlekamp`) both return
+it, so it lives below both.
 """
 
 from __future__ import annotations
 
 from enum import StrEnum
+
+#: ``n_corrected`` returned for a word the decoder cannot correct (galois' convention).
+UNCORRECTABLE = -1
 
 
 class CodecError(Exception):

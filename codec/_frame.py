@@ -22,7 +22,7 @@ its memory).
 
 from __future__ import annotations
 
-from codec._bch import UNCORRECTABLE, BCHCode, TableDecoder
+from codec._bch import BCHCode, TableDecoder
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
@@ -31,10 +31,10 @@ from codec._dictionary import (
     CommandDictionary,
     Pattern,
 )
-from codec._errors import DecodeError, RejectReason
-from codec._fields import FIELD_BITS
+from codec._errors import UNCORRECTABLE, DecodeError, RejectReason
 from codec._gf2 import ChunkedRemainder
 from codec._record import Record, init
+from codec._scales import FIELD_BITS
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
@@ -75,6 +75,18 @@ CRC4_REMAINDER: Final = ChunkedRemainder(CRC_POLY, width=PAYLOAD_BITS, shift=CRC
 FAST_DECODER: Final = TableDecoder(CODE)
 #: Zero bits after the frame in its 13 bytes.
 PAD_BITS: Final = FRAME_BYTES * 8 - FRAME_BITS
+#: The widths of the frame's sections in wire order (bits): preamble, delimiter, pattern ID, the
+#: six fields, CRC, parity, guard. :meth:`Frame.grouped` spaces them; :func:`codec.sections`
+#: (the console's) names them.
+SECTION_BITS: Final = (
+    PREAMBLE_BITS,
+    DELIMITER_BITS,
+    PATTERN_ID_BITS,
+    *(FIELD_BITS,) * FIELDS_PER_FRAME,
+    CRC_BITS,
+    PARITY_BITS,
+    GUARD_BITS,
+)
 
 
 def crc4(payload: int) -> int:
@@ -112,11 +124,18 @@ class Frame(Record):
         return (self.value << PAD_BITS).to_bytes(FRAME_BYTES, "big")
 
     def grouped(self, pattern: Pattern | None = None) -> str:
-        """The bits with a space between sections."""
-        from codec._wire import sections  # the console's
+        """The bits with a space between sections (:data:`SECTION_BITS`).
 
+        ``pattern`` names the field sections in :func:`codec.sections`; it moves no boundary,
+        so the grouping is the same for every pattern.
+        """
         bits = self.bits
-        return " ".join(bits[s.start : s.start + s.length] for s in sections(pattern))
+        parts = []
+        start = 0
+        for width in SECTION_BITS:
+            parts.append(bits[start : start + width])
+            start += width
+        return " ".join(parts)
 
     def __str__(self) -> str:
         return self.bits

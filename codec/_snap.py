@@ -1,7 +1,8 @@
 """The encode side of the field quantizations: snapping a requested value to a code, the
-:class:`Snap` report, and the scales' texts for listings and error messages.
+:class:`Snap` report, and the scales' texts for listings and error messages (:func:`fmt`, a
+value's short text, is the console's too).
 
-The methods of :class:`codec._fields.NumericScale` and :class:`codec._fields.ChoiceScale`
+The methods of :class:`codec._scales.NumericScale` and :class:`codec._scales.ChoiceScale`
 that encode or describe call into this module, loaded on first use: the vehicle only decodes
 (``value_of``, ``is_valid_code``) and never loads it (``nemesys bench reconfig``).
 """
@@ -12,8 +13,16 @@ import math
 from bisect import bisect_left
 
 from codec._errors import EncodeError
-from codec._fields import ChoiceScale, NumericScale, ParamValue, fmt
 from codec._record import Record, init
+
+TYPE_CHECKING = False
+if TYPE_CHECKING:
+    from codec._scales import ChoiceScale, NumericScale, ParamValue
+
+
+def fmt(value: float) -> str:
+    """Short, exact-looking text for a value (``12.5``, ``0.025``, ``3210``)."""
+    return format(value, ".10g")
 
 
 class Snap(Record):

@@ -1,5 +1,6 @@
 """The console's side of the frame: encoding (pattern lookup, snapping, the frame's bits)
-and the frame's sections for display.
+and the frame's sections for display. The lookup of a pattern's name is :mod:`codec._lookup`
+(still importable from here), which the dictionary calls without importing this module.
 
 :mod:`codec._frame` holds the layout and what the vehicle runs (the codeword's decode and
 checks); this module is loaded on first use of one of its names from :mod:`codec`, so the
@@ -11,67 +12,44 @@ from __future__ import annotations
 from codec._dictionary import (
     DICTIONARY,
     FIELDS_PER_FRAME,
-    PATTERN_ID_BITS,
     Command,
     CommandDictionary,
     Pattern,
 )
 from codec._errors import EncodeError
-from codec._fields import FIELD_BITS, ParamValue
 from codec._frame import (
     CODE,
     CODEWORD_BITS,
     CRC4_REMAINDER,
     CRC_BITS,
     DEFAULT_BITRATE_BPS,
-    DELIMITER_BITS,
     FRAME_BITS,
     GUARD_BITS,
-    PARITY_BITS,
-    PREAMBLE_BITS,
-    SYNC_BITS,
+    SECTION_BITS,
     SYNC_WORD,
     Frame,
 )
+from codec._lookup import lookup_pattern
 from codec._record import Record, init
+from codec._scales import FIELD_BITS, ParamValue
 from codec._snap import Snap
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
     from collections.abc import Mapping
 
-
-#: What :meth:`CommandDictionary.lookup` strips around a name, and the most digits it reads
-#: as an ID (leading zeros included; ``int`` is never given thousands of digits).
-_ASCII_SPACE = " \t\r\n\f\v"
-_MAX_ID_DIGITS = 8
-#: Longest quote of an unknown pattern in the error message.
-_MAX_SHOWN = 40
-
-
-def lookup_pattern(dictionary: CommandDictionary, pattern: str | int) -> Pattern:
-    """:meth:`CommandDictionary.lookup`: the pattern of ``dictionary`` that ``pattern`` names.
-
-    Raises:
-        EncodeError: no such pattern.
-    """
-    found: Pattern | None = None
-    if isinstance(pattern, bool):
-        found = None
-    elif isinstance(pattern, int):
-        found = dictionary.by_id(pattern)
-    elif isinstance(pattern, str) and pattern.isascii():
-        key = pattern.strip(_ASCII_SPACE).lower().replace("-", "_").replace(" ", "_")
-        found = dictionary.get(key)
-        if found is None and key.isdigit() and len(key) <= _MAX_ID_DIGITS:
-            found = dictionary.by_id(int(key))
-    if found is None:
-        known = ", ".join(f"{p.name} ({p.id})" for p in dictionary.values())
-        shown = repr(pattern)
-        if len(shown) > _MAX_SHOWN:
-            shown = shown[: _MAX_SHOWN - 1] + "…"
-        raise EncodeError(f"unknown pattern {shown}: known patterns are {known}")
-    return found
+__all__ = [
+    "Encoded",
+    "Section",
+    "airtime_s",
+    "encode_frame",
+    "frame_of",
+    "lookup_pattern",
+    "make_command",
+    "message_of",
+    "payload_of",
+    "sections",
+]
 
 
 def make_command(
@@ -128,23 +106,24 @@ class Section(Record):
 
 
 def sections(pattern: Pattern | None = None) -> tuple[Section, ...]:
-    """The frame's sections in order; field sections take the pattern's field names."""
-    out = [
-        Section("preamble", 0, PREAMBLE_BITS),
-        Section("delimiter", PREAMBLE_BITS, DELIMITER_BITS),
-        Section("pattern", SYNC_BITS, PATTERN_ID_BITS),
-    ]
-    start = SYNC_BITS + PATTERN_ID_BITS
+    """The frame's sections in order (the widths of :data:`codec._frame.SECTION_BITS`); field
+    sections take the pattern's field names."""
     fields = pattern.fields if pattern is not None else ()
-    for j in range(FIELDS_PER_FRAME):
-        name = fields[j].name if j < len(fields) else f"j{j + 1} (unused)"
-        out.append(Section(name, start, FIELD_BITS))
-        start += FIELD_BITS
-    out += [
-        Section("crc", start, CRC_BITS),
-        Section("parity", start + CRC_BITS, PARITY_BITS),
-        Section("guard", SYNC_BITS + CODEWORD_BITS, GUARD_BITS),
+    names = [
+        "preamble",
+        "delimiter",
+        "pattern",
+        *(f.name for f in fields[:FIELDS_PER_FRAME]),
+        *(f"j{j + 1} (unused)" for j in range(len(fields), FIELDS_PER_FRAME)),
+        "crc",
+        "parity",
+        "guard",
     ]
+    out = []
+    start = 0
+    for name, width in zip(names, SECTION_BITS, strict=True):
+        out.append(Section(name, start, width))
+        start += width
     return tuple(out)
 
 

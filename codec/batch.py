@@ -21,7 +21,6 @@ from numpy.typing import NDArray
 
 from codec._dictionary import DICTIONARY, FIELDS_PER_FRAME, CommandDictionary
 from codec._errors import RejectReason
-from codec._fields import FIELD_BITS, FIELD_CODES
 from codec._frame import (
     CODE,
     CRC4_REMAINDER,
@@ -31,6 +30,7 @@ from codec._frame import (
     FRAME_BYTES,
     SYNC_WORD,
 )
+from codec._scales import FIELD_BITS, FIELD_CODES
 
 U8 = NDArray[np.uint8]
 U64 = NDArray[np.uint64]

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 
 from codec._record import Record, init
-from planner._limits import Violation, finite_positive
+from planner._errors import Violation, finite_positive
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:

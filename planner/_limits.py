@@ -21,14 +21,12 @@ every plan but loads neither unless it is given a geofence (``nemesys bench reco
 
 from __future__ import annotations
 
-import math
-
 from codec._record import Record, init
-from planner._plan import turn_radius_m
+from planner._build import turn_radius_m
+from planner._errors import Violation, finite_positive
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
-    from planner._checks import top_speed
     from planner._fence import CircleFence, PolygonFence
     from planner._plan import Plan
 
@@ -38,7 +36,6 @@ __all__ = [
     "Limits",
     "Violation",
     "finite_positive",
-    "top_speed",
     "validate",
 ]
 
@@ -49,12 +46,6 @@ DEFAULT_MAX_SPEED_MPS = 1.0
 
 _DEPTH_PARAMS = ("depth", "start_depth", "end_depth")
 _ROUND_PARAMS = {"circle": "radius", "helix": "radius"}
-
-
-def finite_positive(name: str, value: float) -> float:
-    if not (math.isfinite(value) and value > 0):
-        raise ValueError(f"{name} must be a finite number above 0, got {value!r}")
-    return float(value)
 
 
 class Limits(Record):
@@ -85,44 +76,6 @@ class Limits(Record):
         init(self, "max_depth_m", float(max_depth_m))
         init(self, "max_speed_mps", finite_positive("max_speed_mps", max_speed_mps))
         init(self, "geofence", geofence)
-
-
-class Violation(Record):
-    """One broken limit.
-
-    Attributes:
-        param: the command parameter at fault (``depth``, ``radius``...).
-        value: its value in the command.
-        limit: the limit it breaks, in the same unit (``None`` for a polygon geofence, which
-            the message describes).
-        unit: the unit of ``value`` and ``limit``.
-        message: a sentence for the operator.
-        overridable: ``False`` for the depth rating, which no operator can override.
-    """
-
-    __slots__ = ("limit", "message", "overridable", "param", "unit", "value")
-    param: str
-    value: float
-    limit: float | None
-    unit: str
-    message: str
-    overridable: bool
-
-    def __init__(
-        self,
-        param: str,
-        value: float,
-        limit: float | None,
-        unit: str,
-        message: str,
-        overridable: bool = True,
-    ) -> None:
-        init(self, "param", param)
-        init(self, "value", value)
-        init(self, "limit", limit)
-        init(self, "unit", unit)
-        init(self, "message", message)
-        init(self, "overridable", overridable)
 
 
 def validate(plan: Plan, limits: Limits) -> tuple[Violation, ...]:
@@ -187,15 +140,3 @@ def validate(plan: Plan, limits: Limits) -> tuple[Violation, ...]:
 
         out.extend(fence_violations(plan, limits.geofence))
     return tuple(out)
-
-
-# ``top_speed`` (the console's, :mod:`planner._checks`) is still importable from here, loaded on
-# first use: the vehicle never runs it.
-if not TYPE_CHECKING:
-
-    def __getattr__(name: str) -> object:
-        if name != "top_speed":
-            raise AttributeError(f"module 'planner._limits' has no attribute {name!r}")
-        from planner._checks import top_speed
-
-        return top_speed

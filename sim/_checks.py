@@ -1,9 +1,15 @@
-"""Validation helpers shared by the simulator's config records: errors name the field and
-the allowed range."""
+"""Validation helpers shared by the simulator's config records and steps: errors name the
+field and the allowed range."""
 
 from __future__ import annotations
 
 import math
+
+
+def check_dt(dt_s: float) -> None:
+    """A simulation step ``dt_s`` in [0, inf) (s). No type check: it runs at every step."""
+    if not 0.0 <= dt_s < math.inf:
+        raise ValueError(f"dt_s must be in [0, inf), got {dt_s!r}")
 
 
 def number(name: str, value: object) -> float:

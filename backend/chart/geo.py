@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 import threading
-from typing import Final
+from typing import Final, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -28,13 +28,10 @@ from pyproj import Transformer
 
 from codec._record import Record, init
 
-TYPE_CHECKING = False
-if TYPE_CHECKING:
-    from backend.settings import Settings
-
 __all__ = [
     "TRAINING_DATUM",
     "Datum",
+    "DatumSettings",
     "dm",
     "geodetic_to_ned",
     "initial_datum",
@@ -99,7 +96,22 @@ def _check(name: str, value: float, bound: float) -> float:
 TRAINING_DATUM: Final = Datum(29.5316, -82.3031)
 
 
-def initial_datum(settings: Settings) -> Datum | None:
+class DatumSettings(Protocol):
+    """What :func:`initial_datum` reads of the console's settings (``backend.settings.Settings``;
+    not imported here: the settings check their ``gps`` with the GPS parser, which imports this
+    module)."""
+
+    @property
+    def datum_lat_deg(self) -> float | None: ...
+
+    @property
+    def datum_lon_deg(self) -> float | None: ...
+
+    @property
+    def training(self) -> bool: ...
+
+
+def initial_datum(settings: DatumSettings) -> Datum | None:
     """The datum at start: the settings' when given, training's site in training, else None
     (a surface GPS may set it later)."""
     if settings.datum_lat_deg is not None and settings.datum_lon_deg is not None:

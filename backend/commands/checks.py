@@ -27,34 +27,39 @@ Surface is never held back for the battery or the link's reach: it is what an em
 or a vehicle out of range calls for, and its path only rises from where the vehicle is.
 
 Soft means the operator may send it with an explicit override; hard, never. Pure: no I/O, no
-clock; the caller gives the vehicle's profile, its state of charge and the transmitter.
+clock; the caller gives the vehicle's profile, its state of charge and the transmitter. The
+report's types are :mod:`backend.commands.report` (importable from here too).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Any, Final, Literal
+from typing import Final
 
 from backend.authoring.profile import UNKNOWN, VehicleProfile, endurance_left_s
 from backend.chart.gps import Station
 from backend.chart.reach import distances_m, out_of_range_message
+from backend.commands.report import (
+    CheckLine,
+    CheckName,
+    CheckReport,
+    CheckStatus,
+    SendViolation,
+    ViolationKind,
+)
 from planner import RATED_DEPTH_M, Estimate, Limits, Plan, Violation, turn_radius_m, validate
 from planner import estimate as plan_estimate
 from planner._checks import top_speed
 from planner._fence import EXTENT_PARAMS, fence_violations
 
-ViolationKind = Literal["hard", "soft"]
-CheckStatus = Literal["ok", "violated", "skipped"]
-CheckName = Literal[
-    "depth_rating",
-    "depth_limit",
-    "speed_limit",
-    "turn_radius",
-    "top_speed",
-    "endurance",
-    "geofence",
-    "reach",
-    "onboard_limit",
+__all__ = [
+    "CheckLine",
+    "CheckName",
+    "CheckReport",
+    "CheckStatus",
+    "SendViolation",
+    "ViolationKind",
+    "check_plan",
+    "plan_limits",
 ]
 
 _DEPTH_PARAMS: Final = ("depth", "start_depth", "end_depth")
@@ -62,82 +67,6 @@ _DEPTH_PARAMS: Final = ("depth", "start_depth", "end_depth")
 _ROUND_PATTERNS: Final = frozenset({"circle", "helix"})
 #: Never held back for the battery or the reach (see the module doc).
 _EXEMPT_PATTERN: Final = "surface"
-
-
-@dataclass(frozen=True, slots=True)
-class SendViolation:
-    """One broken rule.
-
-    Attributes:
-        check: which check found it.
-        param: the command parameter at fault (``depth``, ``speed``, ``radius``...).
-        kind: ``hard``: refused on every path; ``soft``: sent only with an explicit override.
-        message: a sentence for the operator.
-        value: the plan's figure (in ``unit``).
-        limit: the limit it breaks (same unit); None for a polygon geofence (see message).
-        unit: the unit of ``value`` and ``limit``.
-        allowed: the allowed range as text (``0 to 100 m``).
-        step: a mission script's step (0-based), when a script was checked.
-    """
-
-    check: CheckName
-    param: str
-    kind: ViolationKind
-    message: str
-    value: float
-    limit: float | None
-    unit: str
-    allowed: str
-    #: The mission script's step it belongs to (0-based), when a script was checked.
-    step: int | None = None
-
-    @property
-    def overridable(self) -> bool:
-        return self.kind == "soft"
-
-    def as_json(self) -> dict[str, Any]:
-        """The violation as every document and error body gives it (``LimitViolation``)."""
-        return {
-            "check": self.check,
-            "param": self.param,
-            "kind": self.kind,
-            "value": self.value,
-            "limit": self.limit,
-            "unit": self.unit,
-            "allowed": self.allowed,
-            "message": self.message,
-            "overridable": self.overridable,
-            "step": self.step,
-        }
-
-
-@dataclass(frozen=True, slots=True)
-class CheckLine:
-    """One check that ran (``ok``, ``violated``) or could not (``skipped``), and in words
-    what it found or why it could not run."""
-
-    check: CheckName
-    status: CheckStatus
-    detail: str
-
-
-@dataclass(frozen=True, slots=True)
-class CheckReport:
-    """Every check's line, and every violation found (in the lines' order)."""
-
-    lines: tuple[CheckLine, ...]
-    violations: tuple[SendViolation, ...]
-
-    @property
-    def hard(self) -> tuple[SendViolation, ...]:
-        """Violations no override can pass."""
-        return tuple(v for v in self.violations if v.kind == "hard")
-
-    @property
-    def soft(self) -> tuple[SendViolation, ...]:
-        """Violations the operator may override explicitly."""
-        return tuple(v for v in self.violations if v.kind == "soft")
-
 
 _Result = tuple[CheckLine, tuple[SendViolation, ...]]
 

@@ -1,22 +1,21 @@
 """Link health: what the station knows of its link to the vehicle, and what is wrong with it.
 
 This is the vehicle link, not the browser's websocket to the console. :class:`FrameLedger`
-counts the frames that left the station and what became of them (over the last
-:data:`WINDOW` frames and since the dive began); :func:`assess` turns that, the link's
-capability and the ages of the last acknowledgement and telemetry into a green / amber / red
-level and a list of named problems. :class:`LinkHealth` is what ``/api/vehicle`` gives under
-``link``.
+(:mod:`backend.commands.ledger`, its names still importable from here) counts the frames that
+left the station and what became of them (over the last :data:`WINDOW` frames and since the
+dive began); :func:`assess` turns that, the link's capability and the ages of the last
+acknowledgement and telemetry into a green / amber / red level and a list of named problems.
+:class:`LinkHealth` is what ``/api/vehicle`` gives under ``link``.
 """
 
 from __future__ import annotations
 
 import time
-from collections import deque
-from dataclasses import dataclass
 from typing import Final, Literal
 
 from pydantic import BaseModel
 
+from backend.commands.ledger import WINDOW, FrameCounts, FrameLedger, FrameTotals, Outcome
 from station.link import Capability
 
 TYPE_CHECKING = False
@@ -25,8 +24,21 @@ if TYPE_CHECKING:
     from backend.telemetry import TelemetryHub
     from station.link import Link
 
-#: Frames in the "recent" window.
-WINDOW: Final = 20
+__all__ = [
+    "RED_TELEMETRY_S",
+    "STALE_TELEMETRY_S",
+    "UNKNOWN_VALUES_RECENT_S",
+    "WINDOW",
+    "FrameCounts",
+    "FrameLedger",
+    "FrameTotals",
+    "Level",
+    "LinkHealth",
+    "Outcome",
+    "assess",
+    "link_health_of",
+]
+
 #: Telemetry older than this is a problem (s); at RED_TELEMETRY_S it is red.
 STALE_TELEMETRY_S: Final = 3.0
 RED_TELEMETRY_S: Final = 10.0
@@ -34,25 +46,7 @@ RED_TELEMETRY_S: Final = 10.0
 UNKNOWN_VALUES_RECENT_S: Final = 10.0
 
 Level = Literal["green", "amber", "red"]
-Outcome = Literal["sent", "awaiting", "acknowledged", "rejected", "timed_out"]
 _ANSWERS: Final = ("acknowledged", "rejected", "timed_out")
-
-
-class FrameCounts(BaseModel):
-    """Frames that left the station, and what became of them."""
-
-    #: Every frame that left.
-    frames: int = 0
-    #: Frames no acknowledgement was expected for (one-way link, or replaced before one came).
-    sent: int = 0
-    acknowledged: int = 0
-    rejected: int = 0
-    timed_out: int = 0
-
-
-class FrameTotals(BaseModel):
-    recent: FrameCounts
-    dive: FrameCounts
 
 
 class LinkHealth(BaseModel):
@@ -78,50 +72,6 @@ class LinkHealth(BaseModel):
     copies: int
     #: Copies a Surface gets now; null: repeated until acknowledged (two-way link).
     surface_copies: int | None
-
-
-@dataclass
-class _Slot:
-    command_id: int
-    outcome: Outcome
-
-
-class FrameLedger:
-    """Frames out and their fate: the last :data:`WINDOW` and the dive's totals."""
-
-    def __init__(self) -> None:
-        self.reset()
-
-    def reset(self) -> None:
-        """A new dive."""
-        self._recent: deque[_Slot] = deque(maxlen=WINDOW)
-        self._dive = FrameCounts()
-        self._awaiting: dict[int, int] = {}  # command id -> its frames awaiting an answer
-
-    def frame_out(self, command_id: int, *, answer_expected: bool) -> None:
-        self._dive.frames += 1
-        if answer_expected:
-            self._awaiting[command_id] = self._awaiting.get(command_id, 0) + 1
-            self._recent.append(_Slot(command_id, "awaiting"))
-        else:
-            self._dive.sent += 1
-            self._recent.append(_Slot(command_id, "sent"))
-
-    def settle(self, command_id: int, outcome: Outcome) -> None:
-        """The command's frames awaiting an answer got ``outcome`` (``sent``: none will
-        come, e.g. it was replaced)."""
-        count = self._awaiting.pop(command_id, 0)
-        setattr(self._dive, outcome, getattr(self._dive, outcome) + count)
-        for slot in self._recent:
-            if slot.command_id == command_id and slot.outcome == "awaiting":
-                slot.outcome = outcome
-
-    def totals(self) -> FrameTotals:
-        recent = FrameCounts(frames=len(self._recent))
-        for slot in self._recent:
-            if slot.outcome != "awaiting":
-                setattr(recent, slot.outcome, getattr(recent, slot.outcome) + 1)
-        return FrameTotals(recent=recent, dive=self._dive.model_copy())
 
 
 def _plural(n: int, word: str) -> str:

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from typing import Any
 
 from backend.commands.delivery import Delivery
-from backend.commands.health import FrameLedger, Outcome
+from backend.commands.ledger import FrameLedger, Outcome
 from backend.commands.lifecycle import Event, IllegalTransition, advance
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.telemetry import TelemetryHub

@@ -4,7 +4,8 @@ SQLite in WAL mode with ``synchronous=FULL``: a committed row survives a killed 
 power cut. One connection guarded by a lock (the console is one process; writes are small).
 Rows are only ever inserted or updated field by field, so no record is half written. A write
 that fails (disk full, the file made read-only) raises :class:`LogWriteError`. Track points are
-written within :data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that).
+written within :data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that;
+the buffer is :mod:`backend.mission_log.track`).
 Opening a log with its checks: :func:`backend.mission_log.opening.open_checked`.
 """
 
@@ -12,7 +13,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import logging
 import sqlite3
 import threading
 from collections.abc import Iterator, Mapping
@@ -21,18 +21,31 @@ from pathlib import Path
 from typing import Any
 
 from backend.commands.lifecycle import ON_ITS_WAY, TERMINAL, Event, State, advance
+from backend.mission_log.errors import LogWriteError
 from backend.mission_log.schema import create_or_migrate
+from backend.mission_log.track import (
+    TRACK_BATCH,
+    TRACK_BUFFER_MAX,
+    TRACK_FLUSH_S,
+    TrackBuffer,
+    TrackPoint,
+)
 
-logger = logging.getLogger("backend.mission_log.store")
+__all__ = [
+    "BUSY_TIMEOUT_S",
+    "FINAL_STATES",
+    "STATES",
+    "TRACK_BATCH",
+    "TRACK_BUFFER_MAX",
+    "TRACK_FLUSH_S",
+    "WIRE_ORDER",
+    "LogWriteError",
+    "MissionLog",
+    "now_iso",
+]
 
 #: How long a write waits for a lock another connection holds before it fails (s).
 BUSY_TIMEOUT_S = 1.0
-#: Track points are buffered at most this long after the first of them arrived (s)...
-TRACK_FLUSH_S = 0.5
-#: ... or until this many are buffered.
-TRACK_BATCH = 10
-#: Points kept while the log cannot be written (the oldest are dropped beyond).
-TRACK_BUFFER_MAX = 3600
 
 #: Columns holding JSON text.
 _JSON = ("params", "requested", "ack", "overrides")
@@ -62,21 +75,6 @@ STATES = tuple(State)
 FINAL_STATES = frozenset(str(s) for s in TERMINAL)
 
 
-class LogWriteError(Exception):
-    """The mission log cannot be written (disk full, file or directory made read-only, locked
-    by another process, I/O error): SQLite's ``reason``. ``outcome``: what the caller did
-    about it (e.g. "nothing was transmitted"), added to the message."""
-
-    def __init__(self, reason: str, outcome: str | None = None) -> None:
-        super().__init__(reason)
-        self.reason = reason
-        self.outcome = outcome
-
-    def __str__(self) -> str:
-        tail = f"; {self.outcome}" if self.outcome else ""
-        return f"the mission log cannot be written: {self.reason}{tail}"
-
-
 @contextlib.contextmanager
 def _writing() -> Iterator[None]:
     """SQLite's errors of a write as :class:`LogWriteError` (our own misuse stays as it is)."""
@@ -101,9 +99,7 @@ class MissionLog:
         if str(path) != ":memory:":
             self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.RLock()  # re-entered by the writes of a transaction()
-        self._track: list[tuple[int, float, float, float, float, float]] = []
-        self._track_timer: threading.Timer | None = None
-        self._track_failing = False
+        self._track = TrackBuffer(self._lock, self._write_track)
         self._closed = False
         self._db = sqlite3.connect(
             str(path), timeout=busy_timeout_s, check_same_thread=False, isolation_level=None
@@ -189,9 +185,7 @@ class MissionLog:
             if self._closed:
                 return
             self._closed = True
-            if self._track_timer is not None:
-                self._track_timer.cancel()
-            self._flush_track_logged()
+            self._track.close()
             self._db.close()
 
     # --- dives ---------------------------------------------------------------------------
@@ -205,7 +199,7 @@ class MissionLog:
 
     def dives(self) -> list[dict[str, Any]]:
         with self._lock:
-            self._flush_track_logged()
+            self._track.flush()
             rows = self._db.execute(
                 "SELECT d.id, d.started_at, d.target, "
                 "(SELECT COUNT(*) FROM commands c WHERE c.dive = d.id) AS commands, "
@@ -354,45 +348,16 @@ class MissionLog:
         """Buffer one track point; written (one commit) within :data:`TRACK_FLUSH_S` of the
         first point buffered, at :data:`TRACK_BATCH` points, on a read and on close. A write
         that fails is logged and tried again by the timer (never raised)."""
-        with self._lock:
-            self._track.append((dive, t_s, x_m, y_m, z_m, heading_deg))
-            del self._track[:-TRACK_BUFFER_MAX]
-            if len(self._track) >= TRACK_BATCH and not self._track_failing:
-                self._flush_track_logged()
-            elif self._track_timer is None and not self._closed:
-                self._track_timer = threading.Timer(TRACK_FLUSH_S, self._flush_track_due)
-                self._track_timer.daemon = True
-                self._track_timer.start()
+        self._track.add((dive, t_s, x_m, y_m, z_m, heading_deg))
 
-    def _flush_track_due(self) -> None:
-        with self._lock:
-            self._track_timer = None
-            if not self._closed:
-                self._flush_track_logged()
-
-    def _flush_track_logged(self) -> None:
-        try:
-            self._flush_track()
-        except LogWriteError as err:
-            if not self._track_failing:  # once, not at every point
-                logger.error("track points are kept in memory only: %s", err)
-            self._track_failing = True
-
-    def _flush_track(self) -> None:
-        if self._track:
-            with self.transaction(), _writing():
-                self._db.executemany("INSERT INTO track VALUES (?, ?, ?, ?, ?, ?)", self._track)
-            self._track = []
-            if self._track_failing:
-                logger.warning("track points are written to the mission log again")
-                self._track_failing = False
-        if self._track_timer is not None:
-            self._track_timer.cancel()
-            self._track_timer = None
+    def _write_track(self, points: list[TrackPoint]) -> None:
+        """Commit ``points`` together (the track buffer's write)."""
+        with self.transaction(), _writing():
+            self._db.executemany("INSERT INTO track VALUES (?, ?, ?, ?, ?, ?)", points)
 
     def track(self, dive: int) -> list[dict[str, float]]:
         with self._lock:
-            self._flush_track_logged()
+            self._track.flush()
             rows = self._db.execute(
                 "SELECT t_s, x_m, y_m, z_m, heading_deg FROM track WHERE dive = ? ORDER BY t_s",
                 (dive,),

@@ -52,8 +52,9 @@ def test_listing_helpers_load_on_first_use() -> None:
 
 
 #: The console's modules: encoding, one-frame decode of any form, snapping and the scales'
-#: texts, the textbook BCH decoder. The vehicle's decode loads none of them.
-CONSOLE_ONLY = ("codec._wire", "codec._parse", "codec._snap", "codec._berlekamp")
+#: texts, the lookup of a pattern's name, the textbook BCH decoder. The vehicle's decode loads
+#: none of them.
+CONSOLE_ONLY = ("codec._wire", "codec._parse", "codec._snap", "codec._lookup", "codec._berlekamp")
 
 
 def _received(errors: int) -> str:

@@ -10,8 +10,8 @@ import pytest
 
 from codec import DICTIONARY, encode_frame, make_command
 from planner import Plan, VehicleState, compare, estimate, plan
+from planner._checks import top_speed
 from planner._estimate import flyable_times, planned_speed_mps
-from planner._limits import top_speed
 from planner._plan import HOVER_APPROACH_MPS
 
 #: Level with the patterns' depth and facing north: a straight north is one segment.
