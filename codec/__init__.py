@@ -69,6 +69,7 @@ if TYPE_CHECKING:
         frame_success_probability,
     )
     from codec._describe import describe_dictionary, describe_pattern, markdown_tables
+    from codec._number_text import int_from_text, number_from_text
     from codec._parse import decode_frame, parse_frame
     from codec._snap import Snap
     from codec._wire import (
@@ -146,9 +147,11 @@ __all__ = [
     "encode_frame",
     "frame_of",
     "frame_success_probability",
+    "int_from_text",
     "make_command",
     "markdown_tables",
     "message_of",
+    "number_from_text",
     "parse_frame",
     "payload_of",
     "sections",
@@ -169,6 +172,8 @@ _LAZY = {
     "delivery_probability": "codec._delivery",
     "frame_success_probability": "codec._delivery",
     "Snap": "codec._snap",
+    "int_from_text": "codec._number_text",
+    "number_from_text": "codec._number_text",
     "Encoded": "codec._wire",
     "Section": "codec._wire",
     "airtime_s": "codec._wire",

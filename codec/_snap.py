@@ -13,6 +13,7 @@ from bisect import bisect_left
 
 from codec._errors import EncodeError
 from codec._fields import ChoiceScale, NumericScale, ParamValue, fmt
+from codec._number_text import number_from_text
 from codec._record import Record, init
 
 
@@ -171,9 +172,10 @@ def _as_number(name: str, unit: str, requested: ParamValue, allowed: str) -> flo
     if isinstance(requested, bool) or not isinstance(requested, str | int | float):
         raise EncodeError(f"{problem}, got {type(requested).__name__}", field=name)
     try:
-        number = float(requested.strip() if isinstance(requested, str) else requested)
-    except ValueError:
-        raise EncodeError(f"{problem}, got {requested!r}", field=name) from None
+        # text: ASCII decimal only (float() would take Arabic-Indic digits, "1_0", "nan")
+        number = number_from_text(requested) if isinstance(requested, str) else float(requested)
+    except ValueError as err:
+        raise EncodeError(f"{problem}: {err}", field=name) from None
     except OverflowError:  # an int too large for a float is far out of every range
         raise EncodeError(f"{name} is out of range: allowed {allowed}", field=name) from None
     if not math.isfinite(number):
