@@ -66,9 +66,11 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     try:
         settings = Settings.load(**overrides)
     except ValidationError as err:
+        from backend.strict_input import error_message
+
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
-        return _usage(f"setting {where}: {first['msg']}")
+        return _usage(f"setting {where}: {error_message(first)}")
     from backend.store import LogWriteError
     from backend.store_open import ELSEWHERE, LogError, open_checked
 

@@ -69,7 +69,7 @@ if TYPE_CHECKING:
         frame_success_probability,
     )
     from codec._describe import describe_dictionary, describe_pattern, markdown_tables
-    from codec._number_text import int_from_text, number_from_text
+    from codec._number_text import ASCII_DIGITS, int_from_text, number_from_text
     from codec._parse import decode_frame, parse_frame
     from codec._snap import Snap
     from codec._wire import (
@@ -85,6 +85,7 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "ASCII_DIGITS",
     "CODE",
     "CODEWORD_BITS",
     "CRC_BITS",
@@ -172,6 +173,7 @@ _LAZY = {
     "delivery_probability": "codec._delivery",
     "frame_success_probability": "codec._delivery",
     "Snap": "codec._snap",
+    "ASCII_DIGITS": "codec._number_text",
     "int_from_text": "codec._number_text",
     "number_from_text": "codec._number_text",
     "Encoded": "codec._wire",

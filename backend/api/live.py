@@ -15,6 +15,7 @@ from backend.bounded_input import shorten
 from backend.commands import RateLimited
 from backend.console import Console
 from backend.security import origin_allowed
+from backend.strict_input import lone_surrogate_in
 from codec import CodecError
 from planner import PlanError
 
@@ -111,6 +112,10 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
         return {"type": "error", "detail": "not JSON"}
     if not isinstance(msg, dict):
         return {"type": "error", "detail": "expected a JSON object with a 'type'"}
+    invalid = lone_surrogate_in(msg)  # the REST rule (backend.strict_input), before any use
+    if invalid is not None:
+        loc, detail, _text = invalid
+        return {"type": "error", "detail": detail, "field": ".".join(map(str, loc))}
     kind = msg.get("type")
     if kind == "auth":
         token = msg.get("token")
