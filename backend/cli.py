@@ -33,7 +33,9 @@ from codec import (
     decode_frame,
     describe_dictionary,
     encode_frame,
+    int_from_text,
     markdown_tables,
+    number_from_text,
     sections,
 )
 from codec._fields import fmt
@@ -94,11 +96,9 @@ def _parse_assignments(items: Sequence[str]) -> dict[str, str]:
 
 def _positive_rate(text: str) -> float:
     try:
-        rate = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"bit rate must be a number in b/s, got {text!r}"
-        ) from None
+        rate = number_from_text(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"bit rate must be a number in b/s: {err}") from None
     if not rate > 0 or rate == float("inf"):
         raise argparse.ArgumentTypeError(f"bit rate must be a positive number in b/s, got {text}")
     return rate
@@ -107,7 +107,7 @@ def _positive_rate(text: str) -> float:
 def _number_or_text(value: object) -> object:
     if isinstance(value, str):
         try:
-            return float(value)
+            return number_from_text(value)
         except ValueError:
             return value
     return value
@@ -223,9 +223,9 @@ DEFAULT_SEND_TIMEOUT_S = 5.0
 
 def _seconds(text: str) -> float:
     try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"timeout must be seconds, got {text!r}") from None
+        value = number_from_text(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"timeout must be seconds: {err}") from None
     if not 0 <= value < float("inf"):
         raise argparse.ArgumentTypeError(f"timeout must be 0 or more seconds, got {text}")
     return value
@@ -473,8 +473,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="run a benchmark and print its table")
     p.add_argument("target", choices=BENCHMARKS, help="what to benchmark")
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
-    p.add_argument("--kills", type=int, help="recovery: console kills (default 20)")
-    p.add_argument("--seed", type=int, help="recovery: random seed (default 0)")
+    p.add_argument("--kills", type=int_from_text, help="recovery: console kills (default 20)")
+    p.add_argument("--seed", type=int_from_text, help="recovery: random seed (default 0)")
 
     p = sub.add_parser(
         "results",
@@ -497,7 +497,7 @@ def build_parser() -> argparse.ArgumentParser:
         "sent r = 1..3 times through the training channel, against 1 - (1 - P1)^r.",
     )
     p.add_argument("target", choices=["ber", "delivery"], help="what to analyze")
-    p.add_argument("--trials", type=int, default=None, help="delivery: commands per BER")
+    p.add_argument("--trials", type=int_from_text, default=None, help="delivery: commands per BER")
     p.add_argument("--quick", action="store_true", help="fewer frames (under a minute)")
     p.add_argument(
         "--out",
@@ -506,7 +506,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="output directory (default docs/results)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=int_from_text, default=0, help="random seed (default 0)")
     return parser
 
 

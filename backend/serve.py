@@ -14,6 +14,8 @@ import sys
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TextIO
 
+from codec import int_from_text, number_from_text
+
 if TYPE_CHECKING:
     import uvicorn
 
@@ -31,8 +33,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "with the simulated vehicle, a local SQLite log, everything on 127.0.0.1.",
     )
     p.add_argument("--host", help="interface for the page and API (default 127.0.0.1)")
-    p.add_argument("--port", type=int, help="port of the page and API (default 8000)")
-    p.add_argument("--viewer-port", type=int, help="viser's port (default 8080; 0 = any)")
+    p.add_argument("--port", type=int_from_text, help="port of the page and API (default 8000)")
+    p.add_argument("--viewer-port", type=int_from_text, help="viser's port (default 8080; 0 = any)")
     p.add_argument(
         "--target",
         help="sim (default: the simulated vehicle), ws://host:port (a rosbridge vehicle), "
@@ -41,7 +43,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--db", dest="db_path", help="mission log file (default .nemesys/missions.sqlite3)"
     )
-    p.add_argument("--time-scale", dest="sim_time_scale", type=float, help="simulator speed-up")
+    p.add_argument(
+        "--time-scale", dest="sim_time_scale", type=number_from_text, help="simulator speed-up"
+    )
 
 
 def cmd_console(args: argparse.Namespace, out: TextIO) -> int:

@@ -12,6 +12,7 @@ tabs around it.
 from __future__ import annotations
 
 import re
+from argparse import ArgumentTypeError
 
 _DECIMAL = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 _INTEGER = re.compile(r"[+-]?[0-9]+")
@@ -21,13 +22,19 @@ _QUOTE_CHARS = 40
 ASCII_DIGITS = "only ASCII digits 0-9 are allowed"
 
 
-def _refuse(text: str, what: str) -> ValueError:
+class NumberTextError(ValueError, ArgumentTypeError):
+    """Text that is not a number. Also an ``ArgumentTypeError``: as the ``type`` of a
+    command-line option, :func:`number_from_text` and :func:`int_from_text` have argparse
+    print this message (it prints only "invalid value" for a plain ``ValueError``)."""
+
+
+def _refuse(text: str, what: str) -> NumberTextError:
     shown = text if len(text) <= _QUOTE_CHARS else text[: _QUOTE_CHARS - 1] + "…"
     if not text.isascii():
         # ascii() so the message itself is plain text whatever was given (even a lone
         # surrogate, which no encoder writes)
-        return ValueError(f"{ASCII_DIGITS} in {what}, got {shown!a}")
-    return ValueError(f"expected {what}, got {shown!r}")
+        return NumberTextError(f"{ASCII_DIGITS} in {what}, got {shown!a}")
+    return NumberTextError(f"expected {what}, got {shown!r}")
 
 
 def number_from_text(text: str) -> float:
@@ -35,8 +42,8 @@ def number_from_text(text: str) -> float:
     The result may be infinite (``1e400``): the caller checks its range.
 
     Raises:
-        ValueError: anything else, the message saying what is allowed (non-ASCII digits:
-            :data:`ASCII_DIGITS`).
+        NumberTextError: (a ``ValueError``) anything else, the message saying what is
+            allowed (non-ASCII digits: :data:`ASCII_DIGITS`).
     """
     core = text.strip(" \t")
     if not _DECIMAL.fullmatch(core):
@@ -49,7 +56,8 @@ def int_from_text(text: str) -> int:
     digits (no integer the console reads is longer; ``int()`` of a long text is slow).
 
     Raises:
-        ValueError: anything else, the message saying what is allowed.
+        NumberTextError: (a ``ValueError``) anything else, the message saying what is
+            allowed.
     """
     core = text.strip(" \t")
     if not _INTEGER.fullmatch(core) or len(core.lstrip("+-")) > 20:
