@@ -13,7 +13,7 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
 
-from fastapi import FastAPI, Request
+from fastapi import Depends, FastAPI, Request
 from fastapi.responses import FileResponse, JSONResponse
 from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException
@@ -28,6 +28,7 @@ from backend.commands.service import SendRefused, refusal_detail
 from backend.console import Console
 from backend.security import HostGuard, allowed_hosts, install_redaction
 from backend.settings import Settings
+from backend.strict_input import strict_json_body
 from backend.token_file import with_kept_token
 from codec import EncodeError
 from planner import PlanError
@@ -64,6 +65,9 @@ def create_app(settings: Settings | None = None, *, viewer: bool = True) -> Fast
         summary="Author, preview, send and watch 100-bit retasking commands for the NemeSys AUV.",
         version="0.1.0",
         lifespan=lifespan,
+        # a JSON body with a lone surrogate anywhere is a 422 naming the field, before
+        # anything reads it (no 500, the connection stays open)
+        dependencies=[Depends(strict_json_body)],
     )
     app.state.settings = cfg
     # No CORS middleware: cross-origin browser calls are refused (closed by default).

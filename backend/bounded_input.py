@@ -10,13 +10,16 @@ an over-size body is never read.
 
 :func:`validation_errors` replaces FastAPI's 422 handler: each error keeps ``loc``, ``msg``
 and ``type``, with ``input`` cut to a short excerpt and no ``ctx`` or ``url``; a body the
-JSON parser cannot read at all (not Unicode text, nested too deeply) is a 422 as well.
+JSON parser cannot read at all (not Unicode text, nested too deeply) is a 422 as well. Every
+text of a 422 can be written (a lone surrogate is quoted as its escape: rendering it raised,
+a 500) and holds no operator token (a client that put it in a path gets ``***`` back).
 """
 
 from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from typing import Any
 
 from fastapi import FastAPI, Request
@@ -25,6 +28,9 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse, Response
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from backend.security import redact
+from backend.strict_input import error_message, lone_surrogate, printable
 
 #: Longest ``input`` echoed in a 422 (characters of its JSON text), and longest ``loc`` item.
 EXCERPT_CHARS = 80
@@ -127,6 +133,7 @@ def excerpt(value: Any) -> Any:
             return value
         return f"<an integer of {value.bit_length()} bits>"
     if isinstance(value, str):
+        value = printable(value)  # a lone surrogate cannot be written: its escape is
         return value if len(value) <= EXCERPT_CHARS else value[: EXCERPT_CHARS - 1] + "…"
     if isinstance(value, bytes | bytearray):  # a body FastAPI did not parse (not JSON): text
         return excerpt(bytes(value).decode("utf-8", errors="replace"))
@@ -139,6 +146,8 @@ def excerpt(value: Any) -> Any:
             text = json.dumps(value, ensure_ascii=False, default=repr)
     except (TypeError, ValueError, RecursionError):  # a long integer, a deep structure
         return f"<{type(value).__name__}>"
+    if lone_surrogate(text) is not None:
+        native, text = False, printable(text)
     short = len(text) <= EXCERPT_CHARS
     if native and short and "NaN" not in text and "Infinity" not in text:
         return value
@@ -150,20 +159,28 @@ def shorten(text: str, limit: int = MSG_CHARS) -> str:
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
-def short_error(error: dict[str, Any]) -> dict[str, Any]:
+def short_error(error: dict[str, Any], secrets: Sequence[str] = ()) -> dict[str, Any]:
     """One validation error as the console answers it: ``loc``, ``msg``, ``type`` and an
-    excerpt of ``input``."""
-    loc = [
-        shorten(item, LOC_CHARS) if isinstance(item, str) else item for item in error.get("loc", ())
-    ]
-    msg = str(error.get("msg", ""))
+    excerpt of ``input``; every text printable (a lone surrogate as its escape) and with
+    ``secrets`` (the operator token: a client put it in a path, say) redacted."""
+
+    def text(value: str, limit: int) -> str:
+        return shorten(redact(printable(value), secrets), limit)
+
+    loc = [text(i, LOC_CHARS) if isinstance(i, str) else i for i in error.get("loc", ())]
+    msg = error_message(error)  # with the ASCII rule when a number's digits broke it
     if error.get("type") == "json_invalid":  # FastAPI puts the parser's reason in ctx
         reason = (error.get("ctx") or {}).get("error")
         if reason:
             msg = f"{msg}: {reason}"
-    out: dict[str, Any] = {"loc": loc, "msg": shorten(msg, MSG_CHARS), "type": error.get("type")}
+    given = error.get("input")
+    out: dict[str, Any] = {"loc": loc, "msg": text(msg, MSG_CHARS), "type": error.get("type")}
     if "input" in error:
-        out["input"] = excerpt(error["input"])
+        shown = excerpt(given)
+        if isinstance(shown, list | dict):  # short JSON: its text, if that holds a token
+            as_text = json.dumps(shown, ensure_ascii=False)
+            shown = as_text if redact(as_text, secrets) != as_text else shown
+        out["input"] = text(shown, EXCERPT_CHARS) if isinstance(shown, str) else shown
     return out
 
 
@@ -188,9 +205,10 @@ def validation_errors(app: FastAPI) -> None:
     422 as malformed JSON instead of FastAPI's undocumented 400."""
 
     @app.exception_handler(RequestValidationError)
-    async def request_validation(_request: Request, err: RequestValidationError) -> JSONResponse:
+    async def request_validation(request: Request, err: RequestValidationError) -> JSONResponse:
+        secrets = [request.app.state.settings.token]
         return JSONResponse(
-            {"detail": [short_error(dict(e)) for e in err.errors()]}, status_code=422
+            {"detail": [short_error(dict(e), secrets) for e in err.errors()]}, status_code=422
         )
 
     @app.exception_handler(StarletteHTTPException)

@@ -15,6 +15,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, TextIO
 
 from backend.token_file import TokenFileError, token_path, with_kept_token
+from codec import int_from_text, number_from_text
 
 if TYPE_CHECKING:
     import uvicorn
@@ -35,8 +36,8 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         "with the simulated vehicle, a local SQLite log, everything on 127.0.0.1.",
     )
     p.add_argument("--host", help="interface for the page and API (default 127.0.0.1)")
-    p.add_argument("--port", type=int, help="port of the page and API (default 8000)")
-    p.add_argument("--viewer-port", type=int, help="viser's port (default 8080; 0 = any)")
+    p.add_argument("--port", type=int_from_text, help="port of the page and API (default 8000)")
+    p.add_argument("--viewer-port", type=int_from_text, help="viser's port (default 8080; 0 = any)")
     p.add_argument(
         "--target",
         help="sim (default: the simulated vehicle), ws://host:port (a rosbridge vehicle), "
@@ -45,7 +46,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     p.add_argument(
         "--db", dest="db_path", help="mission log file (default .nemesys/missions.sqlite3)"
     )
-    p.add_argument("--time-scale", dest="sim_time_scale", type=float, help="simulator speed-up")
+    p.add_argument(
+        "--time-scale", dest="sim_time_scale", type=number_from_text, help="simulator speed-up"
+    )
     p.add_argument(
         "--new-token",
         action="store_true",
@@ -76,9 +79,11 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     try:
         settings = Settings.load(**overrides)
     except ValidationError as err:
+        from backend.strict_input import error_message
+
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
-        return _usage(f"setting {where}: {first['msg']}")
+        return _usage(f"setting {where}: {error_message(first)}")
     from backend.mission_log.opening import ELSEWHERE, LogError, open_checked
     from backend.mission_log.store import LogWriteError
 

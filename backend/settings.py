@@ -17,16 +17,19 @@ from typing import Annotated, Any
 from pydantic import BeforeValidator, Field, WithJsonSchema, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from codec import ASCII_DIGITS, number_from_text
+
 #: The target meaning "the embedded simulator" (training mode).
 SIM_TARGET = "sim"
 
 
 def _number(value: object, *, text: bool) -> float | None:
-    """A number; from text too when ``text`` (environment variables, settings files);
-    ``None`` for anything else (booleans are not numbers)."""
+    """A number; from text too when ``text`` (environment variables, settings files: ASCII
+    decimal digits only, :func:`codec.number_from_text`); ``None`` for anything else
+    (booleans are not numbers)."""
     if isinstance(value, str) and text:
         try:
-            return float(value)
+            return number_from_text(value)
         except ValueError:
             return None
     if isinstance(value, bool) or not isinstance(value, int | float):
@@ -34,17 +37,23 @@ def _number(value: object, *, text: bool) -> float | None:
     return float(value)
 
 
+def _got(value: object) -> str:
+    """How a refused value is quoted, with the rule it broke when that was the digits."""
+    hint = f" ({ASCII_DIGITS})" if isinstance(value, str) and not value.isascii() else ""
+    return f"got {value!r:.40}{hint}"
+
+
 def _checks(*, text: bool) -> tuple[BeforeValidator, BeforeValidator]:
     def link_ber(value: object) -> float:
         number = _number(value, text=text)
         if number is None or not 0.0 <= number < 0.5:
-            raise ValueError(f"link_ber must be a number in [0, 0.5), got {value!r:.40}")
+            raise ValueError(f"link_ber must be a number in [0, 0.5), {_got(value)}")
         return number
 
     def delivery_target(value: object) -> float:
         number = _number(value, text=text)
         if number is None or not 0.0 < number < 1.0:
-            raise ValueError(f"delivery_target must be a number in (0, 1), got {value!r:.40}")
+            raise ValueError(f"delivery_target must be a number in (0, 1), {_got(value)}")
         return number
 
     return BeforeValidator(link_ber), BeforeValidator(delivery_target)

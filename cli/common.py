@@ -7,7 +7,7 @@ import argparse
 from collections.abc import Sequence
 from typing import Any, TextIO
 
-from codec import Encoded, Snap
+from codec import Encoded, Snap, number_from_text
 from codec._fields import fmt
 from onboard.agent import command_json
 
@@ -36,11 +36,9 @@ def parse_assignments(items: Sequence[str]) -> dict[str, str]:
 
 def positive_rate(text: str) -> float:
     try:
-        rate = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"bit rate must be a number in b/s, got {text!r}"
-        ) from None
+        rate = number_from_text(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"bit rate must be a number in b/s: {err}") from None
     if not rate > 0 or rate == float("inf"):
         raise argparse.ArgumentTypeError(f"bit rate must be a positive number in b/s, got {text}")
     return rate
@@ -49,7 +47,7 @@ def positive_rate(text: str) -> float:
 def _number_or_text(value: object) -> object:
     if isinstance(value, str):
         try:
-            return float(value)
+            return number_from_text(value)
         except ValueError:
             return value
     return value

@@ -18,10 +18,12 @@ EXIT_USAGE = 2
 
 
 def _positive_seconds(text: str) -> float:
+    from codec import number_from_text
+
     try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be seconds, got {text!r}") from None
+        value = number_from_text(text)  # ASCII digits only
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"must be seconds: {err}") from None
     if not 0 < value < float("inf"):
         raise argparse.ArgumentTypeError(f"must be more than 0 seconds, got {text}")
     return value

@@ -44,6 +44,7 @@ from codec import (
     decode_frame,
     describe_dictionary,
     encode_frame,
+    int_from_text,
     markdown_tables,
     sections,
 )
@@ -284,8 +285,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="run a benchmark and print its table")
     p.add_argument("target", choices=BENCHMARKS, help="what to benchmark")
     p.add_argument("--quick", action="store_true", help="fewer repetitions (smoke run)")
-    p.add_argument("--kills", type=int, help="recovery: console kills (default 20)")
-    p.add_argument("--seed", type=int, help="recovery: random seed (default 0)")
+    p.add_argument("--kills", type=int_from_text, help="recovery: console kills (default 20)")
+    p.add_argument("--seed", type=int_from_text, help="recovery: random seed (default 0)")
 
     p = sub.add_parser(
         "results",
@@ -308,7 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
         "sent r = 1..3 times through the training channel, against 1 - (1 - P1)^r.",
     )
     p.add_argument("target", choices=["ber", "delivery"], help="what to analyze")
-    p.add_argument("--trials", type=int, default=None, help="delivery: commands per BER")
+    p.add_argument("--trials", type=int_from_text, default=None, help="delivery: commands per BER")
     p.add_argument("--quick", action="store_true", help="fewer frames (under a minute)")
     p.add_argument(
         "--out",
@@ -317,7 +318,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="output directory (default docs/results)",
     )
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=int_from_text, default=0, help="random seed (default 0)")
     return parser
 
 

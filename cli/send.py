@@ -25,7 +25,14 @@ from cli.common import (
     positive_rate,
     write_snaps,
 )
-from codec import DEFAULT_BITRATE_BPS, DICTIONARY, CodecError, airtime_s, encode_frame
+from codec import (
+    DEFAULT_BITRATE_BPS,
+    DICTIONARY,
+    CodecError,
+    airtime_s,
+    encode_frame,
+    number_from_text,
+)
 from codec._fields import fmt
 
 if TYPE_CHECKING:
@@ -41,9 +48,9 @@ DEFAULT_SEND_TIMEOUT_S = 5.0
 
 def _seconds(text: str) -> float:
     try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"timeout must be seconds, got {text!r}") from None
+        value = number_from_text(text)
+    except ValueError as err:
+        raise argparse.ArgumentTypeError(f"timeout must be seconds: {err}") from None
     if not 0 <= value < float("inf"):
         raise argparse.ArgumentTypeError(f"timeout must be 0 or more seconds, got {text}")
     return value

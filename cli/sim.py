@@ -12,7 +12,7 @@ import pathlib
 from collections.abc import Callable
 from typing import TextIO
 
-from codec import DEFAULT_BITRATE_BPS
+from codec import DEFAULT_BITRATE_BPS, int_from_text, number_from_text
 
 # Scenario names, for the help text (checked against sim.scenarios by the tests; the
 # CLI does not import the simulator until a simulator subcommand runs).
@@ -26,9 +26,9 @@ class SimUsageError(ValueError):
 def _number(lo: float, hi: float, what: str) -> Callable[[str], float]:
     def parse(text: str) -> float:
         try:
-            value = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{what} must be a number, got {text!r}") from None
+            value = number_from_text(text)  # ASCII digits only
+        except ValueError as err:
+            raise argparse.ArgumentTypeError(f"{what} must be a number: {err}") from None
         if math.isnan(value) or not lo <= value <= hi:
             raise argparse.ArgumentTypeError(f"{what} must be in [{lo:g}, {hi:g}], got {text}")
         return value
@@ -45,8 +45,12 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         "/nemesys/status; see docs/bridge.md). Ctrl-C stops it.",
     )
     p.add_argument("--host", default="127.0.0.1", help="interface to bind (default 127.0.0.1)")
-    p.add_argument("--port", type=int, default=9090, help="TCP port (default 9090; 0 = any)")
-    p.add_argument("--seed", type=int, default=0, help="random seed of the run (default 0)")
+    p.add_argument(
+        "--port", type=int_from_text, default=9090, help="TCP port (default 9090; 0 = any)"
+    )
+    p.add_argument(
+        "--seed", type=int_from_text, default=0, help="random seed of the run (default 0)"
+    )
     p.add_argument(
         "--ber", type=_number(0, 0.5, "--ber"), default=0.0, help="bit error rate, 0..0.5"
     )
@@ -77,7 +81,7 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
     )
     p.add_argument(
         "--current",
-        type=float,
+        type=number_from_text,
         nargs=2,
         default=(0.0, 0.0),
         metavar=("NORTH", "EAST"),
@@ -98,7 +102,7 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         "print its metrics and write a PNG plot of the track and the depth over time.",
     )
     p.add_argument("name", metavar="NAME", help=", ".join(SCENARIO_NAMES))
-    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    p.add_argument("--seed", type=int_from_text, default=0, help="random seed (default 0)")
     p.add_argument(
         "--out", default=".", metavar="DIR", help="where to write scenario-NAME.png (default .)"
     )

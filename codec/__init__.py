@@ -63,6 +63,7 @@ if TYPE_CHECKING:
         frame_success_probability,
     )
     from codec._describe import describe_dictionary, describe_pattern, markdown_tables
+    from codec._number_text import ASCII_DIGITS, int_from_text, number_from_text
     from codec._parse import decode_frame, parse_frame
     from codec._snap import Snap
     from codec._wire import (
@@ -78,6 +79,7 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "ASCII_DIGITS",
     "CODE",
     "CODEWORD_BITS",
     "CRC_BITS",
@@ -140,9 +142,11 @@ __all__ = [
     "encode_frame",
     "frame_of",
     "frame_success_probability",
+    "int_from_text",
     "make_command",
     "markdown_tables",
     "message_of",
+    "number_from_text",
     "parse_frame",
     "payload_of",
     "sections",
@@ -163,6 +167,9 @@ _LAZY = {
     "delivery_probability": "codec._delivery",
     "frame_success_probability": "codec._delivery",
     "Snap": "codec._snap",
+    "ASCII_DIGITS": "codec._number_text",
+    "int_from_text": "codec._number_text",
+    "number_from_text": "codec._number_text",
     "Encoded": "codec._wire",
     "Section": "codec._wire",
     "airtime_s": "codec._wire",

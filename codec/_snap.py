@@ -13,6 +13,7 @@ import math
 from bisect import bisect_left
 
 from codec._errors import EncodeError
+from codec._number_text import number_from_text
 from codec._record import Record, init
 
 TYPE_CHECKING = False
@@ -173,6 +174,10 @@ def snap_choice(scale: ChoiceScale, name: str, requested: ParamValue) -> tuple[i
     return scale.choices.index(text), text
 
 
+#: Words float() reads as a number that is not finite.
+_NON_FINITE = frozenset({"nan", "inf", "infinity"})
+
+
 def _as_number(name: str, unit: str, requested: ParamValue, allowed: str) -> float:
     """``requested`` as a finite float, or an :class:`EncodeError` saying what is allowed."""
     unit_text = f" in {unit}" if unit else ""
@@ -180,9 +185,13 @@ def _as_number(name: str, unit: str, requested: ParamValue, allowed: str) -> flo
     if isinstance(requested, bool) or not isinstance(requested, str | int | float):
         raise EncodeError(f"{problem}, got {type(requested).__name__}", field=name)
     try:
-        number = float(requested.strip() if isinstance(requested, str) else requested)
-    except ValueError:
-        raise EncodeError(f"{problem}, got {requested!r}", field=name) from None
+        # text: ASCII decimal only (float() would take Arabic-Indic digits and "1_0")
+        number = number_from_text(requested) if isinstance(requested, str) else float(requested)
+    except ValueError as err:
+        if str(requested).strip(" \t").lstrip("+-").lower() in _NON_FINITE:
+            number = math.nan  # said below as what it is: not finite
+        else:
+            raise EncodeError(f"{problem}: {err}", field=name) from None
     except OverflowError:  # an int too large for a float is far out of every range
         raise EncodeError(f"{name} is out of range: allowed {allowed}", field=name) from None
     if not math.isfinite(number):

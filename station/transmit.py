@@ -112,8 +112,10 @@ def _serial_baud(target: str, query: str) -> int:
     if "baud" not in options:
         return DEFAULT_BAUDRATE
     text = options["baud"][-1]
-    if not text.isdigit() or int(text) <= 0:
-        raise _bad_target(target, f"baud must be a positive whole number, got {text!r}")
+    if not (text.isascii() and text.isdigit()) or int(text) <= 0:
+        raise _bad_target(
+            target, f"baud must be a positive whole number in ASCII digits, got {text!r}"
+        )
     return int(text)
 
 

@@ -17,6 +17,7 @@ from backend.commands.service import SendRefused, SendRequest
 from backend.console import Console
 from backend.mission_log.store import LogWriteError
 from backend.security import origin_allowed
+from backend.strict_input import lone_surrogate_in
 from codec import CodecError
 from planner import PlanError
 
@@ -114,6 +115,10 @@ async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
         return {"type": "error", "detail": "not JSON"}
     if not isinstance(msg, dict):
         return {"type": "error", "detail": "expected a JSON object with a 'type'"}
+    invalid = lone_surrogate_in(msg)  # the REST rule (backend.strict_input), before any use
+    if invalid is not None:
+        loc, detail, _text = invalid
+        return {"type": "error", "detail": detail, "field": ".".join(map(str, loc))}
     kind = msg.get("type")
     if kind == "auth":
         token = msg.get("token")

@@ -98,8 +98,10 @@ def parse_gps(value: str) -> GpsSource | None:
         if unknown:
             raise _bad(value, f"unknown option {unknown[0]!r} (only baud=)")
         baud_text = options.get("baud", [str(DEFAULT_BAUD)])[-1]
-        if not baud_text.isdigit() or int(baud_text) <= 0:
-            raise _bad(value, f"baud must be a positive whole number, got {baud_text!r}")
+        if not (baud_text.isascii() and baud_text.isdigit()) or int(baud_text) <= 0:
+            raise _bad(
+                value, f"baud must be a positive whole number in ASCII digits, got {baud_text!r}"
+            )
         return GpsSource("serial", device=split.path, baud=int(baud_text))
     raise _bad(value, f"unknown scheme {scheme!r}")
 
@@ -284,7 +286,7 @@ def _reason(err: Exception) -> str:
 def _int(value: object) -> int | None:
     if isinstance(value, int):
         return value
-    if isinstance(value, str) and value.strip().isdigit():
+    if isinstance(value, str) and value.isascii() and value.strip().isdigit():
         return int(value)
     return None
 

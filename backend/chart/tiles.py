@@ -62,7 +62,7 @@ class DirectoryTiles(TileSource):
         zooms = sorted(
             int(p.name)
             for p in self.root.iterdir()
-            if p.is_dir() and p.name.isdigit() and int(p.name) <= MAX_ZOOM
+            if p.is_dir() and p.name.isascii() and p.name.isdigit() and int(p.name) <= MAX_ZOOM
         )
         self.min_zoom = zooms[0] if zooms else None
         self.max_zoom = zooms[-1] if zooms else None
@@ -137,7 +137,7 @@ class MbTiles(TileSource):
 
 def _int(value: object, fallback: object) -> int | None:
     for v in (value, fallback):
-        if isinstance(v, int) or (isinstance(v, str) and v.strip().isdigit()):
+        if isinstance(v, int) or (isinstance(v, str) and v.isascii() and v.strip().isdigit()):
             return int(v)
     return None
 

@@ -10,12 +10,13 @@ them
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError, ValidationError
 
 from backend.scripts.completion import after_repeating, repeats
+from backend.strict_input import NotBool
 from codec import EncodeError, encode_frame
 
 SCRIPT_FORMAT = "nemesys-mission-script"
@@ -138,7 +139,8 @@ class MissionScript(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     format: Literal["nemesys-mission-script"]
-    version: Literal[1]
+    #: ``true`` is refused: pydantic's ``Literal[1]`` would take it (``True == 1``).
+    version: Annotated[Literal[1], NotBool]
     name: str = Field(min_length=1, max_length=80)
     steps: list[ScriptStep] = Field(min_length=1, max_length=100)
 

@@ -66,9 +66,10 @@ class ChartDoc(BaseModel):
 
 
 class DatumIn(BaseModel):
-    """Either ``{lat_deg, lon_deg}`` or ``{"source": "gps"}`` (the GPS's latest fix)."""
+    """Either ``{lat_deg, lon_deg}`` or ``{"source": "gps"}`` (the GPS's latest fix).
+    Strict: ``false`` is not latitude 0, nor ``"10"`` a number."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
     lat_deg: float | None = Field(None, ge=-90, le=90)
     lon_deg: float | None = Field(None, ge=-180, le=180)
