@@ -15,6 +15,8 @@ from typing import Any
 from backend.commands.delivery import Delivery
 from backend.commands.health import FrameLedger, Outcome
 from backend.commands.lifecycle import Event, IllegalTransition, advance
+from backend.messages import CommandMessage
+from backend.mission_log.records import command_record
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.telemetry import TelemetryHub
 from codec import Encoded
@@ -64,7 +66,7 @@ class CommandRecords:
         if self._held is not None:
             self._held.append(record)
         else:
-            self.hub.publish({"type": "command", "command": record})
+            self.hub.publish(CommandMessage(command=command_record(record)))
 
     @contextlib.contextmanager
     def _atomic(self) -> Iterator[None]:

@@ -14,6 +14,7 @@ import pytest
 
 from backend.commands.health import assess
 from backend.commands.manager import MIN_SURFACE_COPIES, CommandManager, RateLimited
+from backend.messages import CommandMessage, News
 from backend.mission_log.store import MissionLog
 from backend.telemetry import TelemetryHub
 from codec import Encoded, Frame, copies_for, delivery_probability, encode_frame
@@ -56,10 +57,10 @@ class RecordingHub(TelemetryHub):
         super().__init__()
         self.states: dict[int, list[str]] = {}
 
-    def publish(self, event: dict[str, Any]) -> None:
-        if event.get("type") == "command":
-            record = event["command"]
-            self.states.setdefault(record["id"], []).append(record["state"])
+    def publish(self, event: News) -> None:
+        if isinstance(event, CommandMessage):
+            record = event.command
+            self.states.setdefault(record.id, []).append(record.state)
 
 
 class Rig:
