@@ -1,5 +1,6 @@
 // Authoring: pattern picker, parameter form, live preview (bits, hex, airtime, estimates,
-// checks; the backend draws the 3D preview in the viewer) and the confirmed send.
+// checks; the backend draws the 3D preview in the viewer) and the confirmed send: of the form's
+// command, or a retry of a logged one (the same dialog, checked from where the vehicle is now).
 
 import { api, ApiError } from "./api.js";
 import { initCopies, readCopies, copiesLine } from "./copies.js";
@@ -16,6 +17,9 @@ const state = {
   seq: 0,
   controller: null,
   onSent: () => {},
+  // what the open confirm dialog sends: {pattern, params, retryOf} (retryOf: null, or the
+  // id of the logged command a retry repeats as a new command)
+  pending: null,
 };
 
 export function current() {
@@ -206,17 +210,45 @@ async function openConfirm() {
     if (bad && state.form) state.form.focus(bad.param);
     return;
   }
-  renderConfirm(state.preview, current());
+  showConfirm(state.preview, { ...current(), retryOf: null });
+}
+
+/** Retry: the confirm dialog for a new command with a logged one's pattern and values, from a
+ *  fresh preview (the estimates and every check from where the vehicle is now). The form and
+ *  its preview stay as the operator left them. */
+export async function openRetry(record) {
+  if (!canWrite()) return;
+  const command = { pattern: record.pattern, params: record.params || {}, retryOf: record.id };
+  let preview = null;
+  let error = null;
+  try {
+    preview = await api("/api/preview", { method: "POST", body: { pattern: command.pattern, params: command.params } });
+  } catch (err) {
+    error = err;
+  }
+  showConfirm(preview, command, error);
+}
+
+function showConfirm(preview, command, error = null) {
+  state.pending = command;
+  renderConfirm(preview, command, error);
   $("confirm-dialog").showModal();
 }
 
-function renderConfirm(preview, command) {
+function renderConfirm(preview, command, error) {
   const body = $("confirm-body");
   const overrideBox = $("confirm-override-box");
   $("confirm-override").checked = false;
   $("confirm-error").hidden = true;
+  body.dataset.hard = "0";
   const parts = [];
-  if (!preview) {
+  if (error instanceof ApiError && error.status !== 0) {
+    // a retry's values the checks refuse outright (a 422): shown, and nothing can send them
+    parts.push(el("ul", { class: "violations", testid: "confirm-preview-error" },
+      ...error.items.map((i) => el("li", { class: "error" }, i.param ? `${i.param}: ${i.msg}` : i.msg))));
+    overrideBox.hidden = true;
+    body.dataset.hard = "1";
+  } else if (!preview) {
     parts.push(el("p", { class: "warn" }, "No preview available (backend unreachable?): the command is checked when sent."));
     overrideBox.hidden = true;
   } else {
@@ -251,7 +283,8 @@ function renderConfirm(preview, command) {
     body.dataset.hard = violations.some(isHard) ? "1" : "0";
   }
   parts.push(copiesLine(preview));
-  $("confirm-title").textContent = `Send ${command.pattern}?`;
+  $("confirm-title").textContent = command.retryOf == null ? `Send ${command.pattern}?`
+    : `Retry command ${command.retryOf} (${command.pattern}) as a new command?`;
   body.replaceChildren(...parts);
   updateConfirmButton();
 }
@@ -294,7 +327,8 @@ function updateConfirmButton() {
 }
 
 async function confirmSend() {
-  const command = current();
+  const command = state.pending || { ...current(), retryOf: null };
+  const retry = command.retryOf != null;
   const button = $("confirm-send");
   const { copies, error } = readCopies();
   if (error) {
@@ -303,19 +337,26 @@ async function confirmSend() {
     return;
   }
   button.disabled = true;
-  const body = { pattern: command.pattern, params: command.params, override: $("confirm-override").checked };
+  const body = retry ? { override: $("confirm-override").checked }
+    : { pattern: command.pattern, params: command.params, override: $("confirm-override").checked };
   if (copies !== null) body.copies = copies;
+  const path = retry ? `/api/commands/${encodeURIComponent(command.retryOf)}/retry` : "/api/commands";
   try {
-    const record = await api("/api/commands", { method: "POST", body });
+    const record = await api(path, { method: "POST", body });
     $("confirm-dialog").close();
-    notify(`${command.pattern} queued${record && record.id !== undefined ? ` (command ${record.id})` : ""}`);
+    const id = record && record.id !== undefined ? ` (command ${record.id})` : "";
+    notify(retry ? `retry of command ${command.retryOf} (${command.pattern}) queued${id}` : `${command.pattern} queued${id}`);
     state.onSent(record);
   } catch (err) {
     const box = $("confirm-error");
     box.hidden = false;
     box.textContent = err.message;
-    if (err.status === 409) $("confirm-override-box").hidden = false;
-    if (err.status === 422 && state.form) {
+    // overridable limits: the override box; refused outright (a 422, or a retry's command no
+    // longer retryable, a 409 without violations): the same press cannot succeed, Send stays disabled
+    const overridable = err.status === 409 && err.detail && Array.isArray(err.detail.violations);
+    if (overridable) $("confirm-override-box").hidden = false;
+    else if (err.status === 422 || err.status === 409) $("confirm-body").dataset.hard = "1";
+    if (err.status === 422 && state.form && !retry) {
       state.form.setErrors(new Map(err.items.filter((i) => i.param).map((i) => [i.param, i.msg])));
     }
     if (err.status === 422 && err.items.some((i) => i.param === "copies")) $("copies-input").setAttribute("aria-invalid", "true");

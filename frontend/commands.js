@@ -1,16 +1,15 @@
 // The command lifecycle list (states, copies, delivery, Retry) and the echo check.
 
 import { api } from "./api.js";
+import { openRetry } from "./authoring.js";
 import { RETRYABLE, copiesText, stateText } from "./delivery.js";
 import { commandText } from "./form.js";
 import { initSurface, trackSurface, followSurface } from "./surface.js";
-import { $, el, num, clock, notify, notifyError, applyAuth } from "./ui.js";
+import { $, el, num, clock, notify, notifyError, applyAuth, debounce } from "./ui.js";
 
 const MAX_ROWS = 200;
-// states in which the vehicle may be running the command (the echo check's "last sent")
-const WENT_OUT = new Set(["transmitted", "sent", "acknowledged"]);
 const commands = new Map(); // id -> record
-let lastSent = null;
+let lastSent = null; // the server's last sent, as shown
 
 export function initCommands({ wsSurface }) {
   initSurface({ wsSurface, record: upsertCommand, find: (id) => commands.get(String(id)) || null });
@@ -26,8 +25,9 @@ export async function loadCommands() {
   }
 }
 
+/** Wire order, as the log's: when the first copy left (created, if none has yet), then id. */
 function sortKey(r) {
-  return `${r.created_at || ""}|${String(r.id).padStart(12, "0")}`;
+  return `${r.first_sent_at || r.created_at || ""}|${String(r.id).padStart(12, "0")}`;
 }
 
 /** A record from the log, the websocket or a POST: add or update its row. */
@@ -41,18 +41,18 @@ export function upsertCommand(record, { quiet = false } = {}) {
   const list = $("command-list");
   const row = renderRow(r);
   const existing = list.querySelector(`[data-testid="command-${CSS.escape(String(r.id))}"]`);
-  if (existing) existing.replaceWith(row);
-  else {
-    const after = [...list.children].find((li) => sortKey(commands.get(li.dataset.id) || {}) < sortKey(r));
-    list.insertBefore(row, after || null);
-    while (list.children.length > MAX_ROWS) {
-      commands.delete(list.lastElementChild.dataset.id);
-      list.lastElementChild.remove();
-    }
+  // placed anew: its first copy leaving moves it to its place in wire order
+  if (existing) existing.remove();
+  const after = [...list.children].find((li) => sortKey(commands.get(li.dataset.id) || {}) < sortKey(r));
+  list.insertBefore(row, after || null);
+  while (list.children.length > MAX_ROWS) {
+    commands.delete(list.lastElementChild.dataset.id);
+    list.lastElementChild.remove();
   }
   applyAuth(undefined, row);
   trackSurface(r);
-  if (WENT_OUT.has(r.state) && isNewer(r)) setLastSent(r);
+  // a first copy left: the server's "last sent" has moved (the /ws messages do not carry it)
+  if (!quiet && r.first_sent_at && !(old && old.first_sent_at)) refreshLastSent();
   if (!quiet && old && old.state !== r.state && r.state === "rejected") {
     // the row says why in full; the toast names the reason's code and points there
     const code = (r.ack && r.ack.reason) || "see its row";
@@ -114,23 +114,42 @@ function renderRow(r) {
   return el("li", { class: `command st-${r.state}`, testid: `command-${id}`, dataset: { id } }, ...children);
 }
 
+/** A retry is a new command, checked from where the vehicle is now: the confirm dialog of a
+ *  send. A Surface is never checked nor confirmed (the abort, as its button): at once. */
 async function retry(id) {
+  const old = commands.get(String(id));
+  if (!old) return;
+  if (old.kind !== "surface" && old.pattern !== "surface") {
+    await openRetry(old);
+    return;
+  }
   try {
     const r = await api(`/api/commands/${encodeURIComponent(id)}/retry`, { method: "POST" });
-    const old = commands.get(String(id));
-    if (r && r.id !== undefined && (r.kind === "surface" || (old && old.kind === "surface"))) followSurface(r.id);
+    if (r && r.id !== undefined) followSurface(r.id);
     upsertCommand(r && r.id !== undefined ? r : { id, state: "queued" });
   } catch (err) {
     notifyError(`retry of command ${id}`, err);
   }
 }
 
-// ---- echo check ----
+// ---- echo check: "last sent" is the server's (GET /api/vehicle), never worked out here ----
 
-/** Newer than the last sent shown: ids grow with time, a Surface included. */
+/** Not older on the wire than the last sent shown, as far as the list knows (a late answer
+ *  never puts an older command back); unknown to the list: the server's word is taken. */
 function isNewer(cmd) {
-  return !lastSent || Number(cmd.id) >= Number(lastSent.id);
+  const shown = lastSent && commands.get(String(lastSent.id));
+  const next = commands.get(String(cmd.id));
+  if (!shown || !next || !shown.first_sent_at || !next.first_sent_at) return true;
+  return sortKey(next) >= sortKey(shown);
 }
+
+const refreshLastSent = debounce(async () => {
+  try {
+    renderEcho({ last_sent: (await api("/api/vehicle")).last_sent });
+  } catch {
+    // the console is unreachable: the connection state says so, and reconnecting reloads it
+  }
+}, 100);
 
 function setLastSent(cmd) {
   lastSent = cmd;

@@ -23,6 +23,7 @@ the first hours of a dive, which is where a plan's cost is asked.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Final, Literal
@@ -179,10 +180,16 @@ def hours_run(soc_pct: float) -> float:
     (the fit falls monotonically), 0 for a full battery."""
     if not soc_pct < 100.0:
         return 0.0
-    lo, hi = 0.0, _MAX_HOURS
-    for _ in range(50):
+    return _hours_to(paper_soc_pct, soc_pct, _MAX_HOURS)
+
+
+def _hours_to(soc_of: Callable[[float], float], soc_pct: float, max_h: float) -> float:
+    """When (h, within ``[0, max_h]``) a falling state-of-charge curve ``soc_of`` reaches
+    ``soc_pct``: bisection, to well under a second."""
+    lo, hi = 0.0, max_h
+    for _ in range(60):
         mid = (lo + hi) / 2
-        if paper_soc_pct(mid) > soc_pct:
+        if soc_of(mid) > soc_pct:
             lo = mid
         else:
             hi = mid
@@ -217,11 +224,4 @@ def endurance_left_s(endurance_s: float, soc_pct: float | None, cutoff_pct: floa
     def soc(t_h: float) -> float:
         return 100.0 - linear_pct_per_h * t_h - SOC_FAST_PCT * -math.expm1(-t_h / SOC_FAST_TAU_H)
 
-    lo, hi = 0.0, total_h
-    for _ in range(60):
-        mid = (lo + hi) / 2
-        if soc(mid) > soc_pct:
-            lo = mid
-        else:
-            hi = mid
-    return max(0.0, endurance_s - (lo + hi) / 2 * 3600.0)
+    return max(0.0, endurance_s - _hours_to(soc, soc_pct, total_h) * 3600.0)

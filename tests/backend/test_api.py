@@ -544,7 +544,8 @@ def test_rate_limit_429_with_retry_after_but_never_surface(make_client: MakeClie
         assert s.status_code == 202
         assert s.json()["kind"] == "surface"
     # a retry is a transmission too
-    r = client.post(f"/api/commands/{rejected['id']}/retry", headers=AUTH)
+    body = {"override": True}  # checked like a send: its speed needs the override again
+    r = client.post(f"/api/commands/{rejected['id']}/retry", json=body, headers=AUTH)
     assert r.status_code == 429 and "retry-after" in r.headers
 
 
@@ -677,11 +678,13 @@ def test_retry_a_timed_out_command(make_client: MakeClient) -> None:
     put_channel(client, loss=0.0)
     r = client.post(f"/api/commands/{cmd['id']}/retry", headers=AUTH)
     assert r.status_code == 202
-    assert r.json()["id"] == cmd["id"]
-    rec = wait_state(client, cmd["id"], ("acknowledged",))
-    assert rec["attempts"] == 2
-    assert rec["reason"] is None
-    assert len(client.get("/api/commands").json()) == 1  # the same record, a new attempt
+    retried = r.json()  # a new command, naming the one it retries
+    assert retried["id"] != cmd["id"] and retried["retry_of"] == cmd["id"]
+    done = wait_state(client, retried["id"], ("acknowledged",))
+    assert done["attempts"] == 1 and done["reason"] is None
+    assert wait_state(client, cmd["id"])["state"] == "timed_out"  # the old one stays as it was
+    rows = client.get("/api/commands").json()  # newest first, in wire order
+    assert [r["id"] for r in rows] == [retried["id"], cmd["id"]]
 
 
 # --- surface ------------------------------------------------------------------------------

@@ -523,14 +523,14 @@ def test_503_while_the_console_cannot_take_commands(client: TestClient) -> None:
     c = contract(client)
     console = console_of(client)
     retry = f"/api/commands/{interrupted_record(client)}/retry"
-    manager, console.commands = console.commands, None
+    service, console.service = console.service, None
     try:
         body = {"pattern": "circle", "params": CIRCLE}
         assert c.call("POST", "/api/commands", json=body, headers=AUTH).status_code == 503
         assert c.call("POST", "/api/surface", headers=AUTH).status_code == 503
         assert c.call("POST", retry, headers=AUTH).status_code == 503
     finally:
-        console.commands = manager
+        console.service = service
 
 
 def test_503_when_a_new_dive_cannot_be_logged(

@@ -459,10 +459,16 @@ def test_reset_while_a_command_is_transmitted_shows_it_interrupted_and_retryable
     expect(row).to_have_class(re.compile(r"\bst-interrupted\b"))
     expect(row.get_by_test_id(f"command-detail-{command_id}")).to_have_text(record["reason"])
 
-    # retried on a working channel, it is acknowledged
+    # retried on a working channel (through the confirm dialog: a new command, checked from
+    # where the vehicle is now), it is acknowledged; the interrupted one stays interrupted
     console.put("/api/training/channel", {"loss": 0.0})
     before = {r["id"] for r in commands(console)}
     row.get_by_test_id(f"retry-{command_id}").click()
+    expect(page.locator("#confirm-title")).to_have_text(
+        f"Retry command {command_id} (circle) as a new command?"
+    )
+    page.get_by_test_id("confirm-send").click()
+    expect(page.get_by_test_id("confirm-dialog")).to_be_hidden()
     deadline = time.monotonic() + ACK_MS / 1000
     while True:
         done = [r for r in commands(console) if r["state"] == "acknowledged"]
@@ -470,9 +476,10 @@ def test_reset_while_a_command_is_transmitted_shows_it_interrupted_and_retryable
             break
         assert time.monotonic() < deadline, commands(console)
         time.sleep(0.1)
-    retried = done[0]["id"]
-    assert retried == command_id or retried not in before
-    assert_acknowledged_row(page, retried)
+    retried = done[0]
+    assert retried["id"] not in before and retried["retry_of"] == command_id, retried
+    assert console.get(f"/api/commands/{command_id}")["state"] == "interrupted"
+    assert_acknowledged_row(page, retried["id"])
     watched.assert_clean()
 
 
