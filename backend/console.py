@@ -27,13 +27,7 @@ from backend.commands.checks import SendViolation
 from backend.commands.health import LinkHealth, link_health_of
 from backend.commands.manager import CommandManager
 from backend.commands.service import Assessment, CommandService
-from backend.messages import (
-    ActivePath,
-    ActivePathMessage,
-    EventMessage,
-    LinkMessage,
-    VehicleView,
-)
+from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMessage, VehicleView
 from backend.mission_log.opening import open_checked
 from backend.mission_log.records import log_event
 from backend.mission_log.store import LogWriteError, MissionLog
@@ -215,15 +209,7 @@ class Console:
             return
         self._echo_flagged = True
         assert cm is not None and self.log is not None
-        last = cm.vehicle.accepted or {}
-        status = self.hub.status or {}
-        active = cm.vehicle_active or {"pattern": status.get("pattern")}
-        detail = (
-            f"the vehicle runs {active.get('pattern')}, not {last.get('pattern')} (command "
-            f"{last.get('id')}, the last it accepted from this console): retasked by another "
-            "station, restarted, or not this console's vehicle"
-        )
-        data = {"vehicle_active": active, "last_accepted_id": last.get("id")}
+        detail, data = cm.vehicle.mismatch_event()
         try:
             event = self.log.add_event(self.dive, "echo_mismatch", detail, data)
         except LogWriteError as err:
