@@ -12,6 +12,8 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from typing import Any
 
+from pydantic import ValidationError
+
 from backend.commands.delivery import Delivery
 from backend.commands.health import FrameLedger, Outcome
 from backend.commands.lifecycle import Event, IllegalTransition, advance
@@ -66,7 +68,12 @@ class CommandRecords:
         if self._held is not None:
             self._held.append(record)
         else:
-            self.hub.publish(CommandMessage(command=command_record(record)))
+            try:
+                message = CommandMessage(command=command_record(record))
+            except ValidationError as err:  # a bookkeeping bug: say so, keep delivering
+                logger.error("command %s not announced: %s", record.get("id"), err)
+                return
+            self.hub.publish(message)
 
     @contextlib.contextmanager
     def _atomic(self) -> Iterator[None]:
