@@ -80,7 +80,7 @@ class Console:
         #: The one checked path to the vehicle (every frame leaves through it).
         self.service: CommandService | None = None
         self.viewer: Viewer | None = None  # the 3D view (None: started without one)
-        self.runner: ScriptRunner | None = None  # the mission script run, the last one
+        self.runner: ScriptRunner | None = None  # the latest mission script run (None: none yet)
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
         self.drawer = PreviewDrawer(PREVIEW_DRAW_INTERVAL_S)
