@@ -32,11 +32,12 @@ from backend.mission_log.opening import open_checked
 from backend.mission_log.records import log_event
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
-from backend.telemetry import TelemetryHub, number, pose_from_message, position_known
+from backend.telemetry import TelemetryHub
 from backend.viewer.draw_queue import PreviewDrawer
 from codec import Encoded, airtime_s
 from planner import Limits, Plan, VehicleState
 from station.link import Link, RosbridgeLink, open_link
+from vehicle_contract.messages import number, pose_from_message, position_known
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
     from backend.scripts.operations import ScriptRunner

@@ -10,85 +10,25 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import math
 import time
 from collections import deque
 from typing import Any, Protocol
 
 from backend.messages import News, TelemetryMessage, message_json
+from vehicle_contract.messages import (
+    PoseFields,
+    position_known,
+    status_from_message,
+    unknown_count,
+)
 
 
 class Sender(Protocol):
     async def send_text(self, data: str) -> None: ...
 
 
-#: Numbers of a pose, each ``None`` when the vehicle sent none (null, NaN, missing).
-POSE_KEYS = ("t_s", "x_m", "y_m", "z_m", "heading_deg", "roll_deg")
-#: Numbers of the vehicle's status the console reads.
-STATUS_NUMBERS = ("t_s", "depth_m", "heading_deg", "speed_mps", "battery_pct", "x_m", "y_m")
-
-Pose = dict[str, float | None]
-
-
-def number(value: object) -> float | None:
-    """A finite number, or ``None``: rosbridge_server sends NaN and infinity as ``null``, and
-    a field may be missing or of another type. Booleans are not numbers."""
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        return None
-    out = float(value)
-    return out if math.isfinite(out) else None
-
-
-def _dict(value: object) -> dict[str, Any]:
-    return value if isinstance(value, dict) else {}
-
-
-def heading_roll_from_quaternion(q: dict[str, Any]) -> tuple[float | None, float | None]:
-    """(heading_deg in [0, 360), roll_deg) from a NED body quaternion with pitch 0; both
-    ``None`` when a component is not a number."""
-    x, y, z, w = (number(q.get(k)) for k in ("x", "y", "z", "w"))
-    if x is None or y is None or z is None or w is None:
-        return None, None
-    yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-    roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
-    return math.degrees(yaw) % 360.0, math.degrees(roll)
-
-
-def pose_from_message(msg: dict[str, Any]) -> Pose:
-    """A PoseStamped message (NED, ``map_ned``) as a flat pose dict; a number the vehicle
-    did not send (null, NaN, missing) is ``None``. ``t_s`` is the vehicle's ROS time."""
-    pose = _dict(msg.get("pose"))
-    pos = _dict(pose.get("position"))
-    heading, roll = heading_roll_from_quaternion(_dict(pose.get("orientation")))
-    stamp = _dict(_dict(msg.get("header")).get("stamp"))
-    sec, nanosec = number(stamp.get("sec")), number(stamp.get("nanosec"))
-    return {
-        "t_s": None if sec is None else sec + (nanosec or 0.0) * 1e-9,
-        "x_m": number(pos.get("x")),
-        "y_m": number(pos.get("y")),
-        "z_m": number(pos.get("z")),
-        "heading_deg": heading,
-        "roll_deg": roll,
-    }
-
-
-def status_from_message(msg: dict[str, Any]) -> tuple[dict[str, Any], int]:
-    """The vehicle's status with every number it should hold (:data:`STATUS_NUMBERS`) made a
-    finite float or ``None``, and how many were unknown (null, NaN or missing)."""
-    status = dict(msg)
-    unknown = 0
-    for key in STATUS_NUMBERS:
-        status[key] = number(msg.get(key))
-        unknown += status[key] is None
-    return status, unknown
-
-
-def unknown_count(pose: Pose) -> int:
-    return sum(pose[k] is None for k in POSE_KEYS)
-
-
-def position_known(pose: Pose | None) -> bool:
-    return pose is not None and all(pose[k] is not None for k in ("x_m", "y_m", "z_m"))
+#: A pose as the vehicle sent it (:func:`vehicle_contract.messages.pose_from_message`).
+Pose = PoseFields
 
 
 class _Client:

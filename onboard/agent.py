@@ -32,14 +32,13 @@ from codec import (
 )
 from onboard.guidance import Guidance, Reference
 from planner import Limits, Plan, PlanError, VehicleState, plan, validate
+from vehicle_contract.codes import INVALID_PLAN, LIMIT_VIOLATION
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # the onboard process imports no typing (~0.45 MiB): bench reconfig
     from typing import Any
 
-#: Reject reasons beyond the codec's (:class:`codec.RejectReason`).
-INVALID_PLAN = "invalid_plan"
-LIMIT_VIOLATION = "limit_violation"
+#: The reject reasons beyond the codec's are the contract's (:mod:`vehicle_contract.codes`).
 #: The pattern executed whatever the limits (pattern 15).
 SURFACE = "surface"
 

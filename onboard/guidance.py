@@ -19,21 +19,10 @@ transient.
 from __future__ import annotations
 
 import math
-from enum import StrEnum
 
 from codec._record import Record, init
 from planner import Plan
-
-
-class Mode(StrEnum):
-    """What the vehicle is doing (reported in the status)."""
-
-    IDLE = "idle"  # no command yet: holding the start pose
-    RUNNING = "running"  # following a pattern
-    HOLDING = "holding"  # a finite pattern is complete, or a hover: station keeping
-    SURFACING = "surfacing"
-    SURFACED = "surfaced"
-    BATTERY_EMPTY = "battery_empty"
+from vehicle_contract.codes import Mode
 
 
 class GuidanceConfig(Record):

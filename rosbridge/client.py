@@ -1,6 +1,7 @@
 """rosbridge v2, the client side, sans-IO: what a client sends, and what it makes of what the
-server sends. Used by the station's transmitter (:mod:`station.transmit`) and the console's
-link (:mod:`station.link`); the server side is :mod:`rosbridge.protocol`.
+server sends. The transport under it is :mod:`rosbridge.transport`, the one client the
+console's link (:mod:`station.link`), the station's transmitter (:mod:`station.transmit`) and
+``nemesys vehicle-check`` use; the server side is :mod:`rosbridge.protocol`.
 
 :class:`ClientProtocol` makes the messages (as roslibpy makes them, ids included),
 :func:`decode_server_message` and :func:`decode_json_string` read what comes back, and

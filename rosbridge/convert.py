@@ -28,6 +28,7 @@ from rosbridge.types import (
     ros2_type,
     short_type,
 )
+from vehicle_contract.messages import stamp
 
 # ---------------------------------------------------------------------------------------------
 # Incoming: JSON -> a complete message
@@ -71,7 +72,7 @@ def _object(
         raise _mismatch(root, stack, short_type(type_name), msg)
     out: JsonObject = {name: default(field, type_name, name) for name, field in layout}
     if type_name == "std_msgs/msg/Header":
-        out["stamp"] = time_msg(now_s)
+        out["stamp"] = stamp(now_s)
     types = dict(layout)
     for name, value in msg.items():
         where = [*stack, name]
@@ -124,7 +125,7 @@ def _time(value: object, now_s: float, root: str, stack: list[str]) -> JsonObjec
     """``builtin_interfaces/Time``: ``"now"``, or an object with ``sec``/``secs`` and
     ``nanosec``/``nsecs`` (other keys ignored, as the real server does)."""
     if value == "now":
-        return time_msg(now_s)
+        return stamp(now_s)
     if isinstance(value, str):
         if any(key in value for key in ("sec", "nsecs")):
             raise TypeMismatch("string indices must be integers, not 'str'")
@@ -174,21 +175,6 @@ def default(field: str, owner: str = "", name: str = "") -> Any:
     nested = ros2_type(field)
     layout = MESSAGE_FIELDS.get(nested, ())
     return {n: default(f, nested, n) for n, f in layout}
-
-
-def time_msg(t_s: float) -> JsonObject:
-    """``builtin_interfaces/Time`` of a time in seconds: ``{"sec": int, "nanosec": int}``.
-
-    ``nanosec`` is in 0..999_999_999 (``sec`` is floored, so negative times stay valid).
-    Non-finite times give 0.
-    """
-    if not math.isfinite(t_s):
-        return {"sec": 0, "nanosec": 0}
-    sec = math.floor(t_s)
-    nanosec = round((t_s - sec) * 1e9)
-    if nanosec >= 1_000_000_000:
-        sec, nanosec = sec + 1, nanosec - 1_000_000_000
-    return {"sec": int(sec), "nanosec": int(nanosec)}
 
 
 # ---------------------------------------------------------------------------------------------

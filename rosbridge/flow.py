@@ -4,8 +4,8 @@
 ``Protocol.incoming`` does (a text that does not parse is kept and joined with the next one;
 several objects in one text are taken one by one). :class:`MessageHandler` paces one
 subscription as the real server's ``subscription_modifiers`` do (``throttle_rate``,
-``queue_length``); :class:`Defragmenter` reassembles incoming ``fragment`` ops as its
-``defragmentation`` capability does.
+``queue_length``), and :class:`Subscription` holds one topic's; :class:`Defragmenter`
+reassembles incoming ``fragment`` ops as its ``defragmentation`` capability does.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import json
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Final
 
 from rosbridge.errors import BridgeError, FragmentError
@@ -54,6 +54,21 @@ class MessageHandler:
             if self.throttle_s > 0:
                 break
         return out
+
+
+@dataclass(slots=True)
+class Subscription:
+    """One client's subscriptions to one topic: every id's (``throttle_rate`` ms,
+    ``queue_length``), paced together by the smallest of each (as the real server)."""
+
+    expanded: str
+    type: str
+    options: dict[Any, tuple[int, int]] = field(default_factory=dict)  # id -> (throttle, queue)
+    handler: MessageHandler = field(default_factory=MessageHandler)
+
+    def update(self) -> None:
+        values = list(self.options.values())
+        self.handler.configure(min(v[0] for v in values), min(v[1] for v in values))
 
 
 @dataclass(slots=True)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Final
 
-from rosbridge.convert import populate, time_msg
+from rosbridge.convert import populate
 from rosbridge.errors import (
     BridgeError,
     InvalidName,
@@ -30,6 +30,7 @@ from rosbridge.errors import (
 from rosbridge.types import resolve_type
 from vehicle_contract import contract
 from vehicle_contract.contract import VEHICLE_NODE
+from vehicle_contract.messages import stamp
 
 #: Node names (a real vehicle: rosbridge_websocket_launch.xml plus the vehicle's node).
 BRIDGE_NODE: Final = "/rosbridge_websocket"
@@ -380,7 +381,7 @@ _ROSAPI: Final[
         ),
         "/rosapi/service_providers": ((("service", _STRING),), _service_providers),
         "/rosapi/service_node": ((("service", _STRING),), _service_node),
-        "/rosapi/get_time": ((), lambda g, _: {"time": time_msg(g.ros_time())}),
+        "/rosapi/get_time": ((), lambda g, _: {"time": stamp(g.ros_time())}),
         "/rosapi/get_ros_version": ((), lambda g, _: {"version": 2, "distro": ROS_DISTRO}),
     }
 )

@@ -326,3 +326,30 @@ def parse_message(text: str) -> Request:
     except (ValueError, RecursionError) as exc:
         raise MalformedMessage(f"not valid JSON: {exc}") from None
     return parse_object(obj, text)
+
+
+#: The op of each request record (the log's prefix for its failures).
+OP_NAMES: Final[Mapping[type, str]] = MappingProxyType(
+    {
+        Advertise: "advertise",
+        Unadvertise: "unadvertise",
+        Publish: "publish",
+        Subscribe: "subscribe",
+        Unsubscribe: "unsubscribe",
+        CallService: "call_service",
+    }
+)
+
+
+def op_name(request: Request) -> str | None:
+    """The op of a request record (None for a fragment or an unimplemented op)."""
+    return OP_NAMES.get(type(request))
+
+
+def id_key(op_id: MessageId) -> Any:
+    """An id as a dictionary key (the real server's dicts refuse a list or object id)."""
+    try:
+        hash(op_id)
+    except TypeError:
+        raise BridgeError(f"unhashable type: '{type(op_id).__name__}'", None) from None
+    return op_id

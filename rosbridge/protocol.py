@@ -12,7 +12,9 @@ package layer does the rest, split along its seams:
 * :mod:`rosbridge.graph`: the ROS graph (nodes, topics, services) and rosapi;
 * :mod:`rosbridge.types` and :mod:`rosbridge.convert`: message types
   and the JSON conversion (``uint8[]`` as base64, NaN as ``null``);
-* :mod:`rosbridge.wire`: builders, serialization and outgoing fragments;
+* :mod:`rosbridge.wire`: builders, serialization and outgoing fragments (the pose message,
+  the time stamps and the JSON payloads are the vehicle contract's,
+  :mod:`vehicle_contract.messages`);
 * :mod:`rosbridge.errors`: the errors, named after the real server's.
 
 As in the ROS 2 server, a client never receives an error: failures are written to the
@@ -90,23 +92,19 @@ from rosbridge.session import (
 )
 from rosbridge.types import canonical_type, resolve_type, ros2_type, same_type
 from rosbridge.wire import (
-    POSE_FRAME_ID,
     connected_clients_msg,
     fragments,
     json_string_msg,
     log_msg,
-    pose_stamped_msg,
     publish_message,
-    quaternion_from_roll_yaw,
     service_response,
-    stamp,
     string_msg,
-    to_json,
     uint8_multiarray_msg,
     wire_json,
 )
 from vehicle_contract import contract
-from vehicle_contract.contract import VEHICLE_NODE
+from vehicle_contract.contract import POSE_FRAME_ID, VEHICLE_NODE
+from vehicle_contract.messages import pose_stamped_msg, quaternion_from_roll_yaw, stamp, to_json
 
 #: Console -> vehicle: one packed frame (13 bytes: 100 bits MSB first, 4 zero bits).
 FRAME_TOPIC: Final = contract.FRAME_TOPIC

@@ -13,8 +13,8 @@ event loop, one at a time. Each connection has its own session and outbox
 
 As the ROS 2 server, nothing is sent back for a failed message: it is logged on
 ``rosbridge.server`` and published on ``/rosout`` (``rcl_interfaces/msg/Log``, node
-``rosbridge_websocket``). A message above ``hard_max_bytes`` (10 MiB, tornado's limit) closes
-that connection (1009). The endpoint never sees a malformed message.
+``rosbridge_websocket``: :mod:`rosbridge.rosout`). A message above ``hard_max_bytes`` (10 MiB,
+tornado's limit) closes that connection (1009). The endpoint never sees a malformed message.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import http
 import itertools
 import logging
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any, Final
 
 from websockets.asyncio.server import Server, ServerConnection, serve
@@ -42,13 +42,11 @@ from rosbridge.outbox import (
     peer_of,
 )
 from rosbridge.protocol import (
-    BRIDGE_NODE,
     CLIENT_COUNT_TOPIC,
     CONNECTED_CLIENTS_TOPIC,
     DEFAULT_MAX_MESSAGE_BYTES,
     MISSION_TOPIC,
     POSE_TOPIC,
-    ROSOUT_TOPIC,
     STATUS_TOPIC,
     BridgeError,
     ClientSession,
@@ -58,9 +56,9 @@ from rosbridge.protocol import (
     Outcome,
     connected_clients_msg,
     json_string_msg,
-    log_msg,
     pose_stamped_msg,
 )
+from rosbridge.rosout import BridgeLog
 from vehicle_contract.endpoint import VehicleEndpoint
 
 logger = logging.getLogger("rosbridge.server")
@@ -71,7 +69,6 @@ DEFAULT_TICK_S: Final = 0.02
 MAX_TICK_STEP_S: Final = 0.5
 #: Topics streamed latest-wins to each client.
 _STREAMED: Final = frozenset({POSE_TOPIC, STATUS_TOPIC})
-_LEVELS: Final = {20: logging.INFO, 30: logging.WARNING, 40: logging.ERROR}
 
 
 class BridgeServer:
@@ -137,7 +134,7 @@ class BridgeServer:
         self._client_ids = itertools.count(1)
         self._stopped = asyncio.Event()
         self._guard = EndpointGuard()
-        self._in_rosout = False
+        self._log = BridgeLog(self._publish, self._ros_time)
         self._publish_clients()
 
     # -- lifecycle ---------------------------------------------------------------------------
@@ -169,7 +166,7 @@ class BridgeServer:
             compression=None,  # tornado's default: no permessage-deflate
             process_request=self._check_path,
         )
-        self._tick_task = asyncio.create_task(self._tick_loop(), name="sim_bridge tick")
+        self._tick_task = asyncio.create_task(self._tick_loop(), name="rosbridge tick")
         logger.info(
             "rosbridge server on ws://%s:%d (time scale %g, pose %.4g Hz, status %.4g Hz)",
             self._host,
@@ -222,9 +219,9 @@ class BridgeServer:
         client = ClientOutbox(ws, session, name, self._send_timeout_s, self._max_queue)
         client.connected_at = self._ros_time()
         self._clients.add(client)
-        self._log_node(f"Client connected. {len(self._clients)} clients total.", client)
+        self._log.node(name, f"Client connected. {len(self._clients)} clients total.")
         self._publish_clients()
-        writer = asyncio.create_task(client.run_writer(), name=f"sim_bridge writer {name}")
+        writer = asyncio.create_task(client.run_writer(), name=f"rosbridge writer {name}")
         try:
             async for message in ws:
                 try:
@@ -251,7 +248,7 @@ class BridgeServer:
             writer.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await writer
-            self._log_node(f"Client disconnected. {len(self._clients)} clients total.", client)
+            self._log.node(name, f"Client disconnected. {len(self._clients)} clients total.")
             self._publish_clients()
 
     def _on_message(self, client: ClientOutbox, message: str | bytes) -> None:
@@ -281,40 +278,14 @@ class BridgeServer:
         if outcome.close:
             client.drop("the real server drops a connection that sends non-UTF-8 binary")
 
+    def _log_lines(self, client: ClientOutbox, lines: Iterable[LogLine]) -> None:
+        self._log.lines(client.name, client.session.client_id, lines)
+
     def _submit(self, client: ClientOutbox, frame: bytes) -> None:
         logger.info(
             "client %s: frame of %d bytes to the vehicle: %s", client.name, len(frame), frame.hex()
         )
         self._guard("endpoint.submit_frame", lambda: self._endpoint.submit_frame(frame))
-
-    # -- logging: the Python log and /rosout -----------------------------------------------------
-
-    def _log_lines(self, client: ClientOutbox, lines: list[LogLine] | tuple[LogLine, ...]) -> None:
-        for line in lines:
-            tag = f"[id: {line.op_id}] " if line.op_id is not None else ""
-            logger.log(
-                _LEVELS.get(line.level, logging.INFO),
-                "client %s: %s%s",
-                client.name,
-                tag,
-                line.text,
-            )
-            self._rosout(line.level, f"[Client {client.session.client_id}] {tag}{line.text}")
-
-    def _log_node(self, text: str, client: ClientOutbox) -> None:
-        logger.info("client %s: %s", client.name, text)
-        self._rosout(20, text)
-
-    def _rosout(self, level: int, text: str) -> None:
-        """Publish a log line on /rosout, as the real node's logger does (INFO and up)."""
-        if self._in_rosout:
-            return
-        self._in_rosout = True
-        try:
-            msg = log_msg(self._ros_time(), level, BRIDGE_NODE.lstrip("/"), text)
-            self._publish(ROSOUT_TOPIC, msg)
-        finally:
-            self._in_rosout = False
 
     # -- clock and publishing ----------------------------------------------------------------
 

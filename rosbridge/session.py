@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import uuid
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from typing import Any, Final
 
 from rosbridge.auth import AuthGate
@@ -34,7 +33,7 @@ from rosbridge.errors import (
     UnknownOp,
     UnsupportedOp,
 )
-from rosbridge.flow import NOTHING, Defragmenter, IncomingBuffer, MessageHandler
+from rosbridge.flow import NOTHING, Defragmenter, IncomingBuffer, Subscription
 from rosbridge.graph import Graph, expand_name
 from rosbridge.messages import (
     Advertise,
@@ -49,6 +48,8 @@ from rosbridge.messages import (
     Unadvertise,
     Unimplemented,
     Unsubscribe,
+    id_key,
+    op_name,
     op_of,
     parse_object,
 )
@@ -69,18 +70,6 @@ DEFAULT_MAX_MESSAGE_BYTES: Final = 10 * 1024 * 1024
 DEFAULT_FRAGMENT_SIZE: Final = 10_000_000
 #: The real server's ``fragment_timeout``: an incomplete incoming message is forgotten after.
 DEFAULT_FRAGMENT_TIMEOUT_S: Final = 600.0
-
-
-@dataclass(slots=True)
-class _Subscription:
-    expanded: str
-    type: str
-    options: dict[Any, tuple[int, int]] = field(default_factory=dict)  # id -> (throttle, queue)
-    handler: MessageHandler = field(default_factory=MessageHandler)
-
-    def update(self) -> None:
-        values = list(self.options.values())
-        self.handler.configure(min(v[0] for v in values), min(v[1] for v in values))
 
 
 class ClientSession:
@@ -105,7 +94,7 @@ class ClientSession:
         #: Outgoing texts longer than this are fragmented (any message may set it).
         self.fragment_size = fragment_size
         self._buffer = IncomingBuffer()
-        self._subs: dict[str, _Subscription] = {}
+        self._subs: dict[str, Subscription] = {}
         self._adverts: dict[str, tuple[str, str, set[Any]]] = {}  # raw -> expanded, type, ids
         self._published: set[str] = set()
         self._latched: set[str] = set()
@@ -228,7 +217,7 @@ class ClientSession:
     def _advertise(self, request: Advertise) -> Outcome:
         expanded, kind = self.graph.add_publisher(self.client_id, request.topic, request.type)
         _, _, ids = self._adverts.setdefault(request.topic, (expanded, kind, set()))
-        ids.add(_key(request.id))
+        ids.add(id_key(request.id))
         if request.latch:
             self._latched.add(expanded)
         return Outcome(request)
@@ -241,7 +230,7 @@ class ClientSession:
         if request.id is None:
             ids.clear()
         else:
-            ids.discard(_key(request.id))
+            ids.discard(id_key(request.id))
         if not ids:
             del self._adverts[request.topic]
             self._published.discard(expanded)
@@ -266,11 +255,11 @@ class ClientSession:
         sub = self._subs.get(request.topic)
         if sub is None:
             expanded, kind = self.graph.add_subscriber(self.client_id, request.topic, request.type)
-            sub = _Subscription(expanded, kind)
+            sub = Subscription(expanded, kind)
         elif request.type is not None:
             self.graph.add_subscriber(self.client_id, request.topic, request.type)
         before = dict(sub.options)
-        sub.options[_key(request.id)] = (request.throttle_rate, request.queue_length)
+        sub.options[id_key(request.id)] = (request.throttle_rate, request.queue_length)
         try:
             sub.update()
         except ValueError as exc:
@@ -302,7 +291,7 @@ class ClientSession:
         if request.id is None:
             sub.options.clear()
         else:
-            sub.options.pop(_key(request.id), None)
+            sub.options.pop(id_key(request.id), None)
         if sub.options:
             sub.update()
         else:
@@ -353,7 +342,7 @@ class ClientSession:
                 out.extend(self._through(raw, sub, msg))
         return out
 
-    def _through(self, raw: str, sub: _Subscription, msg: JsonObject) -> list[str]:
+    def _through(self, raw: str, sub: Subscription, msg: JsonObject) -> list[str]:
         text = wire_json(publish_message(raw, msg))
         return self._split(sub.handler.handle(text, self.graph.clock()))
 
@@ -387,28 +376,9 @@ class ClientSession:
         self._published.clear()
 
     def _fail(self, request: Request | None, error: BridgeError) -> Outcome:
-        op = _OP_NAMES.get(type(request)) if request is not None else None
+        op = op_name(request) if request is not None else None
         reason = error.reason
         if op is not None and not reason.startswith(f"{op}:"):
             reason = f"{op}: {reason}"
         op_id = request.id if request is not None else error.op_id
         return Outcome(request, error=error, logs=(LogLine(LOG_ERROR, reason, op_id),))
-
-
-_OP_NAMES: Final = {
-    Advertise: "advertise",
-    Unadvertise: "unadvertise",
-    Publish: "publish",
-    Subscribe: "subscribe",
-    Unsubscribe: "unsubscribe",
-    CallService: "call_service",
-}
-
-
-def _key(op_id: MessageId) -> Any:
-    """An id as a dictionary key (the real server's dicts refuse a list or object id)."""
-    try:
-        hash(op_id)
-    except TypeError:
-        raise BridgeError(f"unhashable type: '{type(op_id).__name__}'", None) from None
-    return op_id

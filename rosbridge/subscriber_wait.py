@@ -9,17 +9,15 @@ When rosapi cannot tell (the service fails, or does not answer), it waits out th
 advertising. If rosapi keeps saying nobody subscribes, the bound ends the wait too and the
 sender publishes anyway, with :attr:`SubscriberWait.warning` set.
 
-:class:`SubscriberWait` makes the requests and reads the answers; the transport (sync or
-asyncio) sends them and decides how long to block from :meth:`SubscriberWait.timeout_s`.
-Times are ``time.monotonic()`` seconds.
+:class:`SubscriberWait` says when to ask and reads the answers; the transport
+(:mod:`rosbridge.transport`) asks and decides how long to wait from
+:meth:`SubscriberWait.timeout_s`. Times are ``time.monotonic()`` seconds.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from typing import Any, Final
-
-from rosbridge.client import ClientProtocol
 
 #: The rosapi service listing a topic's subscribers (``rosapi_msgs/srv/Subscribers``).
 SUBSCRIBERS_SERVICE: Final = "/rosapi/subscribers"
@@ -40,14 +38,7 @@ def subscribers_of(values: object) -> list[str] | None:
 class SubscriberWait:
     """One wait for a subscriber to ``topic``, at most ``bound_s`` from ``now_s``."""
 
-    def __init__(
-        self,
-        protocol: ClientProtocol,
-        topic: str,
-        bound_s: float,
-        now_s: float,
-        poll_s: float = POLL_S,
-    ) -> None:
+    def __init__(self, topic: str, bound_s: float, now_s: float, poll_s: float = POLL_S) -> None:
         self.topic = topic
         self.bound_s = bound_s
         self.deadline_s = now_s + bound_s
@@ -56,46 +47,44 @@ class SubscriberWait:
         self.subscribers: list[str] | None = None
         #: Why rosapi cannot tell (the service failed or answered something else).
         self.cannot_tell: str | None = None
-        self._protocol = protocol
-        self._id: str | None = None
         self._ask_at_s: float | None = now_s
 
     @property
     def present(self) -> bool:
         return bool(self.subscribers)
 
+    @property
+    def request(self) -> tuple[str, dict[str, str]]:
+        """The service to call and its args."""
+        return SUBSCRIBERS_SERVICE, {"topic": self.topic}
+
     def done(self, now_s: float) -> bool:
         return self.present or now_s >= self.deadline_s
 
-    def ask(self, now_s: float) -> str | None:
-        """The request to send now, if it is time to ask (at once, then after each "nobody")."""
+    def ask(self, now_s: float) -> bool:
+        """Whether to send :attr:`request` now (at once, then after each "nobody"); its answer
+        goes to :meth:`answer`, waited for at most :meth:`timeout_s`."""
         if self._ask_at_s is None or now_s < self._ask_at_s or self.done(now_s):
-            return None
-        self._ask_at_s = None  # again only once this one is answered
-        self._id, text = self._protocol.call_service(SUBSCRIBERS_SERVICE, {"topic": self.topic})
-        return text
-
-    def offer(self, message: Mapping[str, Any], now_s: float) -> bool:
-        """Take a server message; True when it was the answer to the pending request."""
-        if (
-            self._id is None
-            or message.get("op") != "service_response"
-            or message.get("id") != self._id
-        ):
             return False
-        self._id = None
+        self._ask_at_s = None  # again only once this one is answered
+        return True
+
+    def answer(self, message: Mapping[str, Any] | None, now_s: float) -> None:
+        """The ``service_response`` to the request; ``None``: none came (the wait then runs to
+        its bound)."""
+        if message is None:
+            return
         values = message.get("values")
         if message.get("result") is False:
             self.cannot_tell = f"{SUBSCRIBERS_SERVICE} failed: {str(values)[:120]}"
-            return True
+            return
         subscribers = subscribers_of(values)
         if subscribers is None:
             self.cannot_tell = f"{SUBSCRIBERS_SERVICE} answered without a list: {values!r:.120}"
-            return True
+            return
         self.subscribers = subscribers
         if not subscribers:
             self._ask_at_s = now_s + self.poll_s
-        return True
 
     def timeout_s(self, now_s: float) -> float:
         """How long to wait for a message before calling :meth:`ask` again (>= 0)."""

@@ -21,7 +21,7 @@ from typing import Any
 
 from codec import FRAME_BYTES
 from onboard.agent import OnboardAgent, command_json
-from onboard.guidance import Guidance, GuidanceConfig, Mode, Reference
+from onboard.guidance import Guidance, GuidanceConfig, Reference
 from planner import Limits, VehicleState
 from sim.channel import ChannelConfig, Delivery, MEChannel
 from sim.control import Autopilot, AutopilotGains
@@ -35,6 +35,7 @@ from sim.environment import (
     thrust_power_w,
 )
 from sim.model import Vehicle, VehicleParams
+from vehicle_contract.codes import Mode
 from vehicle_contract.endpoint import Pose
 
 

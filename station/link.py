@@ -10,9 +10,9 @@
 
 Every link declares its :class:`Capability`: what the vehicle can report back over it.
 
-The protocol side (the messages, :class:`rosbridge.client.ClientProtocol`, and their
-decoding) lives in :mod:`rosbridge.client`, shared with the station's transmitter; this
-module is the transport.
+The connection is the one rosbridge client (:mod:`rosbridge.transport`, over the sans-IO
+:class:`rosbridge.client.ClientProtocol`), shared with the station's transmitter and
+``nemesys vehicle-check``; this module is what the console makes of it.
 """
 
 from __future__ import annotations
@@ -26,17 +26,11 @@ from collections.abc import Callable
 from enum import StrEnum
 from typing import Any, Final
 
-from websockets.asyncio.client import ClientConnection, connect
-from websockets.exceptions import ConnectionClosed, InvalidURI
+from websockets.exceptions import ConnectionClosed, WebSocketException
 
 from codec import Frame
 from rosbridge.auth import auth_message
-from rosbridge.client import (
-    ClientProtocol,
-    decode_json_string,
-    decode_server_message,
-    topics_listing,
-)
+from rosbridge.client import ClientProtocol, decode_json_string, topics_listing
 from rosbridge.protocol import (
     FRAME_TOPIC,
     MISSION_TOPIC,
@@ -44,12 +38,11 @@ from rosbridge.protocol import (
     STATUS_TOPIC,
     TOPIC_TYPES,
     TOPICS_SERVICE,
-    BinaryMessage,
-    BridgeError,
     InvalidData,
     canonical_type,
     same_type,
 )
+from rosbridge.transport import RosbridgeClient, TopicHandler
 from station.transmit import failure_reason, frame_msg, open_transmitter
 
 logger = logging.getLogger("station.link")
@@ -178,17 +171,22 @@ class RosbridgeLink(Link):
         self.auth_secret = auth_secret
         self.open_timeout_s = open_timeout_s
         self.rosapi_timeout_s = rosapi_timeout_s
-        self._conn: ClientConnection | None = None
+        self._client: RosbridgeClient | None = None
         self._task: asyncio.Task[None] | None = None
         self._ready = asyncio.Event()
-        self._rosapi_id: str | None = None
         self._protocol = ClientProtocol(
             advertise=[FRAME_TOPIC], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC]
         )
+        #: What each subscribed topic's messages go to.
+        self._handlers: dict[str, TopicHandler] = {
+            POSE_TOPIC: self._pose,
+            STATUS_TOPIC: self._status,
+            MISSION_TOPIC: self._mission,
+        }
 
     @property
     def connected(self) -> bool:
-        return self._conn is not None
+        return self._client is not None
 
     async def start(self) -> None:
         self._task = asyncio.create_task(self._run(), name=f"link {self.target}")
@@ -204,64 +202,60 @@ class RosbridgeLink(Link):
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
             self._task = None
-        if self._conn is not None:
-            await self._conn.close()
-            self._conn = None
 
     async def _run(self) -> None:
         backoff = 0.2
         while True:
+            client: RosbridgeClient | None = None
             try:
-                async with connect(
-                    self.target, open_timeout=self.open_timeout_s, max_size=2**22, proxy=None
-                ) as conn:
-                    if self.auth_secret is not None:
-                        auth = auth_message(
-                            self.auth_secret, "nemesys-console", self.target, time.time()
-                        )
-                        await conn.send(json.dumps(auth))
-                    for opening in self._protocol.open_messages():
-                        await conn.send(opening)
-                    # what the vehicle publishes, asked again on every connection
-                    self._set_capability(Capability.UNKNOWN, ["asking /rosapi/topics"])
-                    self._rosapi_id, ask = self._protocol.call_service(TOPICS_SERVICE)
-                    await conn.send(ask)
-                    self._conn = conn
-                    self.connection_problem = None
-                    backoff = 0.2
-                    logger.info("link to %s up", self.target)
-                    timer = asyncio.get_running_loop().call_later(
-                        self.rosapi_timeout_s, self._rosapi_silent
+                client = await RosbridgeClient.connect(
+                    self.target,
+                    self._protocol,
+                    self._handlers,
+                    open_timeout_s=self.open_timeout_s,
+                    logger=logger,
+                )
+                if self.auth_secret is not None:
+                    auth = auth_message(
+                        self.auth_secret, "nemesys-console", self.target, time.time()
                     )
-                    try:
-                        async for message in conn:
-                            self._dispatch(message)
-                    finally:
-                        timer.cancel()
+                    await client.send(json.dumps(auth))
+                await client.open()
+                # what the vehicle publishes, asked again on every connection
+                self._set_capability(Capability.UNKNOWN, ["asking /rosapi/topics"])
+                self._client = client
+                self.connection_problem = None
+                backoff = 0.2
+                logger.info("link to %s up", self.target)
+                answer = await client.call_service(TOPICS_SERVICE, timeout_s=self.rosapi_timeout_s)
+                if answer is not None:
+                    self._on_topics(answer)
+                elif not client.closed:
+                    self._rosapi_silent()
+                await client.wait_closed()
             except asyncio.CancelledError:
                 raise
-            except (OSError, ConnectionClosed, InvalidURI, TimeoutError) as err:
+            except (OSError, WebSocketException, TimeoutError) as err:
                 self.connection_problem = f"not connected to {self.target}: {failure_reason(err)}"
                 logger.warning("link to %s: %s", self.target, failure_reason(err))
             finally:
-                if self._conn is not None:
+                if self._client is not None:
                     self.connection_problem = f"the connection to {self.target} closed"
-                self._conn = None
+                self._client = None
                 self._ready.clear()
                 self._set_capability(Capability.UNKNOWN, [])
+                if client is not None:
+                    await client.close()
             await asyncio.sleep(backoff)
             backoff = min(backoff * 2, 5.0)
 
     def _set_capability(self, capability: Capability, problems: list[str]) -> None:
         self.capability = capability
         self.capability_problems = problems
-        if self._conn is not None and capability is not Capability.UNKNOWN:
+        if self._client is not None and capability is not Capability.UNKNOWN:
             self._ready.set()
 
     def _rosapi_silent(self) -> None:
-        if self._rosapi_id is None:
-            return
-        self._rosapi_id = None
         self._set_capability(
             Capability.UNKNOWN,
             [
@@ -273,7 +267,6 @@ class RosbridgeLink(Link):
         self._ready.set()
 
     def _on_topics(self, message: dict[str, Any]) -> None:
-        self._rosapi_id = None
         if message.get("result") is False:
             self._set_capability(
                 Capability.UNKNOWN,
@@ -291,49 +284,43 @@ class RosbridgeLink(Link):
         self._set_capability(capability, problems)
         logger.info("link to %s: %s", self.target, capability)
 
-    def _dispatch(self, data: str | bytes) -> None:
-        try:
-            message = decode_server_message(data)
-        except BinaryMessage:
-            return
-        except BridgeError as error:
-            logger.warning("link: ignoring %s", error.reason)
-            return
-        op = message.get("op")
-        if op == "service_response" and message.get("id") == self._rosapi_id:
-            self._on_topics(message)
-            return
-        if op != "publish":
-            return
+    # --- what the vehicle publishes (called by the client, on the event loop) ---------------
+
+    def _pose(self, msg: object) -> None:
         self.last_message_s = time.monotonic()
-        topic, msg = message.get("topic"), message.get("msg")
-        if not isinstance(msg, dict):
+        if isinstance(msg, dict):
+            self.on_pose(msg)
+
+    def _status(self, msg: object) -> None:
+        self.last_message_s = time.monotonic()
+        body = self._json(STATUS_TOPIC, msg)
+        if body is not None:
+            self.on_status(body)
+
+    def _mission(self, msg: object) -> None:
+        self.last_message_s = time.monotonic()
+        body = self._json(MISSION_TOPIC, msg)
+        if body is None:
             return
+        if not self.capability.acknowledges:
+            # an acknowledgement is proof the onboard agent runs
+            self._set_capability(Capability.ACKS_AND_TELEMETRY, [])
+        self.on_mission(body)
+
+    @staticmethod
+    def _json(topic: str, msg: object) -> dict[str, Any] | None:
         try:
-            if topic == POSE_TOPIC:
-                handler, body = self.on_pose, msg
-            elif topic in (STATUS_TOPIC, MISSION_TOPIC):
-                handler = self.on_status if topic == STATUS_TOPIC else self.on_mission
-                body = decode_json_string(msg)
-                if topic == MISSION_TOPIC and not self.capability.acknowledges:
-                    # an acknowledgement is proof the onboard agent runs
-                    self._set_capability(Capability.ACKS_AND_TELEMETRY, [])
-            else:
-                return
+            return decode_json_string(msg)
         except InvalidData as error:
             logger.warning("link: ignoring a %s message: %s", topic, error.reason)
-            return
-        try:
-            handler(body)
-        except Exception:  # a console bug must not take the link down
-            logger.exception("link: handler for %s failed", topic)
+            return None
 
     async def transmit(self, frame: Frame) -> str | None:
-        conn = self._conn
-        if conn is None:
+        client = self._client
+        if client is None:
             return "not connected to the vehicle"
         try:
-            await conn.send(self._protocol.publish(FRAME_TOPIC, frame_msg(frame)))
+            await client.publish(FRAME_TOPIC, frame_msg(frame))
         except (OSError, ConnectionClosed) as err:
             return failure_reason(err)
         return None

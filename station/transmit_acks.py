@@ -1,5 +1,5 @@
-"""What comes back over rosbridge, for :mod:`station.transmit_rosbridge`: server messages,
-the vehicle's acknowledgements, and how one is matched to the sent frame. :func:`ack_match` is
+"""What comes back over rosbridge, for :mod:`station.transmit_rosbridge`: the vehicle's
+acknowledgements, and how one is matched to the sent frame. :func:`ack_match` is
 public (import it from :mod:`station.transmit`); the rest serves the rosbridge transmitter.
 
 Acknowledgement matching
@@ -17,17 +17,12 @@ reason "timeout" (``sent_t`` is set, the frame did go out).
 
 from __future__ import annotations
 
-import asyncio
-import logging
 import time
 from typing import Any
 
-from websockets.asyncio.client import ClientConnection as AsyncConnection
-from websockets.exceptions import ConnectionClosed
-
 from codec import CODE, FRAME_BYTES, DecodeError, Frame, parse_frame
-from rosbridge.client import decode_json_string, decode_server_message
-from rosbridge.protocol import MISSION_TOPIC, BinaryMessage, BridgeError, InvalidData
+from rosbridge.client import decode_json_string
+from rosbridge.errors import InvalidData
 from station.transmit_base import AckMatch, logger
 
 #: After a new acknowledgement that is not for the sent frame, how long to wait for one that is.
@@ -88,81 +83,11 @@ class _AckMatcher:
         return until - time.monotonic()
 
 
-def _server_message(data: str | bytes) -> dict[str, Any] | None:
-    """One received message as an object, or None (logged) if it is not one, or a ``status``."""
+def ack_of(msg: object) -> dict[str, Any] | None:
+    """The acknowledgement a ``/nemesys/mission`` message carries, or None (logged) if it
+    holds none."""
     try:
-        message = decode_server_message(data)
-    except BinaryMessage as error:
-        logger.debug("ignoring %s", error.reason)
-        return None
-    except BridgeError as error:
-        logger.warning("ignoring %s", error.reason)
-        return None
-    if message.get("op") == "status":
-        level = logging.WARNING if message.get("level") in ("error", "warning") else logging.INFO
-        logger.log(level, "rosbridge status: %s", message.get("msg", message))
-        return None
-    return message
-
-
-def _mission_of(data: str | bytes) -> dict[str, Any] | None:
-    """The acknowledgement in one received message, or None (logged) if it holds none."""
-    message = _server_message(data)
-    return None if message is None else _mission_in(message)
-
-
-def _mission_in(message: dict[str, Any]) -> dict[str, Any] | None:
-    """The acknowledgement in a server message, or None (logged) if it holds none."""
-    op, topic = message.get("op"), message.get("topic")
-    if op != "publish" or topic != MISSION_TOPIC:
-        logger.debug("ignoring %s on %s", op, topic)
-        return None
-    try:
-        return decode_json_string(message.get("msg"))
+        return decode_json_string(msg)
     except InvalidData as error:
         logger.warning("ignoring a mission message: %s", error.reason)
         return None
-
-
-class _AsyncLink:
-    """An asyncio connection with a reader task that queues acknowledgements (None: closed)
-    and service responses."""
-
-    def __init__(self, conn: AsyncConnection) -> None:
-        self.conn = conn
-        self.loop = asyncio.get_running_loop()
-        self.acks: asyncio.Queue[dict[str, Any] | None] = asyncio.Queue()
-        self.responses: asyncio.Queue[dict[str, Any]] = asyncio.Queue()
-        self.closed = False
-        self.reader = asyncio.create_task(self._read())
-
-    def abort_threadsafe(self) -> None:
-        """Cancel the reader and abort the connection from outside its event loop."""
-        if not self.loop.is_closed():
-            self.loop.call_soon_threadsafe(self.reader.cancel)
-            self.loop.call_soon_threadsafe(self.conn.transport.abort)
-
-    async def _read(self) -> None:
-        try:
-            async for data in self.conn:
-                message = _server_message(data)
-                if message is None:
-                    continue
-                if message.get("op") == "service_response":
-                    self.responses.put_nowait(message)
-                elif (ack := _mission_in(message)) is not None:
-                    self.acks.put_nowait(ack)
-        except ConnectionClosed:
-            pass
-        finally:
-            self.closed = True
-            self.acks.put_nowait(None)
-
-    def drain(self) -> None:
-        """Discard acknowledgements that arrived before now."""
-        while not self.acks.empty():
-            ack = self.acks.get_nowait()
-            if ack is None:
-                self.closed = True
-            else:
-                logger.debug("discarding earlier acknowledgement seq=%s", ack.get("seq"))

@@ -3,6 +3,10 @@ vehicle, or a real vehicle behind a rosbridge) on ``/nemesys/frame`` and waits f
 acknowledgement on ``/nemesys/mission`` (matched as :mod:`station.transmit_acks` says).
 Import it from :mod:`station.transmit`.
 
+``send`` is blocking and thread-safe, as ``nemesys send`` wants it; the
+connection is the one rosbridge client (:mod:`rosbridge.transport`), on an event loop that the
+transmitter runs in a thread of its own from the first send to :meth:`close`.
+
 Waiting for the vehicle's subscriber
 ------------------------------------
 On a new connection the transmitter advertises ``/nemesys/frame`` and, before its first
@@ -20,26 +24,19 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
 import threading
 import time
+from collections.abc import Coroutine
+from typing import Any, TypeVar
 
-from websockets.asyncio.client import connect as async_connect
 from websockets.exceptions import ConnectionClosed, WebSocketException
-from websockets.protocol import State
-from websockets.sync.client import ClientConnection as SyncConnection
-from websockets.sync.client import connect as sync_connect
 
 from codec import Frame
 from rosbridge.client import ClientProtocol
-from rosbridge.protocol import FRAME_TOPIC, MISSION_TOPIC
 from rosbridge.subscriber_wait import DEFAULT_SUBSCRIBER_WAIT_S, SubscriberWait
-from station.transmit_acks import (
-    ACK_SETTLE_S,
-    _AckMatcher,
-    _AsyncLink,
-    _mission_of,
-    _server_message,
-)
+from rosbridge.transport import RosbridgeClient
+from station.transmit_acks import ACK_SETTLE_S, _AckMatcher, ack_of
 from station.transmit_base import (
     DEFAULT_ACK_TIMEOUT_S,
     SendResult,
@@ -49,9 +46,22 @@ from station.transmit_base import (
     frame_msg,
     logger,
 )
+from vehicle_contract.contract import FRAME_TOPIC, MISSION_TOPIC
 
 DEFAULT_ROSBRIDGE_URL = "ws://127.0.0.1:9090"
 DEFAULT_OPEN_TIMEOUT_S = 5.0
+
+T = TypeVar("T")
+
+#: What an acknowledgement queue holds: an acknowledgement, or None when the connection closed.
+_Acks = asyncio.Queue[dict[str, Any] | None]
+
+
+def _why(exc: BaseException) -> str:
+    """A connection failure in words: an OS error's own words for its errno (asyncio's text
+    is "Connect call failed (address)", and the detail names the URL already)."""
+    code = exc.errno if isinstance(exc, OSError) else None
+    return os.strerror(code) if isinstance(code, int) and code > 0 else _message(exc)
 
 
 def _log_wait(wait: SubscriberWait | None, url: str) -> None:
@@ -65,14 +75,31 @@ def _log_wait(wait: SubscriberWait | None, url: str) -> None:
         logger.info("%s: %s", url, wait.note)
 
 
+class _LoopThread:
+    """An event loop in a daemon thread: the blocking ``send`` runs its coroutines there."""
+
+    def __init__(self, name: str) -> None:
+        self.loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self.loop.run_forever, name=name, daemon=True)
+        self._thread.start()
+
+    def run(self, coro: Coroutine[Any, Any, T]) -> T:
+        return asyncio.run_coroutine_threadsafe(coro, self.loop).result()
+
+    def stop(self) -> None:
+        self.loop.call_soon_threadsafe(self.loop.stop)
+        self._thread.join(5.0)
+        if not self._thread.is_alive():
+            self.loop.close()
+
+
 class RosbridgeTransmitter(Transmitter):
     """Publishes frames to a rosbridge v2 endpoint and waits for the vehicle's acknowledgement.
 
     On connecting it advertises :data:`FRAME_TOPIC` (``std_msgs/UInt8MultiArray``) and
     subscribes to :data:`MISSION_TOPIC` (``std_msgs/String`` whose ``data`` is a JSON object);
     each frame is published as ``{"data": [13 ints]}``. The connection is opened on the first
-    send and kept; a connection found closed is reopened once. ``send`` (sync, thread-safe) and
-    ``send_async`` (asyncio) each keep their own connection. Acknowledgements are matched as
+    send and kept; a connection found closed is reopened once. Acknowledgements are matched as
     :mod:`station.transmit_acks` says.
     """
 
@@ -96,133 +123,152 @@ class RosbridgeTransmitter(Transmitter):
         #: What the wait on the newest connection found, until a send reports it.
         self._wait: SubscriberWait | None = None
         self._protocol = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[MISSION_TOPIC])
-        self._conn: SyncConnection | None = None
         self._lock = threading.Lock()
-        self._link: _AsyncLink | None = None
-        self._alock: asyncio.Lock | None = None
-        self._alock_loop: asyncio.AbstractEventLoop | None = None
+        self._thread: _LoopThread | None = None
+        self._client: RosbridgeClient | None = None
+        self._acks: _Acks | None = None
 
     @property
     def connected(self) -> bool:
-        """The sync connection is open."""
-        return self._conn is not None and self._conn.state is State.OPEN
+        """The connection is open."""
+        client = self._client
+        return client is not None and not client.closed
 
-    # sync ---------------------------------------------------------------------------------
+    # --- the blocking face ----------------------------------------------------------------
 
-    def _connect(self) -> SyncConnection:
-        conn = sync_connect(
-            self.url, open_timeout=self.open_timeout_s, close_timeout=1.0, proxy=None
+    def send(self, frame: Frame, *, wait_ack_s: float = DEFAULT_ACK_TIMEOUT_S) -> SendResult:
+        with self._lock:
+            if self._thread is None:
+                self._thread = _LoopThread(f"rosbridge transmitter {self.url}")
+            try:
+                return self._thread.run(self._send(frame, wait_ack_s))
+            except Exception as exc:  # send reports, never raises
+                logger.exception("sending to %s", self.url)
+                with contextlib.suppress(Exception):
+                    self._thread.run(self._drop())
+                return self._failed("internal error", f"{type(exc).__name__}: {exc}")
+
+    def close(self) -> None:
+        """Close the connection (unsubscribing and unadvertising first) and its thread."""
+        with self._lock:
+            thread, self._thread = self._thread, None
+            if thread is None:
+                return
+            try:
+                thread.run(self._drop(polite=True))
+            finally:
+                thread.stop()
+
+    # --- on the transmitter's event loop ----------------------------------------------------
+
+    async def _connect(self) -> RosbridgeClient:
+        acks: _Acks = asyncio.Queue()
+
+        def on_mission(msg: object) -> None:
+            ack = ack_of(msg)
+            if ack is not None:
+                acks.put_nowait(ack)
+
+        client = await RosbridgeClient.connect(
+            self.url,
+            self._protocol,
+            {MISSION_TOPIC: on_mission},
+            open_timeout_s=self.open_timeout_s,
+            logger=logger,
         )
+        client.on_close = lambda: acks.put_nowait(None)
         try:
-            for message in self._protocol.open_messages():
-                conn.send(message)
-            self._wait = self._await_subscriber(conn)
+            await client.open()
+            self._wait = await self._await_subscriber(client)
         except BaseException:
-            conn.close()
+            await client.close()
             raise
         logger.info("connected to %s", self.url)
-        return conn
+        self._client, self._acks = client, acks
+        self._drain()  # acknowledgements that arrived while waiting are old ones
+        return client
 
-    def _new_wait(self) -> SubscriberWait | None:
+    async def _await_subscriber(self, client: RosbridgeClient) -> SubscriberWait | None:
+        """Wait until the frame topic has a subscriber or the bound (module docstring)."""
         if self.subscriber_wait_s <= 0:
             return None
-        return SubscriberWait(self._protocol, FRAME_TOPIC, self.subscriber_wait_s, time.monotonic())
-
-    def _await_subscriber(self, conn: SyncConnection) -> SubscriberWait | None:
-        """Block until the frame topic has a subscriber or the bound (module docstring);
-        acknowledgements arriving meanwhile are old ones and are dropped."""
-        wait = self._new_wait()
-        while wait is not None and not wait.done(time.monotonic()):
-            if (ask := wait.ask(time.monotonic())) is not None:
-                conn.send(ask)
-            try:
-                data = conn.recv(timeout=wait.timeout_s(time.monotonic()))
-            except TimeoutError:
-                continue
-            message = _server_message(data)
-            if message is not None and not wait.offer(message, time.monotonic()):
-                logger.debug("while waiting for a subscriber, ignoring %s", message.get("op"))
+        wait = SubscriberWait(FRAME_TOPIC, self.subscriber_wait_s, time.monotonic())
+        while not wait.done(time.monotonic()) and not client.closed:
+            if wait.ask(time.monotonic()):
+                service, args = wait.request
+                timeout_s = wait.timeout_s(time.monotonic())
+                answer = await client.call_service(service, args, timeout_s=timeout_s)
+                wait.answer(answer, time.monotonic())
+            else:
+                await asyncio.sleep(wait.timeout_s(time.monotonic()))
         _log_wait(wait, self.url)
         return wait
 
-    def _drain(self, conn: SyncConnection) -> None:
-        while True:
-            try:
-                data = conn.recv(timeout=0)
-            except TimeoutError:
-                return
-            ack = _mission_of(data)
+    def _drain(self) -> None:
+        """Discard the acknowledgements that arrived before now."""
+        acks = self._acks
+        while acks is not None and not acks.empty():
+            ack = acks.get_nowait()
             if ack is not None:
                 logger.debug("discarding earlier acknowledgement seq=%s", ack.get("seq"))
 
-    def _ready(self) -> SyncConnection:
-        if self._conn is not None:
-            try:
-                self._drain(self._conn)
-                if self._conn.state is State.OPEN:
-                    return self._conn
-            except ConnectionClosed:
-                pass
+    async def _ready(self) -> RosbridgeClient:
+        client = self._client
+        if client is not None:
+            self._drain()
+            if not client.closed:
+                return client
             logger.info("connection to %s was closed; reconnecting", self.url)
-            self._drop()
-        self._conn = self._connect()
-        return self._conn
+            await self._drop()
+        return await self._connect()
 
-    def _publish(self, frame: Frame) -> SyncConnection:
+    async def _publish(self, message: str) -> RosbridgeClient:
         """Publish on a ready connection; if a kept connection turns out closed (the frame was
         not written), publish once more on a new one."""
-        message = self._protocol.publish(FRAME_TOPIC, frame_msg(frame))
-        reused = self._conn is not None
-        conn = self._ready()
+        reused = self._client is not None
+        client = await self._ready()
         try:
-            conn.send(message)
+            await client.send(message)
         except ConnectionClosed:
             if not reused:
                 raise
             logger.info("connection to %s was closed; reconnecting", self.url)
-            self._drop()
-            conn = self._ready()
-            conn.send(message)
-        return conn
+            await self._drop()
+            client = await self._ready()
+            await client.send(message)
+        return client
 
-    def _drop(self) -> None:
-        conn, self._conn = self._conn, None
-        if conn is not None:
-            conn.close()
+    async def _drop(self, *, polite: bool = False) -> None:
+        client, self._client, self._acks = self._client, None, None
+        if client is not None:
+            await client.close(*(self._protocol.close_messages() if polite else ()))
 
-    def send(self, frame: Frame, *, wait_ack_s: float = DEFAULT_ACK_TIMEOUT_S) -> SendResult:
-        with self._lock:
-            try:
-                return self._send(frame, wait_ack_s)
-            except Exception as exc:  # send reports, never raises
-                logger.exception("sending to %s", self.url)
-                self._drop()
-                return self._failed("internal error", f"{type(exc).__name__}: {exc}")
-
-    def _send(self, frame: Frame, wait_ack_s: float) -> SendResult:
+    async def _send(self, frame: Frame, wait_ack_s: float) -> SendResult:
+        # made before connecting: the publish keeps its id whatever the connection asks first
+        message = self._protocol.publish(FRAME_TOPIC, frame_msg(frame))
         try:
-            conn = self._publish(frame)
-        except (OSError, WebSocketException) as exc:
-            self._drop()
-            return self._failed(failure_reason(exc), f"{self.url}: {_message(exc)}")
+            await self._publish(message)
+        except (OSError, WebSocketException, TimeoutError) as exc:
+            await self._drop()
+            return self._failed(failure_reason(exc), f"{self.url}: {_why(exc)}")
+        acks = self._acks
         wait, self._wait = self._wait, None
         sent_t = time.time()
         logger.info("published frame %s to %s", frame.hex, self.url)
         matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)  # expired at once if not waiting
         closed = False
-        try:
-            while (remaining_s := matcher.remaining_s()) > 0:
-                try:
-                    data = conn.recv(timeout=remaining_s)
-                except TimeoutError:
-                    break
-                ack = _mission_of(data)
-                if ack is not None and matcher.offer(ack):
-                    break
-        except (OSError, WebSocketException) as exc:
-            logger.info("connection to %s lost while waiting: %s", self.url, exc)
-            self._drop()
-            closed = True
+        while acks is not None and (remaining_s := matcher.remaining_s()) > 0:
+            try:
+                ack = await asyncio.wait_for(acks.get(), remaining_s)
+            except TimeoutError:
+                break
+            if ack is None:
+                logger.info("connection to %s lost while waiting", self.url)
+                await self._drop()
+                closed = True
+                break
+            if matcher.offer(ack):
+                break
         return self._outcome(matcher, sent_t, wait_ack_s, closed, wait)
 
     def _outcome(
@@ -275,143 +321,3 @@ class RosbridgeTransmitter(Transmitter):
             detail=detail,
             warning=warning,
         )
-
-    def close(self) -> None:
-        """Close the sync connection (unsubscribing and unadvertising first). An async
-        connection is aborted; from async code prefer :meth:`aclose`."""
-        with self._lock:
-            conn, self._conn = self._conn, None
-            if conn is not None:
-                try:
-                    for message in self._protocol.close_messages():
-                        conn.send(message)
-                except (OSError, WebSocketException) as exc:
-                    logger.debug("closing %s: %s", self.url, exc)
-                conn.close()
-        link, self._link = self._link, None
-        if link is not None:
-            link.abort_threadsafe()
-
-    # async --------------------------------------------------------------------------------
-
-    def _async_lock(self) -> asyncio.Lock:
-        loop = asyncio.get_running_loop()
-        if self._alock is None or self._alock_loop is not loop:
-            self._alock, self._alock_loop = asyncio.Lock(), loop
-        return self._alock
-
-    async def _async_ready(self) -> _AsyncLink:
-        link = self._link
-        if link is not None:
-            if link.loop is asyncio.get_running_loop():
-                link.drain()
-                if not link.closed and link.conn.state is State.OPEN:
-                    return link
-                logger.info("connection to %s was closed; reconnecting", self.url)
-            await self._async_drop()
-        conn = await async_connect(
-            self.url, open_timeout=self.open_timeout_s, close_timeout=1.0, proxy=None
-        )
-        try:
-            for message in self._protocol.open_messages():
-                await conn.send(message)
-        except BaseException:
-            await conn.close()
-            raise
-        logger.info("connected to %s", self.url)
-        self._link = _AsyncLink(conn)
-        self._wait = await self._async_await_subscriber(self._link)
-        return self._link
-
-    async def _async_await_subscriber(self, link: _AsyncLink) -> SubscriberWait | None:
-        """:meth:`_await_subscriber` on the async connection."""
-        wait = self._new_wait()
-        while wait is not None and not wait.done(time.monotonic()):
-            if (ask := wait.ask(time.monotonic())) is not None:
-                await link.conn.send(ask)
-            try:
-                message = await asyncio.wait_for(
-                    link.responses.get(), wait.timeout_s(time.monotonic())
-                )
-            except TimeoutError:
-                continue
-            wait.offer(message, time.monotonic())
-        link.drain()
-        _log_wait(wait, self.url)
-        return wait
-
-    async def _async_publish(self, frame: Frame) -> _AsyncLink:
-        """As :meth:`_publish`, on the async connection."""
-        message = self._protocol.publish(FRAME_TOPIC, frame_msg(frame))
-        reused = self._link is not None
-        link = await self._async_ready()
-        try:
-            await link.conn.send(message)
-        except ConnectionClosed:
-            if not reused:
-                raise
-            logger.info("connection to %s was closed; reconnecting", self.url)
-            await self._async_drop()
-            link = await self._async_ready()
-            await link.conn.send(message)
-        return link
-
-    async def _async_drop(self, *, polite: bool = False) -> None:
-        link, self._link = self._link, None
-        if link is None:
-            return
-        if link.loop is not asyncio.get_running_loop():  # opened under another event loop
-            link.abort_threadsafe()
-            return
-        if polite and not link.closed:
-            try:
-                for message in self._protocol.close_messages():
-                    await link.conn.send(message)
-            except (OSError, WebSocketException) as exc:
-                logger.debug("closing %s: %s", self.url, exc)
-        await link.conn.close()
-        link.reader.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await link.reader
-
-    async def send_async(
-        self, frame: Frame, *, wait_ack_s: float = DEFAULT_ACK_TIMEOUT_S
-    ) -> SendResult:
-        """:meth:`send` on the running event loop (its own connection)."""
-        async with self._async_lock():
-            try:
-                return await self._send_async(frame, wait_ack_s)
-            except Exception as exc:  # send reports, never raises
-                logger.exception("sending to %s", self.url)
-                await self._async_drop()
-                return self._failed("internal error", f"{type(exc).__name__}: {exc}")
-
-    async def _send_async(self, frame: Frame, wait_ack_s: float) -> SendResult:
-        try:
-            link = await self._async_publish(frame)
-        except (OSError, WebSocketException) as exc:
-            await self._async_drop()
-            return self._failed(failure_reason(exc), f"{self.url}: {_message(exc)}")
-        wait, self._wait = self._wait, None
-        sent_t = time.time()
-        logger.info("published frame %s to %s", frame.hex, self.url)
-        matcher = _AckMatcher(frame, wait_ack_s, self.settle_s)  # expired at once if not waiting
-        closed = False
-        while (remaining_s := matcher.remaining_s()) > 0:
-            try:
-                ack = await asyncio.wait_for(link.acks.get(), remaining_s)
-            except TimeoutError:
-                break
-            if ack is None:
-                logger.info("connection to %s lost while waiting", self.url)
-                await self._async_drop()
-                closed = True
-                break
-            if matcher.offer(ack):
-                break
-        return self._outcome(matcher, sent_t, wait_ack_s, closed, wait)
-
-    async def aclose(self) -> None:
-        """Close both connections, unsubscribing and unadvertising first."""
-        await self._async_drop(polite=True)
-        await asyncio.to_thread(self.close)

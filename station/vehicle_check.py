@@ -1,6 +1,7 @@
 """``nemesys vehicle-check``: a running vehicle against the vehicle contract.
 
-Connects to the vehicle's rosbridge websocket as the console does (:mod:`station.link`),
+Connects to the vehicle's rosbridge websocket as the console does (:mod:`station.link`, through
+the same client: :mod:`rosbridge.transport`),
 subscribes to pose, status and mission, and checks, one row each (pass, fail or skipped, and
 why):
 
@@ -31,17 +32,13 @@ from dataclasses import dataclass, field
 from typing import Any, Final
 from urllib.parse import urlsplit
 
-from websockets.asyncio.client import ClientConnection, connect
 from websockets.exceptions import ConnectionClosed, WebSocketException
 
 from codec import Frame
-from rosbridge.client import (
-    ClientProtocol,
-    decode_json_string,
-    decode_server_message,
-)
-from rosbridge.protocol import TOPICS_SERVICE, BridgeError, InvalidData
+from rosbridge.client import ClientProtocol, decode_json_string
+from rosbridge.protocol import TOPICS_SERVICE, InvalidData
 from rosbridge.subscriber_wait import SUBSCRIBERS_SERVICE
+from rosbridge.transport import RosbridgeClient
 from station.transmit import ack_match, failure_reason, frame_msg
 from station.vehicle_report import (
     Ack,
@@ -95,11 +92,12 @@ async def check_vehicle(
     problem = url_problem(url)
     if problem is not None:
         raise ValueError(problem)
+    listen = ClientProtocol(advertise=[], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC])
     try:
-        conn = await connect(url, open_timeout=timeout_s, max_size=2**22, proxy=None)
+        client = await RosbridgeClient.connect(url, listen, open_timeout_s=timeout_s)
     except (OSError, WebSocketException, TimeoutError) as err:
         return Report(url, [Check("connect", "fail", f"{failure_reason(err)}: {url}")])
-    session = _Session(conn, timeout_s, window_s)
+    session = _Session(client, timeout_s, window_s)
     session.checks.append(Check("connect", "pass", f"a rosbridge websocket at {url}"))
     try:
         await session.run()
@@ -120,107 +118,81 @@ class _Record:
 
 
 class _Session:
-    """One connection to the vehicle and everything it received."""
+    """One connection to the vehicle (subscribed to pose, status and mission by its protocol)
+    and everything it received."""
 
-    def __init__(self, conn: ClientConnection, timeout_s: float, window_s: float) -> None:
-        self.conn = conn
+    def __init__(self, client: RosbridgeClient, timeout_s: float, window_s: float) -> None:
+        self.client = client
         self.timeout_s = timeout_s
         self.window_s = window_s
-        self.listen = ClientProtocol(
-            advertise=[], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC]
-        )
         self.talk = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[])
         self.record = _Record()
         self.checks: list[Check] = []
-        self._pending: dict[str, asyncio.Future[dict[str, Any]]] = {}
         self._ack_arrived = asyncio.Event()
         self._status_arrived = asyncio.Event()
         self._advertised = False
-        self.closed = False
-        self._reader = asyncio.create_task(self._read())
+        client.handlers.update(
+            {
+                POSE_TOPIC: self._pose,
+                STATUS_TOPIC: lambda msg: self._json(STATUS_TOPIC, msg),
+                MISSION_TOPIC: lambda msg: self._json(MISSION_TOPIC, msg),
+            }
+        )
+        client.on_close = self._closed
+
+    @property
+    def closed(self) -> bool:
+        return self.client.closed
 
     async def close(self) -> None:
-        with contextlib.suppress(OSError, WebSocketException):
-            closing = self.listen.close_messages()
-            if self._advertised:
-                closing += self.talk.close_messages()
-            for message in closing:
-                await self.conn.send(message)
-        await self.conn.close()
-        self._reader.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await self._reader
+        closing = self.client.protocol.close_messages()
+        if self._advertised:
+            closing += self.talk.close_messages()
+        await self.client.close(*closing)
 
-    # --- receiving ---------------------------------------------------------------------------
+    # --- receiving (called by the client, on the event loop) --------------------------------
 
-    async def _read(self) -> None:
-        try:
-            async for data in self.conn:
-                self._dispatch(data)
-        except ConnectionClosed:
-            pass
-        finally:
-            self.closed = True
-            self._ack_arrived.set()
-            self._status_arrived.set()
+    def _closed(self) -> None:
+        self._ack_arrived.set()
+        self._status_arrived.set()
 
-    def _dispatch(self, data: str | bytes) -> None:
-        try:
-            message = decode_server_message(data)
-        except BridgeError:
-            return
-        op, name, msg = message.get("op"), message.get("topic"), message.get("msg")
+    def _pose(self, msg: object) -> None:
+        if isinstance(msg, dict):
+            self.record.poses.append((time.monotonic(), time.time(), msg))
+
+    def _json(self, name: str, msg: object) -> None:
         now = time.monotonic()
-        if op == "service_response":
-            future = self._pending.pop(str(message.get("id")), None)
-            if future is not None and not future.done():
-                future.set_result(message)
-        elif op != "publish":
-            return
-        elif name == POSE_TOPIC and isinstance(msg, dict):
-            self.record.poses.append((now, time.time(), msg))
-        elif name in (STATUS_TOPIC, MISSION_TOPIC):
-            try:
-                body: dict[str, Any] | None = decode_json_string(msg)
-                problem = None
-            except InvalidData as error:
-                body, problem = None, error.reason
-            if name == STATUS_TOPIC:
-                self.record.statuses.append((now, body, problem))
-                self._status_arrived.set()
-            else:
-                self.record.acks.append(Ack(now, body, problem))
-                self._ack_arrived.set()
+        try:
+            body: dict[str, Any] | None = decode_json_string(msg)
+            problem = None
+        except InvalidData as error:
+            body, problem = None, error.reason
+        if name == STATUS_TOPIC:
+            self.record.statuses.append((now, body, problem))
+            self._status_arrived.set()
+        else:
+            self.record.acks.append(Ack(now, body, problem))
+            self._ack_arrived.set()
 
     async def _call(
         self, service: str, args: dict[str, Any] | None = None
     ) -> dict[str, Any] | None:
         """A service's answer, or None when none came within the timeout."""
-        op_id, text = self.listen.call_service(service, args)
-        future: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
-        self._pending[op_id] = future
-        await self.conn.send(text)
-        try:
-            return await asyncio.wait_for(future, self.timeout_s)
-        except TimeoutError:
-            self._pending.pop(op_id, None)
-            return None
+        return await self.client.call_service(service, args, timeout_s=self.timeout_s)
 
     # --- the checks --------------------------------------------------------------------------
 
     async def run(self) -> None:
         """Every check after ``connect``, appended to :attr:`checks` as it is made."""
         began = time.monotonic()
-        for message in self.listen.open_messages():
-            await self.conn.send(message)
+        await self.client.open()
         # asked before this check advertises the frame topic: the listing is the vehicle's
         topics, subscribers = await asyncio.gather(
             self._call(TOPICS_SERVICE), self._call(SUBSCRIBERS_SERVICE, {"topic": FRAME_TOPIC})
         )
         self.checks += topic_checks(topics, self.timeout_s)
         self.checks.append(subscriber_check(subscribers, self.timeout_s))
-        for message in self.talk.open_messages():
-            await self.conn.send(message)
+        await self.client.send(*self.talk.open_messages())
         self._advertised, advertised = True, time.monotonic()
         await asyncio.sleep(max(0.0, began + self.window_s - time.monotonic()))
         window_s = time.monotonic() - began
@@ -259,7 +231,7 @@ class _Session:
             why = f"the active command cannot be re-sent unchanged: {problem}; nothing was sent"
             return Check(name, "fail", why)
         start = len(self.record.acks)
-        await self.conn.send(self.talk.publish(FRAME_TOPIC, frame_msg(enc.frame)))
+        await self.client.send(self.talk.publish(FRAME_TOPIC, frame_msg(enc.frame)))
         sent_s = time.monotonic()
         what = f"re-sent the active command ({enc.command.describe()})"
         ack = await self._ack_for(enc.frame, start)

@@ -8,7 +8,6 @@ import time
 from dataclasses import dataclass
 from typing import Any, Final, Literal
 
-from backend.telemetry import pose_from_message
 from codec import CodecError, Encoded, encode_frame
 from rosbridge.client import topics_listing
 from rosbridge.protocol import TOPICS_SERVICE, InvalidData, same_type
@@ -23,9 +22,9 @@ from vehicle_contract.contract import (
     TOPICS,
     Direction,
     topic,
-    validate_ack,
-    validate_status,
 )
+from vehicle_contract.messages import pose_from_message
+from vehicle_contract.payloads import validate_ack, validate_status
 
 Result = Literal["pass", "fail", "skipped"]
 

@@ -1,7 +1,8 @@
 """The vehicle contract: what the console and a NemeSys vehicle exchange, as the single source.
 
 Every topic with its ROS 2 type, QoS, rate and ``frame_id``; the time base; the JSON Schemas
-(draft 2020-12) of the acknowledgement and status messages; a version and the rule for
+(draft 2020-12) of the acknowledgement and status messages (:mod:`vehicle_contract.payloads`);
+the reason codes and modes (:mod:`vehicle_contract.codes`); a version and the rule for
 changing it. ``nemesys contract`` prints it, ``docs/vehicle.md`` is generated from it, the
 simulator's bridge, the console's link, ``nemesys vehicle-check`` and the reference ROS 2 node
 (``ros2/nemesys_vehicle``) all read it.
@@ -16,18 +17,11 @@ wording. A vehicle and a console built for the same major number work together.
 from __future__ import annotations
 
 import copy
-import functools
 from dataclasses import dataclass
 from enum import StrEnum
-from typing import TYPE_CHECKING, Any, Final
+from typing import Any, Final
 
-from codec import RejectReason, describe_dictionary
-from onboard.agent import INVALID_PLAN, LIMIT_VIOLATION
-from onboard.guidance import Mode
-from vehicle_contract.schema import command_schema, problems, vehicle_state_schema
-
-if TYPE_CHECKING:
-    from jsonschema import Draft202012Validator
+from vehicle_contract.payloads import SCHEMAS
 
 #: The contract's version (see the module doc for the rule).
 CONTRACT_VERSION: Final = "1.0.0"
@@ -172,190 +166,6 @@ def topic(name: str) -> Topic:
         if t.name == name:
             return t
     raise KeyError(name)
-
-
-# --- the JSON payloads ----------------------------------------------------------------------
-
-#: The JSON Schema dialect of both schemas.
-SCHEMA_DIALECT: Final = "https://json-schema.org/draft/2020-12/schema"
-
-_NUMBER_OR_NULL: Final = {"type": ["number", "null"]}
-_COUNT_OR_NULL: Final = {"type": ["integer", "null"], "minimum": 0}
-
-#: The words of ``mode`` in the status (what guidance is doing).
-MODES: Final = tuple(m.value for m in Mode)
-
-#: Every ``reason`` a rejection may give: the codec's (the frame did not decode) and the
-#: agent's (it decoded but is no flyable plan within the vehicle's limits).
-REJECT_REASONS: Final = (*(r.value for r in RejectReason), INVALID_PLAN, LIMIT_VIOLATION)
-
-
-def _command_or_null(description: str) -> dict[str, Any]:
-    return {"anyOf": [{"$ref": "#/$defs/command"}, {"type": "null"}], "description": description}
-
-
-#: The acknowledgement: one JSON object per frame the onboard agent processed, as the ``data``
-#: of a ``std_msgs/String`` on ``/nemesys/mission``.
-ACK_SCHEMA: Final[dict[str, Any]] = {
-    "$schema": SCHEMA_DIALECT,
-    "$id": "urn:nemesys:vehicle-contract:1:ack",
-    "title": "NemeSys acknowledgement",
-    "description": "the onboard agent's verdict on one received frame",
-    "type": "object",
-    "required": [
-        "t_s",
-        "outcome",
-        "frame_hex",
-        "reason",
-        "detail",
-        "command",
-        "duplicate",
-        "active",
-        "from",
-    ],
-    "properties": {
-        "seq": {"type": "integer", "minimum": 1, "description": "frames processed, this one"},
-        "t_s": {**_NUMBER_OR_NULL, "description": "ROS time of the verdict (s)"},
-        "outcome": {"enum": ["accepted", "rejected"], "description": "the verdict"},
-        "frame_hex": {
-            "type": ["string", "null"],
-            "pattern": "^([0-9a-fA-F]{25}|[0-9a-fA-F]{26})$",
-            "description": "the 100 bits received, 25 hex digits (or the 13 packed bytes); "
-            "null when the message was not a frame",
-        },
-        "corrected_bits": {**_COUNT_OR_NULL, "description": "bits the BCH decoder corrected"},
-        "sync_errors": {**_COUNT_OR_NULL, "description": "preamble and delimiter bits wrong"},
-        "reason": {
-            "enum": [*REJECT_REASONS, None],
-            "description": "why it was rejected; null when accepted",
-        },
-        "detail": {"type": "string", "description": "the verdict in words"},
-        "field": {"type": ["string", "null"], "description": "the parameter at fault"},
-        "command": _command_or_null("the command decoded from the frame; null if none"),
-        "duplicate": {
-            "type": "boolean",
-            "description": "accepted and already the active command: not replanned",
-        },
-        "decode_latency_ms": {
-            **_NUMBER_OR_NULL,
-            "minimum": 0,
-            "description": "receipt to decoded and checked (ms)",
-        },
-        "replan_latency_ms": {
-            **_NUMBER_OR_NULL,
-            "minimum": 0,
-            "description": "decoded to the new plan's first setpoint (ms)",
-        },
-        "waypoints": {**_COUNT_OR_NULL, "description": "waypoints of the new plan"},
-        "active": _command_or_null("the command the vehicle runs after this frame; null: none"),
-        "from": {
-            "anyOf": [{"$ref": "#/$defs/vehicle_state"}, {"type": "null"}],
-            "description": "the state the new plan was made from; null unless it replanned",
-        },
-        "channel_flipped_bits": {
-            "type": "integer",
-            "minimum": 0,
-            "description": "the simulator only: bits its emulated channel flipped",
-        },
-    },
-    "allOf": [
-        {
-            "if": {"properties": {"outcome": {"const": "accepted"}}, "required": ["outcome"]},
-            "then": {
-                "properties": {"reason": {"const": None}, "command": {"$ref": "#/$defs/command"}}
-            },
-        },
-        {
-            "if": {"properties": {"outcome": {"const": "rejected"}}, "required": ["outcome"]},
-            "then": {
-                "properties": {
-                    "reason": {"enum": list(REJECT_REASONS)},
-                    "duplicate": {"const": False},
-                }
-            },
-        },
-    ],
-    "$defs": {"command": command_schema(), "vehicle_state": vehicle_state_schema()},
-}
-
-#: The status: one JSON object at >= 1 Hz, as the ``data`` of a ``std_msgs/String`` on
-#: ``/nemesys/status``. A number the vehicle does not know is ``null``, never left out.
-STATUS_SCHEMA: Final[dict[str, Any]] = {
-    "$schema": SCHEMA_DIALECT,
-    "$id": "urn:nemesys:vehicle-contract:1:status",
-    "title": "NemeSys status",
-    "description": "what the vehicle is doing; unknown numbers are null",
-    "type": "object",
-    "required": ["t_s", "depth_m", "heading_deg", "speed_mps", "battery_pct", "mode", "pattern"],
-    "properties": {
-        "t_s": {**_NUMBER_OR_NULL, "description": "ROS time (s)"},
-        "x_m": {**_NUMBER_OR_NULL, "description": "north (m); the pose is the position's source"},
-        "y_m": {**_NUMBER_OR_NULL, "description": "east (m); the pose is the position's source"},
-        "depth_m": {**_NUMBER_OR_NULL, "description": "the depth sensor's reading (m, down)"},
-        "heading_deg": {**_NUMBER_OR_NULL, "description": "degrees clockwise from north"},
-        "speed_mps": {**_NUMBER_OR_NULL, "description": "speed through the water (m/s)"},
-        "battery_pct": {
-            **_NUMBER_OR_NULL,
-            "minimum": 0,
-            "maximum": 100,
-            "description": "state of charge (%)",
-        },
-        "mode": {"enum": list(MODES), "description": "what guidance is doing"},
-        "pattern": {
-            "enum": [*(p["name"] for p in describe_dictionary()), None],
-            "description": "the active command's pattern; null: none",
-        },
-        "active": _command_or_null(
-            "the active command, as in an acknowledgement's 'active'; null: none. Optional "
-            "(1.0), but without it vehicle-check cannot probe the acknowledgement path"
-        ),
-        "link": {
-            "type": "object",
-            "description": "the simulator only: its emulated ME channel",
-            "properties": {
-                "frames_in": {"type": "integer", "minimum": 0},
-                "frames_lost": {"type": "integer", "minimum": 0},
-                "accepted": {"type": "integer", "minimum": 0},
-                "rejected": {"type": "integer", "minimum": 0},
-                "last_frame_t_s": _NUMBER_OR_NULL,
-                "distance_m": _NUMBER_OR_NULL,
-                "range_m": _NUMBER_OR_NULL,
-                "in_range": {"type": "boolean"},
-                "ber": _NUMBER_OR_NULL,
-            },
-        },
-    },
-    "$defs": {"command": command_schema()},
-}
-
-#: The schemas by name.
-SCHEMAS: Final = {"ack": ACK_SCHEMA, "status": STATUS_SCHEMA}
-
-
-def required_fields(schema: dict[str, Any]) -> list[str]:
-    """The top-level fields a message must hold."""
-    return list(schema["required"])
-
-
-@functools.cache
-def _validator(name: str) -> Draft202012Validator:
-    from jsonschema import Draft202012Validator  # on use: `nemesys contract` needs none of it
-
-    schema = SCHEMAS[name]
-    Draft202012Validator.check_schema(schema)
-    return Draft202012Validator(schema)
-
-
-def validate_ack(obj: object) -> list[str]:
-    """Problems of an acknowledgement under :data:`ACK_SCHEMA`, one line each naming the field
-    (empty: valid)."""
-    return problems(_validator("ack"), obj)
-
-
-def validate_status(obj: object) -> list[str]:
-    """Problems of a status under :data:`STATUS_SCHEMA`, one line each naming the field
-    (empty: valid)."""
-    return problems(_validator("status"), obj)
 
 
 # --- the contract as a whole ----------------------------------------------------------------

@@ -15,13 +15,12 @@ from typing import Any, Final
 from vehicle_contract.contract import (
     CONTRACT_VERSION,
     OBLIGATIONS,
-    SCHEMAS,
     TIME_BASE,
     TOPICS,
     VERSION_RULE,
     Topic,
-    required_fields,
 )
+from vehicle_contract.payloads import SCHEMAS, required_fields
 
 #: Where the page lives, from the repository root.
 DOC_PATH: Final = Path("docs") / "vehicle.md"

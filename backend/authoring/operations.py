@@ -16,9 +16,9 @@ from backend.authoring.preview import frame_doc, plan_doc
 from backend.chart.reach import add_geo
 from backend.commands.checks import CheckReport, SendViolation, check_plan
 from backend.commands.service import Assessment
-from backend.telemetry import number
 from codec import Encoded, decode_frame, delivery_probability, encode_frame
 from planner import Plan, plan
+from vehicle_contract.messages import number
 
 if TYPE_CHECKING:
     from backend.console import Console

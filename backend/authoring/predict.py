@@ -44,10 +44,10 @@ import numpy as np
 from backend.authoring.profile import hours_run
 from backend.chart.geo import Datum, ned_to_geodetic
 from codec import decode_frame, encode_frame
-from onboard.guidance import Mode
 from planner import Plan, VehicleState, plan
 from sim.environment import CurrentConfig
 from sim.simulation import SimConfig, Simulation
+from vehicle_contract.codes import Mode
 
 #: Longest simulated time a prediction covers (s), and the default.
 MAX_HORIZON_S = 600.0

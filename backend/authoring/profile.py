@@ -3,7 +3,7 @@
 Top speed through the water (m/s), heave rate (m/s), yaw rate (deg/s), maximum depth (m) and
 endurance (s). A real vehicle's come from the settings (``NEMESYS_TOP_SPEED_MPS``...): an
 unset figure is unknown (``None``) and the checks that need it are skipped, saying so. In
-training they come from the twin (``sim_bridge``), once per parameter set (cached):
+training they come from the twin (``sim``), once per parameter set (cached):
 
 * top speed: the steady surge with both horizontal thrusters at their (calibrated) limit,
   ``2 T = (Xu + Xuu u) u``, solved for ``u``: about 0.19 m/s;

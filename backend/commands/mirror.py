@@ -11,9 +11,10 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
-from backend.telemetry import TelemetryHub, number
+from backend.telemetry import TelemetryHub
 from codec import decode_frame, encode_frame
 from planner import Plan, PlanError, VehicleState, plan
+from vehicle_contract.messages import number
 
 logger = logging.getLogger("backend.commands.mirror")
 

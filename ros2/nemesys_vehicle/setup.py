@@ -16,8 +16,9 @@ setup(
         (f"share/{PACKAGE}/launch", glob("launch/*.launch.py")),
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
     ],
-    # ROS convention: dependencies are in package.xml (rosdep: python3-serial); codec, planner
-    # and sim_bridge come from the nemesys-console package installed alongside (README.md)
+    # ROS convention: dependencies are in package.xml (rosdep: python3-serial); codec, planner,
+    # onboard and vehicle_contract come from the nemesys-console checkout installed alongside
+    # (README.md)
     install_requires=["setuptools"],
     zip_safe=True,
     maintainer="NemeSys Console maintainers",

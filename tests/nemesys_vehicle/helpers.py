@@ -10,7 +10,7 @@ from typing import Any
 from codec import GUARD_BITS, ParamValue, encode_frame
 from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.core import Odometry, Recorder, VehicleCore, frame_bits
-from vehicle_contract.contract import validate_ack
+from vehicle_contract.payloads import validate_ack
 
 CIRCLE: dict[str, ParamValue] = {"speed": 0.2, "depth": 2, "radius": 3, "direction": "cw"}
 #: The agent's wall-clock measurements: present or not, never equal between two runs.

@@ -7,8 +7,6 @@ from collections.abc import Callable
 import pytest
 
 from nemesys_vehicle.core import PENDING_FRAMES
-from onboard.agent import INVALID_PLAN, LIMIT_VIOLATION
-from onboard.guidance import Mode
 from tests.codec.helpers import crafted_frame
 from tests.nemesys_vehicle.helpers import (
     CIRCLE,
@@ -23,7 +21,8 @@ from tests.nemesys_vehicle.helpers import (
     receive_checked,
     running_core,
 )
-from vehicle_contract.contract import validate_ack
+from vehicle_contract.codes import INVALID_PLAN, LIMIT_VIOLATION, Mode
+from vehicle_contract.payloads import validate_ack
 
 # --- accepted ------------------------------------------------------------------------------
 

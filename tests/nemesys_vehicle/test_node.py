@@ -27,9 +27,8 @@ from vehicle_contract.contract import (
     POSE_TOPIC,
     STATUS_TOPIC,
     topic,
-    validate_ack,
-    validate_status,
 )
+from vehicle_contract.payloads import validate_ack, validate_status
 
 NODE_PY = Path(nemesys_vehicle.__file__).parent / "node.py"
 

@@ -8,7 +8,6 @@ import math
 import pytest
 
 from nemesys_vehicle.frames import yaw_deg_of
-from onboard.guidance import Mode
 from tests.nemesys_vehicle.helpers import (
     CIRCLE,
     T0_S,
@@ -18,7 +17,8 @@ from tests.nemesys_vehicle.helpers import (
     receive_checked,
     running_core,
 )
-from vehicle_contract.contract import validate_status
+from vehicle_contract.codes import Mode
+from vehicle_contract.payloads import validate_status
 
 # --- status and pose -----------------------------------------------------------------------
 

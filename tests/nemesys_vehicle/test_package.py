@@ -5,7 +5,10 @@ from __future__ import annotations
 import ast
 import json
 import math
+import os
 import re
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from types import SimpleNamespace
@@ -94,6 +97,48 @@ def test_launch_file_starts_the_node_with_the_params_file() -> None:
     assert "generate_launch_description" in names
     strings = {n.value for n in ast.walk(tree) if isinstance(n, ast.Constant)}
     assert {"nemesys_vehicle", "vehicle_node", "params.yaml", "params_file"} <= strings
+
+
+#: What the node may import of this repository: the vehicle side, nothing of the station, the
+#: simulator or the console (README.md, "Install").
+VEHICLE_SIDE = {"codec", "planner", "onboard", "vehicle_contract", "nemesys_vehicle"}
+#: Top-level packages of this repository that a vehicle does not install.
+STATION_SIDE = ("rosbridge", "station", "sim", "backend", "cli", "bench", "analysis")
+
+
+def test_the_node_imports_only_the_vehicle_side() -> None:
+    """Read with ``ast``, lazy imports inside functions included."""
+    found: dict[str, str] = {}
+    for path in sorted((PACKAGE / "nemesys_vehicle").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+                names = [node.module]
+            else:
+                continue
+            for name in names:
+                found.setdefault(name.split(".")[0], f"{path.name}:{node.lineno}")
+    assert {"codec", "planner", "onboard", "vehicle_contract"} <= set(found)
+    for top in STATION_SIDE:
+        assert top not in found, f"{found[top]} imports {top}"
+
+
+def test_the_nodes_core_runs_without_the_station_side() -> None:
+    """The ROS-free modules, imported in a fresh interpreter, load none of the station's."""
+    code = (
+        "import sys; import nemesys_vehicle.core, nemesys_vehicle.convert, "
+        "nemesys_vehicle.frames, nemesys_vehicle.config, nemesys_vehicle.stream; "
+        "print('\\n'.join(sys.modules))"
+    )
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(PACKAGE), str(PACKAGE.parents[1])])}
+    out = subprocess.run(
+        [sys.executable, "-c", code], check=True, capture_output=True, text=True, env=env
+    ).stdout.split()
+    assert "vehicle_contract.messages" in out and "onboard.agent" in out
+    loaded = {m.split(".")[0] for m in out}
+    assert not loaded & set(STATION_SIDE), sorted(loaded & set(STATION_SIDE))
+    assert "jsonschema" not in loaded
 
 
 # --- configuration -------------------------------------------------------------------------

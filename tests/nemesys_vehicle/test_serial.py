@@ -17,7 +17,7 @@ from nemesys_vehicle.core import Recorder, VehicleCore
 from nemesys_vehicle.serial_input import SerialByteSource
 from nemesys_vehicle.stream import FrameStream
 from tests.nemesys_vehicle.helpers import CIRCLE, T0_S, frame_bytes, odometry, same_ack
-from vehicle_contract.contract import validate_ack
+from vehicle_contract.payloads import validate_ack
 
 CIRCLE_BYTES = frame_bytes("circle", **CIRCLE)
 SQUARE_BYTES = frame_bytes("square", speed=0.2, depth=2, side_span=8, direction="cw")

@@ -18,10 +18,11 @@ from codec import (
     decode_frame,
     encode_frame,
 )
-from onboard.agent import INVALID_PLAN, LIMIT_VIOLATION, OnboardAgent
-from onboard.guidance import Guidance, Mode, Reference
+from onboard.agent import OnboardAgent
+from onboard.guidance import Guidance, Reference
 from planner import CircleFence, Limits, VehicleState, plan, validate
 from tests.codec.helpers import crafted_frame, flip_frame
+from vehicle_contract.codes import INVALID_PLAN, LIMIT_VIOLATION, Mode
 
 ACK_KEYS = {
     "seq",

@@ -8,10 +8,11 @@ import math
 import pytest
 
 from codec import ParamValue, encode_frame
-from onboard.guidance import Guidance, GuidanceConfig, Mode
+from onboard.guidance import Guidance, GuidanceConfig
 from planner import Plan, VehicleState, plan
 from sim.environment import CurrentConfig
 from sim.simulation import Sample, SimConfig, Simulation
+from vehicle_contract.codes import Mode
 
 RECORD_HZ = 10.0
 

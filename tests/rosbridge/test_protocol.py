@@ -9,7 +9,6 @@ import json
 import math
 from typing import Any
 
-import numpy as np
 import pytest
 
 from rosbridge.client import ClientProtocol, decode_json_string, decode_server_message
@@ -18,7 +17,6 @@ from rosbridge.protocol import (
     FRAME_TOPIC,
     MISSION_TOPIC,
     OP_PARSERS,
-    POSE_FRAME_ID,
     POSE_STAMPED_TYPE,
     POSE_TOPIC,
     ROS2_TOPIC_TYPES,
@@ -53,14 +51,11 @@ from rosbridge.protocol import (
     log_msg,
     parse_message,
     populate,
-    pose_stamped_msg,
     publish_message,
-    quaternion_from_roll_yaw,
     resolve_type,
     ros2_type,
     same_type,
     service_response,
-    stamp,
     string_msg,
     to_json,
     uint8_multiarray_msg,
@@ -68,7 +63,7 @@ from rosbridge.protocol import (
 )
 from tests.rosbridge.helpers import EXAMPLE
 from vehicle_contract import contract
-from vehicle_contract.endpoint import FRAME_BYTES, Pose
+from vehicle_contract.endpoint import FRAME_BYTES
 
 # ------------------------------------------------------------------------------------------
 # Topics and type names
@@ -428,93 +423,8 @@ def test_extract_sends_bytes_as_base64_and_nan_as_null() -> None:
 
 
 # ------------------------------------------------------------------------------------------
-# Outgoing messages, the quaternion, fragments
+# Outgoing messages, fragments (the pose, the stamps and to_json: tests/vehicle_contract)
 # ------------------------------------------------------------------------------------------
-
-
-def rotate(q: tuple[float, float, float, float], v: tuple[float, float, float]) -> list[float]:
-    """``q v q*`` for a unit quaternion ``(x, y, z, w)``."""
-    x, y, z, w = q
-    # Rotation matrix of a unit quaternion (Hamilton convention).
-    m = [
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ]
-    return [sum(m[i][j] * v[j] for j in range(3)) for i in range(3)]
-
-
-def euler_matrix(roll_deg: float, yaw_deg: float) -> list[list[float]]:
-    """R = Rz(yaw) Rx(roll): body to NED, built independently of the quaternion code."""
-    r, y = math.radians(roll_deg), math.radians(yaw_deg)
-    rz = [[math.cos(y), -math.sin(y), 0.0], [math.sin(y), math.cos(y), 0.0], [0.0, 0.0, 1.0]]
-    rx = [[1.0, 0.0, 0.0], [0.0, math.cos(r), -math.sin(r)], [0.0, math.sin(r), math.cos(r)]]
-    return [[sum(rz[i][k] * rx[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-
-
-def test_quaternion_identity_and_axes() -> None:
-    assert quaternion_from_roll_yaw(0.0, 0.0) == (0.0, 0.0, 0.0, 1.0)
-    # Heading 90 deg: the bow (+x body) points east (+y NED).
-    assert rotate(quaternion_from_roll_yaw(0.0, 90.0), (1, 0, 0)) == pytest.approx(
-        [0, 1, 0], abs=1e-12
-    )
-    # Heading 180: south.
-    assert rotate(quaternion_from_roll_yaw(0.0, 180.0), (1, 0, 0)) == pytest.approx(
-        [-1, 0, 0], abs=1e-12
-    )
-    # Roll +90 deg: starboard (+y body) goes down (+z NED).
-    assert rotate(quaternion_from_roll_yaw(90.0, 0.0), (0, 1, 0)) == pytest.approx(
-        [0, 0, 1], abs=1e-12
-    )
-    # Roll 90 then heading 90: starboard still points down, the bow east.
-    q = quaternion_from_roll_yaw(90.0, 90.0)
-    assert rotate(q, (0, 1, 0)) == pytest.approx([0, 0, 1], abs=1e-12)
-    assert rotate(q, (1, 0, 0)) == pytest.approx([0, 1, 0], abs=1e-12)
-
-
-def test_quaternion_sign_is_canonical() -> None:
-    q = quaternion_from_roll_yaw(0.0, 359.0)
-    assert q[3] > 0.0
-    assert q == pytest.approx(quaternion_from_roll_yaw(0.0, -1.0), abs=1e-15)
-    assert all(math.copysign(1.0, c) == 1.0 for c in quaternion_from_roll_yaw(0.0, 360.0)[:2])
-    for roll, yaw in [(170.0, 200.0), (-179.0, -181.0), (90.0, 540.0)]:
-        assert quaternion_from_roll_yaw(roll, yaw)[3] >= 0.0
-
-
-@pytest.mark.parametrize(
-    ("roll", "yaw"), [(30.0, 45.0), (-12.5, 300.0), (5.0, -170.0), (170.0, 200.0)]
-)
-def test_quaternion_matches_euler_matrix(roll: float, yaw: float) -> None:
-    q = quaternion_from_roll_yaw(roll, yaw)
-    assert math.fsum(c * c for c in q) == pytest.approx(1.0, abs=1e-12)
-    m = euler_matrix(roll, yaw)
-    for axis in ((1, 0, 0), (0, 1, 0), (0, 0, 1)):
-        expected = [sum(m[i][j] * axis[j] for j in range(3)) for i in range(3)]
-        assert rotate(q, axis) == pytest.approx(expected, abs=1e-12)
-
-
-def test_stamp() -> None:
-    assert stamp(0.0) == {"sec": 0, "nanosec": 0}
-    assert stamp(12.5) == {"sec": 12, "nanosec": 500_000_000}
-    assert stamp(3.000000001) == {"sec": 3, "nanosec": 1}
-    assert stamp(0.9999999999) == {"sec": 1, "nanosec": 0}
-    assert stamp(-0.25) == {"sec": -1, "nanosec": 750_000_000}
-    assert stamp(math.nan) == {"sec": 0, "nanosec": 0}
-    assert stamp(math.inf) == {"sec": 0, "nanosec": 0}
-
-
-def test_pose_stamped_msg() -> None:
-    msg = pose_stamped_msg(Pose(t_s=7.25, x_m=10.0, y_m=-3.5, z_m=4.0, roll_deg=0, heading_deg=90))
-    assert msg["header"] == {"stamp": {"sec": 7, "nanosec": 250_000_000}, "frame_id": "map_ned"}
-    assert POSE_FRAME_ID == "map_ned"
-    assert msg["pose"]["position"] == {"x": 10.0, "y": -3.5, "z": 4.0}
-    o = msg["pose"]["orientation"]
-    half = math.sqrt(0.5)
-    assert (o["x"], o["y"], o["z"], o["w"]) == pytest.approx((0.0, 0.0, half, half))
-    # The same message a ROS 2 rosbridge would send for it: complete, NaN as null.
-    assert extract("geometry_msgs/msg/PoseStamped", msg) == msg
-    nan = pose_stamped_msg(Pose(1.0, math.nan, 0.0, 0.0, 0.0, 0.0))
-    assert json.loads(wire_json(nan))["pose"]["position"]["x"] is None
 
 
 def test_builders() -> None:
@@ -542,13 +452,6 @@ def test_builders() -> None:
     log = log_msg(2.5, 40, "rosbridge_websocket", "boom")
     assert log["stamp"] == {"sec": 2, "nanosec": 500_000_000} and log["level"] == 40
     assert set(log) == {"stamp", "level", "name", "msg", "file", "function", "line"}
-
-
-def test_to_json_takes_numpy_values() -> None:
-    status = {"depth_m": np.float32(2.5), "frames": np.int64(3), "ber": np.array([1e-3, np.nan])}
-    assert to_json(status) == '{"depth_m":2.5,"frames":3,"ber":[0.001,null]}'
-    with pytest.raises(TypeError, match="object is not JSON serializable"):
-        to_json({"x": object()})
 
 
 def test_to_json_is_compact_and_wire_json_is_the_real_servers() -> None:

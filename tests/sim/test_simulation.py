@@ -11,10 +11,10 @@ from typing import Any
 import pytest
 
 from codec import DEFAULT_BITRATE_BPS, FRAME_BITS, ParamValue, encode_frame
-from onboard.guidance import Mode
 from sim.channel import ChannelConfig
 from sim.environment import CurrentConfig
 from sim.simulation import SimConfig, Simulation
+from vehicle_contract.codes import Mode
 from vehicle_contract.endpoint import FRAME_BYTES, Pose, VehicleEndpoint
 
 LATENCY_KEYS = ("decode_latency_ms", "replan_latency_ms")

@@ -19,8 +19,9 @@ from jsonschema import Draft202012Validator
 
 from backend.commands.manager import CommandManager
 from backend.commands.mirror import VehicleMirror
+from backend.messages import message_json
 from backend.mission_log.store import MissionLog
-from backend.telemetry import STATUS_NUMBERS, TelemetryHub, status_from_message
+from backend.telemetry import TelemetryHub
 from cli.main import main
 from codec import Encoded, Frame, encode_frame
 from onboard.agent import command_json
@@ -29,8 +30,9 @@ from rosbridge.protocol import TOPIC_TYPES, same_type
 from sim.simulation import SimConfig, Simulation
 from station.link import Capability, Link
 from tests.onboard.test_agent import REJECTS
-from vehicle_contract import contract
+from vehicle_contract import codes, contract, payloads
 from vehicle_contract.doc import DOC_PATH, REGENERATE, render_markdown
+from vehicle_contract.messages import STATUS_NUMBERS, status_from_message
 
 ROOT = Path(__file__).resolve().parents[2]
 CIRCLE = encode_frame("circle", speed=0.2, depth=2, radius=3, direction="cw")
@@ -52,21 +54,21 @@ STATE = {
 
 @pytest.mark.parametrize("name", ["ack", "status"])
 def test_the_schemas_are_valid_draft_2020_12(name: str) -> None:
-    schema = contract.SCHEMAS[name]
+    schema = payloads.SCHEMAS[name]
     assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
     Draft202012Validator.check_schema(schema)
 
 
 def test_the_required_fields_are_what_the_console_reads() -> None:
-    assert set(contract.ACK_SCHEMA["required"]) == {
+    assert set(payloads.ACK_SCHEMA["required"]) == {
         "outcome", "frame_hex", "reason", "detail", "command", "duplicate", "active", "from",
         "t_s",
     }  # fmt: skip
-    assert set(contract.STATUS_SCHEMA["required"]) == {
+    assert set(payloads.STATUS_SCHEMA["required"]) == {
         "t_s", "depth_m", "heading_deg", "speed_mps", "battery_pct", "mode", "pattern",
     }  # fmt: skip
     # every status number the console reads may be null (NaN through rosbridge)
-    properties = contract.STATUS_SCHEMA["properties"]
+    properties = payloads.STATUS_SCHEMA["properties"]
     for key in STATUS_NUMBERS:
         assert "null" in properties[key]["type"], key
 
@@ -86,7 +88,7 @@ def test_nemesys_contract_prints_the_contract_as_json() -> None:
     assert re.fullmatch(r"\d+\.\d+\.\d+", doc["version"])
     assert doc["version"] == contract.CONTRACT_VERSION
     assert set(doc["schemas"]) == {"ack", "status"}
-    assert doc["schemas"]["status"] == contract.STATUS_SCHEMA
+    assert doc["schemas"]["status"] == payloads.STATUS_SCHEMA
     assert [t["name"] for t in doc["topics"]] == [t.name for t in contract.TOPICS]
     assert doc == contract.contract_json()
 
@@ -94,7 +96,7 @@ def test_nemesys_contract_prints_the_contract_as_json() -> None:
 def test_contract_json_is_a_copy() -> None:
     doc = contract.contract_json()
     doc["schemas"]["ack"]["required"].clear()
-    assert contract.ACK_SCHEMA["required"]
+    assert payloads.ACK_SCHEMA["required"]
 
 
 def test_docs_vehicle_md_is_generated_from_the_contract() -> None:
@@ -110,7 +112,7 @@ def test_the_doc_lists_the_topics_the_schemas_and_their_required_fields() -> Non
     assert f"**Version {contract.CONTRACT_VERSION}.**" in doc
     for t in contract.TOPICS:
         assert f"| `{t.name}` | `{t.type}` |" in doc
-    for name, schema in contract.SCHEMAS.items():
+    for name, schema in payloads.SCHEMAS.items():
         listed = ", ".join(f"`{f}`" for f in schema["required"])
         assert f"Required fields (the console reads them): {listed}." in doc, name
         assert f'"$id": "{schema["$id"]}"' in doc
@@ -150,7 +152,7 @@ def test_every_real_simulator_message_validates() -> None:
         assert ack["outcome"] == "rejected" and ack["reason"] == reason
         reasons.add(reason)
         acks.append(ack)
-    assert reasons == set(contract.REJECT_REASONS)  # every reason the contract names
+    assert reasons == set(codes.REJECT_REASONS)  # every reason the contract names
     acks.append(_run(sim, HOVER.frame.to_bytes()))
     acks.append(_run(sim, SURFACE.frame.to_bytes()))
     for _ in range(40):
@@ -164,9 +166,9 @@ def test_every_real_simulator_message_validates() -> None:
     assert statuses[-1]["mode"] == "battery_empty"
     for ack in acks:
         assert "channel_flipped_bits" in ack or ack["frame_hex"] is None
-        assert contract.validate_ack(json.loads(json.dumps(ack))) == [], ack
+        assert payloads.validate_ack(json.loads(json.dumps(ack))) == [], ack
     for status in statuses:
-        assert contract.validate_status(json.loads(json.dumps(status))) == [], status
+        assert payloads.validate_status(json.loads(json.dumps(status))) == [], status
 
 
 # --- what the schemas accept, the console copes with --------------------------------------
@@ -212,14 +214,14 @@ STATUS_EXAMPLES: dict[str, dict[str, Any]] = {
 @pytest.mark.parametrize("name", list(STATUS_EXAMPLES))
 def test_the_console_reads_every_status_the_schema_accepts(name: str) -> None:
     msg = STATUS_EXAMPLES[name]
-    assert contract.validate_status(msg) == []
+    assert payloads.validate_status(msg) == []
     status, unknown = status_from_message(json.loads(json.dumps(msg)))
     for key in STATUS_NUMBERS:
         assert status[key] is None or isinstance(status[key], float)
     assert unknown == sum(msg.get(k) is None for k in STATUS_NUMBERS)
     hub = TelemetryHub()
     hub.set_status(msg)
-    json.dumps(hub.telemetry())
+    json.loads(message_json(hub.telemetry()))  # the page's telemetry message
     mirror = VehicleMirror(hub, dive=lambda: 1)
     mirror.accepted = {"id": 1, "dive": 1, "pattern": "hover", "params": {}, "ack": {"t_s": None}}
     assert isinstance(mirror.echo_mismatch, bool)
@@ -327,7 +329,7 @@ def test_the_console_takes_every_acknowledgement_the_schema_accepts(
     name: str, tmp_path: Path
 ) -> None:
     ack = ACK_EXAMPLES[name]
-    assert contract.validate_ack(ack) == []
+    assert payloads.validate_ack(ack) == []
     record = asyncio.run(_console_takes(json.loads(json.dumps(ack)), CIRCLE, tmp_path / "m.db"))
     expected = "acknowledged" if ack["outcome"] == "accepted" else "rejected"
     assert record["state"] == expected, record
@@ -352,12 +354,12 @@ def _valid(name: str) -> dict[str, Any]:
 
 @pytest.mark.parametrize(
     ("name", "field"),
-    [("ack", f) for f in contract.ACK_SCHEMA["required"]]
-    + [("status", f) for f in contract.STATUS_SCHEMA["required"]],
+    [("ack", f) for f in payloads.ACK_SCHEMA["required"]]
+    + [("status", f) for f in payloads.STATUS_SCHEMA["required"]],
 )
 def test_a_missing_required_field_fails_naming_it(name: str, field: str) -> None:
     msg = _valid(name)
-    validate = contract.validate_ack if name == "ack" else contract.validate_status
+    validate = payloads.validate_ack if name == "ack" else payloads.validate_status
     assert validate(msg) == []
     del msg[field]
     assert validate(msg) == [f"'{field}' is a required property"]
@@ -381,7 +383,7 @@ def test_a_wrong_value_fails_naming_the_field(
     name: str, change: dict[str, Any], problem: str
 ) -> None:
     msg = {**_valid(name), **change}
-    validate = contract.validate_ack if name == "ack" else contract.validate_status
+    validate = payloads.validate_ack if name == "ack" else payloads.validate_status
     problems = validate(msg)
     assert any(p.startswith(problem) for p in problems), problems
 
@@ -390,8 +392,8 @@ def test_nested_problems_name_the_nested_field() -> None:
     ack = _valid("ack")
     ack["command"]["params"]["speed"] = 9
     del ack["from"]["x_m"]
-    problems = contract.validate_ack(ack)
+    problems = payloads.validate_ack(ack)
     assert "command.params.speed: 9 is greater than the maximum of 2.55" in problems
     assert "from: 'x_m' is a required property" in problems
     status = {**_valid("status"), "active": 5}
-    assert contract.validate_status(status) == ["active: 5 is not of type 'object' or 'null'"]
+    assert payloads.validate_status(status) == ["active: 5 is not of type 'object' or 'null'"]

@@ -14,8 +14,8 @@ from typing import Any, Final
 
 from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.core import Odometry
-from rosbridge.protocol import to_json
 from vehicle_contract.contract import Durability, QoS, Reliability, topic
+from vehicle_contract.messages import to_json
 
 #: Odometry in: BEST_EFFORT matches both reliable and best-effort publishers (sensor data).
 ODOMETRY_QOS: Final = QoS(Reliability.BEST_EFFORT, Durability.VOLATILE, 5)

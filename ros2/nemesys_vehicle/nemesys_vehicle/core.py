@@ -37,10 +37,12 @@ from nemesys_vehicle.frames import EnuPose, NedPose, enu_to_ned, ned_to_enu, yaw
 from nemesys_vehicle.frames import yaw_quaternion as yaw_q
 from nemesys_vehicle.stream import FrameStream
 from onboard.agent import OnboardAgent, command_json
-from onboard.guidance import Guidance, Mode, Reference
+from onboard.guidance import Guidance, Reference
 from planner import VehicleState
-from rosbridge.protocol import stamp
-from vehicle_contract.contract import FRAME_TOPIC, POSE_FRAME_ID, topic
+from vehicle_contract.codes import Mode
+from vehicle_contract.contract import FRAME_TOPIC, topic
+from vehicle_contract.endpoint import Pose
+from vehicle_contract.messages import pose_stamped_msg, stamp
 
 #: Frames held while waiting for the first odometry (the frame topic's history depth).
 PENDING_FRAMES: Final = topic(FRAME_TOPIC).qos.depth
@@ -124,16 +126,10 @@ class Recorder:
 
 
 def pose_msg(t_s: float, ned: NedPose) -> JsonDict:
-    """``geometry_msgs/PoseStamped`` in ``map_ned`` (position NED, heading yaw quaternion),
-    as :func:`rosbridge.protocol.pose_stamped_msg` builds the simulator's."""
-    qx, qy, qz, qw = yaw_q(ned.heading_deg)
-    return {
-        "header": {"stamp": stamp(t_s), "frame_id": POSE_FRAME_ID},
-        "pose": {
-            "position": {"x": ned.x_north_m, "y": ned.y_east_m, "z": ned.z_down_m},
-            "orientation": {"x": qx, "y": qy, "z": qz, "w": qw},
-        },
-    }
+    """``geometry_msgs/PoseStamped`` in ``map_ned`` (position NED, heading yaw quaternion):
+    the contract's message, built as the simulator's (no roll)."""
+    pose = Pose(t_s, ned.x_north_m, ned.y_east_m, ned.z_down_m, 0.0, ned.heading_deg)
+    return pose_stamped_msg(pose)
 
 
 def setpoint_msg(setpoint: Setpoint, frame: str, enu_frame_id: str) -> JsonDict:

@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from rosbridge.protocol import quaternion_from_roll_yaw
+from vehicle_contract.messages import quaternion_from_roll_yaw
 
 #: A quaternion ``(x, y, z, w)``.
 Quaternion = tuple[float, float, float, float]

@@ -16,8 +16,8 @@ from backend.authoring.predict import MAX_POINTS, QUEUE, WORKER_NICE, decimate
 from backend.chart.geo import ned_to_geodetic
 from bench._server import start_console
 from codec import encode_frame
-from onboard.guidance import Mode
 from tests.backend.conftest import AUTH, CIRCLE, MakeClient, console_of, send, wait_until
+from vehicle_contract.codes import Mode
 
 LAWNMOWER = {"speed": 0.18, "depth": 3, "sweep_length": 10, "lane_spacing": 2, "laps": 1}
 #: Largest distance between the prediction and the full simulation at the same instant (m).

@@ -18,12 +18,12 @@ from backend.authoring.profile import (
     twin_profile,
 )
 from codec import decode_frame, encode_frame
-from onboard.guidance import Mode
 from planner import Limits, plan
 from sim.environment import SOC_LINEAR_PCT_PER_H, Battery, BatteryConfig
 from sim.model import VehicleParams
 from sim.simulation import SimConfig, Simulation
 from tests.backend.conftest import AUTH, MakeClient, settings_for, wait_state
+from vehicle_contract.codes import Mode
 
 EXAMPLE = (
     "speed 0.8 m/s exceeds the vehicle's 0.18 m/s top speed: it will fly at 0.18 m/s, "
