@@ -14,34 +14,36 @@ import logging
 import secrets
 from collections.abc import Coroutine, Mapping
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from backend.authoring import operations
 from backend.authoring.predict import TwinWorker
-from backend.authoring.preview import frame_doc, plan_doc
 from backend.authoring.profile import VehicleProfile, profile_for
 from backend.chart.geo import Datum, initial_datum
 from backend.chart.gps import GpsFix, GpsReader, Station, parse_gps, station_of
-from backend.chart.reach import active_path_doc, add_geo, with_lat_lon
+from backend.chart.reach import active_path_doc, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
-from backend.commands.checks import CheckReport, SendViolation, check_plan
+from backend.commands.checks import SendViolation
 from backend.commands.health import LinkHealth, link_health_of
 from backend.commands.manager import CommandManager
 from backend.commands.service import Assessment, CommandService
+from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMessage, VehicleView
 from backend.mission_log.opening import open_checked
+from backend.mission_log.records import log_event
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.settings import Settings
 from backend.telemetry import TelemetryHub
 from backend.viewer.draw_queue import PreviewDrawer
-from codec import (
-    Encoded,
-    airtime_s,
-    decode_frame,
-    delivery_probability,
-    encode_frame,
-)
-from planner import Limits, Plan, VehicleState, plan
+from codec import Encoded, airtime_s
+from planner import Limits, Plan, VehicleState
 from station.link import Link, RosbridgeLink, open_link
 from vehicle_contract.messages import number, pose_from_message, position_known
+
+if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
+    from backend.scripts.operations import ScriptRunner
+    from backend.viewer.viewer import Viewer
+    from rosbridge.server import BridgeServer
+    from sim.simulation import Simulation
 
 logger = logging.getLogger("backend.console")
 
@@ -64,22 +66,22 @@ class Console:
         #: The process /api/predict's twins run in (started on first use).
         self.twin_worker = TwinWorker()
         #: The path the vehicle flies, as mirrored (NED and lat/lon), or None.
-        self.active_path: dict[str, Any] | None = None
+        self.active_path: ActivePath | None = None
         #: What the vehicle can do (the twin's figures in training, the settings' otherwise).
         self.profile: VehicleProfile = profile_for(settings)
         self.gps: GpsReader | None = None  # the surface GPS (``gps`` setting)
         self.tiles: TileSource | None = None  # local map tiles (``tiles`` setting)
         self.log: MissionLog | None = None
         self.dive = 0
-        self.sim: Any = None  # sim.simulation.Simulation in training mode
-        self.bridge: Any = None  # rosbridge.server.BridgeServer in training mode
+        self.sim: Simulation | None = None  # training mode: the simulated vehicle
+        self.bridge: BridgeServer | None = None  # training mode: its rosbridge server
         self.link: Link | None = None
         self.hub = TelemetryHub(settings.telemetry_hz)
         self.commands: CommandManager | None = None
         #: The one checked path to the vehicle (every frame leaves through it).
         self.service: CommandService | None = None
-        self.viewer: Any = None  # backend.viewer.viewer.Viewer
-        self.runner: Any = None  # backend.scripts.operations.ScriptRunner while a script runs
+        self.viewer: Viewer | None = None  # the 3D view (None: started without one)
+        self.runner: ScriptRunner | None = None  # the latest mission script run (None: none yet)
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
         self.drawer = PreviewDrawer(PREVIEW_DRAW_INTERVAL_S)
@@ -141,7 +143,7 @@ class Console:
             max_sends_per_minute=s.max_sends_per_minute,
             copy_interval_s=s.copy_interval_s,
             delivery_target=s.delivery_target,
-            link_ber=self._link_ber,
+            link_ber=self.link_ber,
             link_delay_s=self._link_delay_s,
             airtime_s=airtime_s(s.bitrate_bps),
             target=s.target,
@@ -208,22 +210,14 @@ class Console:
             return
         self._echo_flagged = True
         assert cm is not None and self.log is not None
-        last = cm.vehicle.accepted or {}
-        status = self.hub.status or {}
-        active = cm.vehicle_active or {"pattern": status.get("pattern")}
-        detail = (
-            f"the vehicle runs {active.get('pattern')}, not {last.get('pattern')} (command "
-            f"{last.get('id')}, the last it accepted from this console): retasked by another "
-            "station, restarted, or not this console's vehicle"
-        )
-        data = {"vehicle_active": active, "last_accepted_id": last.get("id")}
+        detail, data = cm.vehicle.mismatch_event()
         try:
             event = self.log.add_event(self.dive, "echo_mismatch", detail, data)
         except LogWriteError as err:
             logger.error("could not log an echo mismatch: %s", err)
             return
         logger.warning("echo mismatch: %s", detail)
-        self.hub.publish({"type": "event", "event": event})
+        self.hub.publish(EventMessage(event=log_event(event)))
 
     def _on_fix(self, fix: GpsFix) -> None:
         if self.datum is None:  # a real vehicle without a datum setting: the first fix
@@ -250,8 +244,12 @@ class Console:
     def _show_active(self, active: Plan | None) -> None:
         """The path the vehicle flies (as the station mirrors it): in the 3D view, and for
         every page's chart (``/api/vehicle`` and an ``active_path`` message on /ws)."""
-        self.active_path = None if active is None else active_path_doc(active, self.datum)
-        self.hub.publish({"type": "active_path", "active_path": self.active_path})
+        self.active_path = (
+            None
+            if active is None
+            else ActivePath.model_validate(active_path_doc(active, self.datum))
+        )
+        self.hub.publish(ActivePathMessage(active_path=self.active_path))
         if self.viewer is None:
             return
         if active is None:
@@ -260,7 +258,7 @@ class Console:
             p = active.path
             self.viewer.show_active(p.xs, p.ys, p.zs, f"active: {active.pattern}")
 
-    def _link_ber(self) -> tuple[float, float]:
+    def link_ber(self) -> tuple[float, float]:
         """(bit-error rate, whole-frame loss) the copies are chosen from: the emulated
         channel's in training, the ``link_ber`` setting on a real link."""
         if self.sim is None:
@@ -271,7 +269,7 @@ class Console:
     def _link_delay_s(self) -> float:
         if self.sim is None:
             return 0.0
-        delay: float = self.sim.channel.config.delay_s
+        delay = self.sim.channel.config.delay_s
         scale = self.bridge.time_scale if self.bridge is not None else 1.0
         # the channel's delay is in simulated seconds; the ack timeout runs on the wall clock
         return delay / scale if scale > 0 else 3600.0
@@ -293,24 +291,27 @@ class Console:
             pose["t_s"] or 0.0,
         )
 
-    def vehicle(self) -> dict[str, Any]:
+    def vehicle(self) -> VehicleView:
+        """Pose, status, the vehicle's echoed active command vs the last sent, link health."""
         cm = self.commands
-        return {
-            "pose": self.hub.pose,
-            "status": self.hub.status,
-            "active": cm.vehicle_active if cm else None,
-            "last_sent": cm.last_sent if cm else None,
-            "active_path": self.active_path,
-            "echo_mismatch": cm.echo_mismatch if cm else False,
-            "age_s": self.hub.age_s(),
-            "link": self.link_health().model_dump(),
-        }
+        return VehicleView.model_validate(
+            {
+                "pose": self.hub.pose,
+                "status": self.hub.status,
+                "active": cm.vehicle_active if cm else None,
+                "last_sent": cm.last_sent if cm else None,
+                "active_path": self.active_path,
+                "echo_mismatch": cm.echo_mismatch if cm else False,
+                "age_s": self.hub.age_s(),
+                "link": self.link_health(),
+            }
+        )
 
     def link_health(self) -> LinkHealth:
         """What the station knows of its link to the vehicle (not the page's websocket)."""
         assert self.link is not None and self.commands is not None
         return link_health_of(
-            self.link, self.commands, self.hub, self.settings.target, self._link_ber()[0]
+            self.link, self.commands, self.hub, self.settings.target, self.link_ber()[0]
         )
 
     def set_link(self, link_ber: float | None, delivery_target: float | None) -> LinkHealth:
@@ -336,14 +337,13 @@ class Console:
         while True:
             await asyncio.sleep(HEALTH_PUSH_INTERVAL_S)
             if self.hub.client_count:
-                self.hub.publish({"type": "link", "link": self.link_health().model_dump()})
+                self.hub.publish(LinkMessage(link=self.link_health()))
 
-    # --- authoring -----------------------------------------------------------------------
+    # --- authoring (backend.authoring.operations) ---------------------------------------
 
     def encode(self, pattern: str, params: dict[str, Any]) -> tuple[Encoded, dict[str, Any]]:
         """Encode (raises codec.EncodeError naming the field) and describe the frame."""
-        enc = encode_frame(pattern, params)
-        return enc, frame_doc(enc, self.settings.bitrate_bps)
+        return operations.encode(self, pattern, params)
 
     def preview(
         self, pattern: str, params: dict[str, Any], *, show: bool = True, view: str | None = None
@@ -354,12 +354,13 @@ class Console:
         Raises:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
-        return self._preview(pattern, params, show=show and view is not None, view=view)[1]
+        shown = show and view is not None
+        return operations.preview(self, pattern, params, show=shown, view=view)[1]
 
     def plan_violations(self, new: Plan) -> tuple[SendViolation, ...]:
         """The send policy's checks of a planned command (a mission script's step), with the
         battery as it is now."""
-        return self._report(new).violations
+        return operations.plan_violations(self, new)
 
     def assess(self, pattern: str, params: Mapping[str, Any]) -> Assessment:
         """The checks of a send from where the vehicle is now (the command service's).
@@ -367,50 +368,7 @@ class Console:
         Raises:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
-        enc = encode_frame(pattern, dict(params))
-        cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
-        current = self.commands.mirror if self.commands else None
-        report = self._report(plan(cmd, self.vehicle_state(), current))
-        return Assessment(enc, report.violations, report.lines)
-
-    def _report(self, new: Plan) -> CheckReport:
-        return check_plan(
-            new,
-            limits=self.limits,
-            profile=self.profile,
-            soc_pct=number((self.hub.status or {}).get("battery_pct")),
-            station=self.station(),
-            range_m=self.settings.me_range_m,
-        )
-
-    def _preview(
-        self, pattern: str, params: dict[str, Any], *, show: bool, view: str | None = None
-    ) -> tuple[Encoded, dict[str, Any]]:
-        enc, doc = self.encode(pattern, params)
-        cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
-        state = self.vehicle_state()
-        current = self.commands.mirror if self.commands else None
-        new = plan(cmd, state, current)
-        path = new.path
-        soc = number((self.hub.status or {}).get("battery_pct"))
-        station, range_m = self.station(), self.settings.me_range_m
-        doc.update(
-            plan_doc(new, current, self.limits, self.profile, soc, station=station, range_m=range_m)
-        )
-        add_geo(doc, self.datum, station, range_m)  # lat/lon, the chart's reach
-        doc["from"] = state.as_dict()
-        if self.commands is not None:
-            # what sending it now would do: copies chosen from the link, and their odds
-            ber, loss = self._link_ber()
-            copies = self.commands.copies_now()
-            doc["two_way"] = self.commands.link.acknowledges
-            doc["copies"] = copies
-            doc["p_delivered"] = delivery_probability(ber, copies, loss=loss)
-        if show and view is not None and self.viewer is not None:
-            self.drawer.later(
-                view, path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
-            )
-        return enc, doc
+        return operations.assess(self, pattern, params)
 
     # --- training ------------------------------------------------------------------------
 

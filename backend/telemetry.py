@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import time
 from collections import deque
 from typing import Any, Protocol
 
+from backend.messages import News, TelemetryMessage, message_json
 from vehicle_contract.messages import (
     PoseFields,
     position_known,
@@ -101,17 +101,15 @@ class TelemetryHub:
         self.last_message_s = time.monotonic()
         self._version += 1
 
-    def telemetry(self) -> dict[str, Any]:
-        return {
-            "type": "telemetry",
-            "pose": self.pose,
-            "status": self.status,
-            "age_s": self.age_s(),
-        }
+    def telemetry(self) -> TelemetryMessage:
+        return TelemetryMessage.model_validate(
+            {"pose": self.pose, "status": self.status, "age_s": self.age_s()}
+        )
 
-    def publish(self, event: dict[str, Any]) -> None:
-        """Queue an event for every client (in order); a client too far behind is dropped."""
-        text = json.dumps(event)
+    def publish(self, event: News) -> None:
+        """Queue an event for every client (in order), serialised once; a client too far
+        behind is dropped."""
+        text = message_json(event)
         for client in list(self._clients):
             try:
                 client.events.put_nowait(text)
@@ -131,6 +129,6 @@ class TelemetryHub:
                         await sender.send_text(client.events.get_nowait())
                 if client.sent_version != self._version:
                     client.sent_version = self._version
-                    await sender.send_text(json.dumps(self.telemetry()))
+                    await sender.send_text(message_json(self.telemetry()))
         finally:
             self._clients.discard(client)

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 from dataclasses import asdict
-from typing import Any
 
 from fastapi import APIRouter, HTTPException, Request
+from pydantic import TypeAdapter
 
 from backend.api.deps import ConsoleDep, token_from, token_ok
 from backend.api.models import CommandIn, DecodeIn
@@ -20,15 +20,22 @@ from backend.api.schemas import (
     ValidationErrorResponse,
     errors,
 )
+from backend.api.schemas.authoring import LinkCapability, SessionLimits, VehicleProfileDoc
+from backend.api.schemas.chart import DatumDoc
 from backend.api.view import ViewHeader
+from backend.mission_log.records import CommandJson
 from codec import DecodeError, decode_frame, describe_dictionary
 from onboard.agent import command_json
+from station.link import Capability
 
 router = APIRouter(prefix="/api", tags=["authoring"])
 
+#: The command dictionary as its documents (the codec describes it; read once per call).
+_PATTERNS = TypeAdapter(list[PatternDoc])
+
 
 @router.get("/session", response_model=Session)
-def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
+def session(request: Request, console: ConsoleDep) -> Session:
     """Mode, target, where the 3D view is, and whether the caller holds the operator token."""
     s, d = console.settings, console.datum
     token = token_from(request.headers.get("authorization"), request.headers.get("x-nemesys-token"))
@@ -36,31 +43,29 @@ def session(request: Request, console: ConsoleDep) -> dict[str, Any]:
     if console.viewer is not None:
         host = request.url.hostname or s.viewer_host
         viewer_url = f"/viewer/?websocket=ws://{host}:{console.viewer.port}&hideViserLogo"
-    return {
-        "mode": "training" if s.training else "vehicle",
-        "target": s.target,
-        "viewer_url": viewer_url,
-        "bitrate_bps": s.bitrate_bps,
-        "operator": s.operator,
-        "authenticated": token_ok(console, token),
-        "dive": console.dive,
-        "version": request.app.version,
-        "limits": {"max_depth_m": s.max_depth_m, "max_speed_mps": s.max_speed_mps},
-        "link": _link_capability(console),
-        "profile": asdict(console.profile),
-        "datum": None if d is None else {"lat_deg": d.lat_deg, "lon_deg": d.lon_deg},
-    }
+    return Session(
+        mode="training" if s.training else "vehicle",
+        target=s.target,
+        viewer_url=viewer_url,
+        bitrate_bps=s.bitrate_bps,
+        operator=s.operator,
+        authenticated=token_ok(console, token),
+        dive=console.dive,
+        version=request.app.version,
+        limits=SessionLimits(max_depth_m=s.max_depth_m, max_speed_mps=s.max_speed_mps),
+        link=_link_capability(console),
+        profile=VehicleProfileDoc.model_validate(asdict(console.profile)),
+        datum=None if d is None else DatumDoc(lat_deg=d.lat_deg, lon_deg=d.lon_deg),
+    )
 
 
-def _link_capability(console: ConsoleDep) -> dict[str, Any]:
+def _link_capability(console: ConsoleDep) -> LinkCapability:
     link = console.link
     if link is None:
-        return {"capability": "unknown", "acknowledges": False, "telemetry": False}
-    return {
-        "capability": str(link.capability),
-        "acknowledges": link.acknowledges,
-        "telemetry": link.telemetry,
-    }
+        return LinkCapability(capability=Capability.UNKNOWN, acknowledges=False, telemetry=False)
+    return LinkCapability(
+        capability=link.capability, acknowledges=link.acknowledges, telemetry=link.telemetry
+    )
 
 
 @router.get(
@@ -68,14 +73,14 @@ def _link_capability(console: ConsoleDep) -> dict[str, Any]:
     response_model=list[PatternDoc],
     response_model_exclude_unset=True,  # a field's optional keys stay absent, as in the codec
 )
-def dictionary() -> list[dict[str, Any]]:
+def dictionary() -> list[PatternDoc]:
     """Every pattern with its fields: name, unit, range, steps, default, choices."""
-    return describe_dictionary()
+    return _PATTERNS.validate_python(describe_dictionary())
 
 
-# preview and encode answer a DocResponse: their model documents the shape, the dict is not
-# validated again on the way out. They are async: their work (0.3-1.2 ms) runs on the event loop
-# without a thread hop per request, and the preview's drawing is queued from the loop's thread.
+# preview and encode answer their model in a DocResponse (rendered once, by pydantic-core). They
+# are async: their work (0.3-1.2 ms) runs on the event loop without a thread hop per request,
+# and the preview's drawing is queued from the loop's thread.
 @router.post(
     "/preview",
     response_class=DocResponse,
@@ -88,7 +93,8 @@ async def preview(
     """The frame (bits, sections, hex, airtime) and the path the vehicle would fly from where it
     is now, expanded from the decoded packet, with estimates, limit violations and the diff
     against the active pattern. Also drawn in the caller's own 3D view (``X-Nemesys-View``)."""
-    return DocResponse(console.preview(body.pattern, dict(body.params), view=x_nemesys_view))
+    doc = console.preview(body.pattern, dict(body.params), view=x_nemesys_view)
+    return DocResponse(PreviewDoc.model_validate(doc))
 
 
 @router.post(
@@ -97,7 +103,7 @@ async def preview(
 async def encode(body: CommandIn, console: ConsoleDep) -> DocResponse:
     """The frame only: snapped values, bits by section, hex, airtime."""
     _, doc = console.encode(body.pattern, dict(body.params))
-    return DocResponse(doc)
+    return DocResponse(EncodeDoc.model_validate(doc))
 
 
 @router.post(
@@ -109,7 +115,7 @@ async def encode(body: CommandIn, console: ConsoleDep) -> DocResponse:
         why={422: "invalid input, or the frame is rejected (detail: reason, message, field)"},
     ),
 )
-def decode(body: DecodeIn) -> dict[str, Any]:
+def decode(body: DecodeIn) -> DecodeResult:
     """Decode 100 bits or 25 hex digits; 422 with the reason when the frame is rejected."""
     try:
         dec = decode_frame(body.frame)
@@ -117,9 +123,9 @@ def decode(body: DecodeIn) -> dict[str, Any]:
         raise HTTPException(
             422, {"reason": err.reason.value, "message": str(err), "field": err.field}
         ) from None
-    return {
-        "ok": True,
-        "command": command_json(dec.command),
-        "corrected": dec.corrected,
-        "sync_errors": dec.sync_errors,
-    }
+    return DecodeResult(
+        ok=True,
+        command=CommandJson.model_validate(command_json(dec.command)),
+        corrected=dec.corrected,
+        sync_errors=dec.sync_errors,
+    )

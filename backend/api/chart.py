@@ -10,11 +10,13 @@ from fastapi.exceptions import RequestValidationError
 
 from backend.api.deps import ConsoleDep, OperatorDep
 from backend.api.schemas import OPERATOR, errors
-from backend.api.schemas.chart import ChartDoc, DatumIn
+from backend.api.schemas.chart import ChartDoc, DatumDoc, DatumIn, GpsDoc, StationDoc, TilesDoc
 from backend.chart.geo import Datum
 from backend.chart.reach import MARGINAL_FRACTION
 from backend.chart.tiles import MAX_ZOOM, MEDIA_TYPES
 from backend.console import Console
+from backend.messages import EventMessage
+from backend.mission_log.records import log_event
 from backend.mission_log.store import LogWriteError
 
 router = APIRouter(prefix="/api", tags=["chart"])
@@ -24,28 +26,30 @@ TILE_URL = "/api/tiles/{z}/{x}/{y}"
 _INDEX_MAX = (1 << MAX_ZOOM) - 1
 
 
-def chart_doc(console: Console) -> dict[str, Any]:
+def chart_doc(console: Console) -> ChartDoc:
     datum, tiles, gps = console.datum, console.tiles, console.gps
-    return {
-        "datum": None if datum is None else {"lat_deg": datum.lat_deg, "lon_deg": datum.lon_deg},
-        "station": console.station().as_dict(),
-        "me_range_m": console.settings.me_range_m,
-        "marginal_fraction": MARGINAL_FRACTION,
-        "tiles": None
+    return ChartDoc(
+        datum=None if datum is None else DatumDoc(lat_deg=datum.lat_deg, lon_deg=datum.lon_deg),
+        station=StationDoc.model_validate(console.station().as_dict()),
+        me_range_m=console.settings.me_range_m,
+        marginal_fraction=MARGINAL_FRACTION,
+        tiles=None
         if tiles is None
-        else {
-            "url": TILE_URL,
-            "kind": tiles.kind,
-            "min_zoom": tiles.min_zoom,
-            "max_zoom": tiles.max_zoom,
-            "format": tiles.format,
-        },
-        "gps": None if gps is None else gps.doc(),
-    }
+        else TilesDoc.model_validate(  # kind and format: checked against the documented names
+            {
+                "url": TILE_URL,
+                "kind": tiles.kind,
+                "min_zoom": tiles.min_zoom,
+                "max_zoom": tiles.max_zoom,
+                "format": tiles.format,
+            }
+        ),
+        gps=None if gps is None else GpsDoc.model_validate(gps.doc()),
+    )
 
 
 @router.get("/chart", response_model=ChartDoc)
-def chart(console: ConsoleDep) -> dict[str, Any]:
+def chart(console: ConsoleDep) -> ChartDoc:
     """The datum (null: none yet), the ME transmitter (station) with its source, the link's
     range and where it turns marginal, the local tiles (null: none) and the surface GPS
     (null: none configured)."""
@@ -66,7 +70,7 @@ def _invalid(field: str, msg: str, value: Any) -> RequestValidationError:
         why={409: '{"source": "gps"} without a GPS fix (no GPS configured, or none yet)'},
     ),
 )
-def set_datum(body: DatumIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+def set_datum(body: DatumIn, console: ConsoleDep, _op: OperatorDep) -> ChartDoc:
     """Set the datum (the NED origin's lat/lon): ``{lat_deg, lon_deg}``, or
     ``{"source": "gps"}`` for the surface GPS's latest fix (409 without one). Every lat/lon
     shown from then on (pose, tracks, previews) is from the new datum; the change is logged
@@ -110,7 +114,7 @@ def _log_datum(console: Console, old: Datum | None, new: Datum, source: str) -> 
         event = console.log.add_event(console.dive, "datum", detail, data)
     except LogWriteError:
         return  # the datum is set; the log's own failure is reported by its health
-    console.hub.publish({"type": "event", "event": event})
+    console.hub.publish(EventMessage(event=log_event(event)))
 
 
 ZoomPath = Annotated[int, Path(ge=0, le=MAX_ZOOM, description="zoom level")]

@@ -14,6 +14,7 @@ from backend.api.deps import ConsoleDep, IdField, IdPath, OperatorDep, ServiceDe
 from backend.api.models import LinkIn, RetryIn, SendIn
 from backend.api.schemas import (
     OPERATOR,
+    Ack,
     CommandRecord,
     DiveDetail,
     DiveSummary,
@@ -24,11 +25,13 @@ from backend.api.schemas import (
     VehicleView,
     errors,
 )
+from backend.api.schemas.records import TrackPoint
 from backend.api.view import ViewHeader
 from backend.chart.reach import track_lat_lon
 from backend.commands.health import LinkHealth
 from backend.commands.service import SendRequest
 from backend.mission_log.export import csv_rows
+from backend.mission_log.records import command_record
 from backend.mission_log.store import STATES
 
 router = APIRouter(prefix="/api", tags=["commands"])
@@ -48,7 +51,7 @@ router = APIRouter(prefix="/api", tags=["commands"])
         },
     ),
 )
-async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> dict[str, Any]:
+async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRecord:
     """Queue a command for transmission (logged first), through the command service's checks.
     422: limits that cannot be overridden or bad values; 409: overridable limits without
     ``override`` (an override is recorded in the log with who gave it); 429: rate limit."""
@@ -65,7 +68,7 @@ async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> dict[str,
     response_model_exclude_unset=True,
     responses=errors((*OPERATOR, 503)),
 )
-async def surface(service: ServiceDep, _op: OperatorDep) -> dict[str, Any]:
+async def surface(service: ServiceDep, _op: OperatorDep) -> CommandRecord:
     """Abort: send surface now and again every ``surface_repeat_s``: until acknowledged on a
     two-way link, a bounded number of times on a one-way link. It replaces any command still
     being repeated; pressed while another Surface is on its way, it joins that one."""
@@ -92,7 +95,7 @@ async def surface(service: ServiceDep, _op: OperatorDep) -> dict[str, Any]:
 )
 async def retry(
     command_id: IdPath, service: ServiceDep, _op: OperatorDep, body: RetryIn | None = None
-) -> dict[str, Any]:
+) -> CommandRecord:
     """A new command with the values of an interrupted, timed-out, failed, rejected or
     superseded one (a new record, created now, ``retry_of`` naming it), checked as any send
     from where the vehicle is now; it replaces any command still being repeated."""
@@ -119,6 +122,7 @@ FilterQ = Annotated[LogFilter, Query()]
 
 
 def _rows(console: ConsoleDep, filters: LogFilter, limit: int) -> list[dict[str, Any]]:
+    """The log's rows as written (the exports hand them on as they are)."""
     assert console.log is not None
     return console.log.commands(**filters.model_dump(), limit=limit)
 
@@ -131,9 +135,9 @@ def _rows(console: ConsoleDep, filters: LogFilter, limit: int) -> list[dict[str,
 )
 def commands(
     console: ConsoleDep, filters: FilterQ, limit: Annotated[int, Query(ge=1, le=1000)] = 200
-) -> list[dict[str, Any]]:
+) -> list[CommandRecord]:
     """The mission log, newest first."""
-    return _rows(console, filters, limit)
+    return [command_record(row) for row in _rows(console, filters, limit)]
 
 
 @router.get(
@@ -142,12 +146,12 @@ def commands(
     response_model_exclude_unset=True,
     responses=errors((404, 422)),
 )
-def command(command_id: IdPath, console: ConsoleDep) -> dict[str, Any]:
+def command(command_id: IdPath, console: ConsoleDep) -> CommandRecord:
     assert console.log is not None
-    record = console.log.command(command_id)
-    if record is None:
+    row = console.log.command(command_id)
+    if row is None:
         raise HTTPException(404, f"no command {command_id}")
-    return record
+    return command_record(row)
 
 
 ExportLimitQ = Annotated[int, Query(ge=1, le=100_000)]
@@ -193,20 +197,22 @@ def log_csv(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_000
 
 
 @router.get("/dives", response_model=list[DiveSummary])
-def dives(console: ConsoleDep) -> list[dict[str, Any]]:
+def dives(console: ConsoleDep) -> list[DiveSummary]:
     assert console.log is not None
-    return console.log.dives()
+    return [DiveSummary.model_validate(row) for row in console.log.dives()]
 
 
-def _dive(console: ConsoleDep, dive: int) -> dict[str, Any]:
+def _dive(console: ConsoleDep, dive: int) -> DiveDetail:
     assert console.log is not None
     if not console.log.dive_exists(dive):
         raise HTTPException(404, f"no dive {dive}")
-    return {
-        "dive": dive,
-        "track": track_lat_lon(console.log.track(dive), console.datum),
-        "commands": console.log.commands(dive=dive, limit=100_000, oldest_first=True),
-    }
+    track = track_lat_lon(console.log.track(dive), console.datum)
+    rows = console.log.commands(dive=dive, limit=100_000, oldest_first=True)
+    return DiveDetail(
+        dive=dive,
+        track=[TrackPoint.model_validate(point) for point in track],
+        commands=[command_record(row) for row in rows],
+    )
 
 
 @router.get(
@@ -215,7 +221,7 @@ def _dive(console: ConsoleDep, dive: int) -> dict[str, Any]:
     response_model_exclude_unset=True,
     responses=errors((404, 422)),
 )
-def dive(dive: IdPath, console: ConsoleDep) -> dict[str, Any]:
+def dive(dive: IdPath, console: ConsoleDep) -> DiveDetail:
     """A dive's track (1 Hz) and its commands, for replay."""
     return _dive(console, dive)
 
@@ -225,26 +231,23 @@ def dive(dive: IdPath, console: ConsoleDep) -> dict[str, Any]:
 )
 def replay(
     dive: IdPath, console: ConsoleDep, _op: OperatorDep, x_nemesys_view: ViewHeader = None
-) -> dict[str, Any]:
+) -> ReplayResult:
     """Draw a dive's track and its acknowledged commands in the caller's own 3D view
     (``X-Nemesys-View``; without it, in none). ``DELETE /api/replay`` clears it."""
     doc = _dive(console, dive)
     if console.viewer is not None:
-        track = [(p["t_s"], p["x_m"], p["y_m"], p["z_m"], p["heading_deg"]) for p in doc["track"]]
+        track = [(p.t_s, p.x_m, p.y_m, p.z_m, p.heading_deg) for p in doc.track]
         marks = []
-        for c in doc["commands"]:
-            ack = c.get("ack") or {}
-            origin = ack.get("from")
-            if c["state"] == "acknowledged" and origin:
-                marks.append(
-                    (origin["t_s"], origin["x_m"], origin["y_m"], origin["z_m"], c["pattern"])
-                )
+        for c in doc.commands:
+            origin = c.ack.from_ if isinstance(c.ack, Ack) else None
+            if c.state == "acknowledged" and origin:
+                marks.append((origin.t_s, origin.x_m, origin.y_m, origin.z_m, c.pattern))
         console.viewer.show_replay(x_nemesys_view, track, marks)
-    return {"dive": dive, "track_points": len(doc["track"]), "commands": len(doc["commands"])}
+    return ReplayResult(dive=dive, track_points=len(doc.track), commands=len(doc.commands))
 
 
 @router.get("/vehicle", response_model=VehicleView, response_model_exclude_unset=True)
-def vehicle(console: ConsoleDep) -> dict[str, Any]:
+def vehicle(console: ConsoleDep) -> VehicleView:
     """Pose, status, the vehicle's echoed active command vs the last sent, link state."""
     return console.vehicle()
 

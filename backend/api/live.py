@@ -1,4 +1,5 @@
-"""The live websocket: telemetry and command states out; authenticated control in."""
+"""The live websocket: telemetry and command states out; authenticated control in. Every
+message is a model of :mod:`backend.api.schemas.live` (``docs/live.md``)."""
 
 from __future__ import annotations
 
@@ -8,13 +9,25 @@ import json
 from typing import Any
 
 from fastapi import APIRouter, WebSocket, WebSocketDisconnect, status
+from pydantic import ValidationError
 
 from backend.api.deps import token_ok
-from backend.api.models import check_copies
+from backend.api.schemas.common import LimitViolation
+from backend.api.schemas.live import (
+    CLIENT_MESSAGE,
+    CLIENT_TYPES,
+    AuthMessage,
+    AuthOk,
+    AuthRefused,
+    ErrorReply,
+    Queued,
+    SurfaceMessage,
+)
 from backend.bounded_input import shorten
 from backend.commands.manager import RateLimited
 from backend.commands.service import SendRefused, SendRequest
 from backend.console import Console
+from backend.messages import message_json
 from backend.mission_log.store import LogWriteError
 from backend.security import origin_allowed
 from backend.strict_input import lone_surrogate_in
@@ -28,6 +41,9 @@ router = APIRouter(tags=["live"])
 MAX_CONTROL_BYTES = 4096
 #: Deepest nesting of arrays and objects in a control message (checked before parsing).
 MAX_CONTROL_DEPTH = 32
+
+#: The answer to a control message.
+Reply = AuthOk | AuthRefused | Queued | ErrorReply
 
 
 def nesting_over(text: str, limit: int) -> bool:
@@ -64,10 +80,11 @@ def _no_constant(name: str) -> Any:
 
 @router.websocket("/ws")
 async def live(websocket: WebSocket) -> None:
-    """Server -> client: ``telemetry`` (10 Hz, latest wins), ``command``, ``vehicle`` and
-    ``error`` messages. Client -> server: ``auth`` (answered ``auth_ok`` or ``auth_refused``)
-    then ``surface`` or ``send``; control without the token is refused (the connection stays,
-    read-only). A browser page from
+    """Server -> client: ``telemetry`` (10 Hz, latest wins), ``command``, ``vehicle``,
+    ``active_path``, ``link`` and ``event`` news, and the answers to the page's own messages.
+    Client -> server: ``auth`` (answered ``auth_ok`` or ``auth_refused``) then ``surface`` or
+    ``send`` (answered ``queued`` or ``error``); control without the token is refused (the
+    connection stays, read-only). Every message: ``docs/live.md``. A browser page from
     another origin is refused at the handshake (403)."""
     console: Console = websocket.app.state.console
     headers = websocket.headers
@@ -85,15 +102,12 @@ async def live(websocket: WebSocket) -> None:
                 break
             text = message.get("text")
             if text is None:
-                reply: dict[str, Any] = {
-                    "type": "error",
-                    "detail": "binary frames are not accepted",
-                }
+                reply: Reply = ErrorReply(detail="binary frames are not accepted")
             else:
                 reply = await _control(console, text, authed)
-            if reply.get("type") == "auth_ok":
+            if isinstance(reply, AuthOk):
                 authed = True
-            await websocket.send_text(json.dumps(reply))
+            await websocket.send_text(message_json(reply))
     except (WebSocketDisconnect, RuntimeError):
         pass
     finally:
@@ -102,81 +116,73 @@ async def live(websocket: WebSocket) -> None:
             await pump
 
 
-async def _control(console: Console, text: str, authed: bool) -> dict[str, Any]:
+async def _control(console: Console, text: str, authed: bool) -> Reply:
     if len(text) > MAX_CONTROL_BYTES or len(text.encode()) > MAX_CONTROL_BYTES:
-        return {"type": "error", "detail": f"message over {MAX_CONTROL_BYTES} bytes"}
+        return ErrorReply(detail=f"message over {MAX_CONTROL_BYTES} bytes")
     if nesting_over(text, MAX_CONTROL_DEPTH):
-        return {"type": "error", "detail": f"message nested deeper than {MAX_CONTROL_DEPTH}"}
+        return ErrorReply(detail=f"message nested deeper than {MAX_CONTROL_DEPTH}")
     try:
         msg = json.loads(text, parse_constant=_no_constant)
     except _NotANumber as err:
-        return {"type": "error", "detail": str(err)}
+        return ErrorReply(detail=str(err))
     except ValueError:
-        return {"type": "error", "detail": "not JSON"}
+        return ErrorReply(detail="not JSON")
     if not isinstance(msg, dict):
-        return {"type": "error", "detail": "expected a JSON object with a 'type'"}
+        return ErrorReply(detail="expected a JSON object with a 'type'")
     invalid = lone_surrogate_in(msg)  # the REST rule (backend.strict_input), before any use
     if invalid is not None:
         loc, detail, _text = invalid
-        return {"type": "error", "detail": detail, "field": ".".join(map(str, loc))}
+        return ErrorReply(detail=detail, field=".".join(map(str, loc)), status=422)
     kind = msg.get("type")
-    if kind == "auth":
-        token = msg.get("token")
-        if isinstance(token, str) and token_ok(console, token):
-            return {"type": "auth_ok"}
+    if kind not in CLIENT_TYPES:
+        use = ", ".join(CLIENT_TYPES)
+        return ErrorReply(detail=f"unknown message type {shorten(repr(kind), 40)}; use {use}")
+    if kind != "auth":
+        if not authed:
+            return ErrorReply(detail="token required: send {type: auth, token} first")
+        if console.service is None:
+            return ErrorReply(detail="the console is starting", status=503)
+    try:
+        parsed = CLIENT_MESSAGE.validate_python(msg)
+    except ValidationError as err:
+        if kind == "auth":  # a token that is not text is no token
+            return AuthRefused(detail="wrong operator token")
+        return _invalid(err)
+    if isinstance(parsed, AuthMessage):
+        if token_ok(console, parsed.token):
+            return AuthOk()
         # a type of its own: a page told this on (re)connecting goes read-only at once (the
         # console restarted with a new token), not at the operator's next press
-        return {"type": "auth_refused", "detail": "wrong operator token"}
-    if kind not in ("surface", "send"):
-        return {
-            "type": "error",
-            "detail": f"unknown message type {shorten(repr(kind), 40)}; use auth, surface, send",
-        }
-    if not authed:
-        return {"type": "error", "detail": "token required: send {type: auth, token} first"}
+        return AuthRefused(detail="wrong operator token")
     service = console.service
-    if service is None:
-        return {"type": "error", "detail": "the console is starting", "status": 503}
+    assert service is not None
     try:
-        if kind == "surface":
+        if isinstance(parsed, SurfaceMessage):
             outcome = await service.surface("ws")
         else:
-            request = _send_request(msg)
-            if isinstance(request, dict):
-                return request
+            request = SendRequest(
+                parsed.pattern, parsed.params, "ws", override=parsed.override, copies=parsed.copies
+            )
             outcome = await service.send(request)
     except (CodecError, PlanError) as err:
         field = getattr(err, "field", None)
-        return {"type": "error", "detail": shorten(str(err)), "field": field, "status": 422}
+        return ErrorReply(detail=shorten(str(err)), field=field, status=422)
     except SendRefused as err:
-        violations = [v.as_json() for v in err.violations]
-        detail = "; ".join([err.message, *(v["message"] for v in violations)])
-        return {"type": "error", "detail": detail, "violations": violations, "status": err.status}
+        violations = [LimitViolation.model_validate(v.as_json()) for v in err.violations]
+        detail = "; ".join([err.message, *(v.message for v in violations)])
+        return ErrorReply(detail=detail, violations=violations, status=err.status)
     except RateLimited as err:
-        return {"type": "error", "detail": str(err), "status": 429}
+        return ErrorReply(detail=str(err), status=429)
     except LogWriteError as err:
-        return {"type": "error", "detail": str(err), "status": 503}
-    return {"type": "queued", "command": outcome.record}
+        return ErrorReply(detail=str(err), status=503)
+    return Queued(command=outcome.record)
 
 
-def _send_request(msg: dict[str, Any]) -> SendRequest | dict[str, Any]:
-    """A ``send`` message as the command service takes it, or the error reply naming the
-    field: ``pattern`` (str), ``params`` (object), ``override`` (bool), ``copies``."""
-    pattern, params = msg.get("pattern"), msg.get("params", {})
-    if not isinstance(pattern, str) or not isinstance(params, dict):
-        return _bad("send needs a pattern (str) and params (object)", "pattern")
-    override = msg.get("override", False)
-    if not isinstance(override, bool):
-        return _bad(
-            f"override must be true or false, got {shorten(repr(override), 40)}", "override"
-        )
-    copies = msg.get("copies")
-    try:
-        check_copies(copies)
-    except ValueError as err:
-        return _bad(str(err), "copies")
-    return SendRequest(pattern, params, "ws", override=override, copies=copies)
-
-
-def _bad(detail: str, field: str) -> dict[str, Any]:
-    return {"type": "error", "detail": detail, "field": field, "status": 422}
+def _invalid(err: ValidationError) -> ErrorReply:
+    """A control message that does not fit its model: its first error, naming the field
+    (a parameter by its name, as the codec names it)."""
+    first = err.errors(include_url=False)[0]
+    loc = [str(part) for part in first["loc"][1:] if part != "[key]"]  # after the type's tag
+    where = ".".join(loc) or "message"
+    detail = shorten(f"{where}: {first['msg']}")
+    return ErrorReply(detail=detail, field=loc[-1] if loc else None, status=422)

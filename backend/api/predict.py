@@ -67,4 +67,4 @@ def predict_track(
             status_code=503,
             headers={"Retry-After": str(math.ceil(err.retry_after_s))},
         )
-    return DocResponse(doc)
+    return DocResponse(Prediction.model_validate(doc))

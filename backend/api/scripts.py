@@ -147,14 +147,14 @@ def _refuse_unsafe(console: Console, script: MissionScript, mirror: Plan | None)
     refuse_unsafe(script, step_violations(expanded, console.plan_violations))
 
 
-def _state(console: Console) -> dict[str, Any]:
+def _state(console: Console) -> RunState:
     """The run's state with the command ids of its steps sent so far."""
-    state = console.runner.state() if console.runner is not None else dict(IDLE)
-    return {**state, "commands": console.script_commands}
+    state = console.runner.state() if console.runner is not None else IDLE
+    return RunState.model_validate({**state, "commands": console.script_commands})
 
 
 @router.get("/run", response_model=RunState)
-def run_state(console: ConsoleDep) -> dict[str, Any]:
+def run_state(console: ConsoleDep) -> RunState:
     return _state(console)
 
 
@@ -174,7 +174,7 @@ def run_state(console: ConsoleDep) -> dict[str, Any]:
         },
     ),
 )
-async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> RunState:
     """Run a script against the vehicle: ``auto`` sends each step at its trigger; ``step``
     proposes each step and waits for the operator's go (``/run/next``)."""
     if console.runner is not None and console.runner.running:
@@ -197,7 +197,7 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, A
 
 
 @router.post("/run/next", response_model=RunState, responses=RUN_CONTROL)
-async def run_next(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+async def run_next(console: ConsoleDep, _op: OperatorDep) -> RunState:
     """Operator's go: send the proposed step."""
     runner = console.runner
     if runner is None:
@@ -211,7 +211,7 @@ async def run_next(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
 
 
 @router.post("/run/stop", response_model=RunState, responses=errors(OPERATOR))
-def run_stop(console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+def run_stop(console: ConsoleDep, _op: OperatorDep) -> RunState:
     if console.runner is not None:
         console.runner.stop()
     return _state(console)
@@ -228,7 +228,7 @@ async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
     except Exception as err:  # refused, rate limit, log, link: the run stops with the reason
         runner.mark_failed(index, f"not sent: {err}")
         return
-    console.script_commands[index] = record["id"]
+    console.script_commands[index] = record.id
     runner.mark_sent(index)
 
 

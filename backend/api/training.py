@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from fastapi import APIRouter, HTTPException
 
@@ -22,8 +22,13 @@ from backend.api.schemas import (
     errors,
 )
 from backend.api.schemas.errors import ERROR_TEXT
+from backend.api.schemas.training import ChannelStats, Retask
 from backend.commands.service import SendRequest
 from backend.console import SCENARIO_PRESETS
+
+if TYPE_CHECKING:
+    from rosbridge.server import BridgeServer
+    from sim.simulation import Simulation
 
 router = APIRouter(prefix="/api/training", tags=["training"])
 
@@ -33,10 +38,17 @@ NO_SIM = {409: "training controls need the simulated vehicle (target 'sim')"}
 SETTING = errors((*OPERATOR, 409, 413, 422), why=NO_SIM)
 
 
-def _sim(console: ConsoleDep) -> Any:
+def _sim(console: ConsoleDep) -> Simulation:
     if console.sim is None:
         raise HTTPException(409, NO_SIM[409])
     return console.sim
+
+
+def _bridge(console: ConsoleDep) -> BridgeServer:
+    """The simulated vehicle's rosbridge server (it runs whenever the simulator does)."""
+    _sim(console)
+    assert console.bridge is not None
+    return console.bridge
 
 
 def _given(body: ChannelIn | CurrentIn) -> dict[str, Any]:
@@ -45,42 +57,41 @@ def _given(body: ChannelIn | CurrentIn) -> dict[str, Any]:
 
 
 @router.get("", response_model=TrainingOn | TrainingOff)
-def training(console: ConsoleDep) -> dict[str, Any]:
+def training(console: ConsoleDep) -> TrainingOn | TrainingOff:
     sim = console.sim
     if sim is None:
-        return {"enabled": False, "scenarios": []}
-    return {
-        "enabled": True,
-        "channel": _json(asdict(sim.channel.config)),
-        "current": asdict(sim.current.config),
-        "time_scale": console.bridge.time_scale if console.bridge is not None else 1.0,
-        "scenarios": list(SCENARIO_PRESETS),
-        "channel_stats": asdict(sim.channel.stats),
-    }
+        return TrainingOff(enabled=False, scenarios=[])
+    return TrainingOn(
+        enabled=True,
+        channel=_channel(sim),
+        current=CurrentSettings.model_validate(asdict(sim.current.config)),
+        time_scale=console.bridge.time_scale if console.bridge is not None else 1.0,
+        scenarios=list(SCENARIO_PRESETS),
+        channel_stats=ChannelStats.model_validate(asdict(sim.channel.stats)),
+    )
 
 
 @router.put("/channel", response_model=ChannelSettings, responses=SETTING)
-def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> ChannelSettings:
     sim = _sim(console)
     fields = _given(body)
     if "range_m" in body.model_fields_set and body.range_m is None:
         fields["range_m"] = math.inf
     sim.channel.set_config(replace(sim.channel.config, **fields))
-    return _json(asdict(sim.channel.config))
+    return _channel(sim)
 
 
 @router.put("/current", response_model=CurrentSettings, responses=SETTING)
-def current(body: CurrentIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+def current(body: CurrentIn, console: ConsoleDep, _op: OperatorDep) -> CurrentSettings:
     sim = _sim(console)
     sim.current.set_config(replace(sim.current.config, **_given(body)))
-    return asdict(sim.current.config)
+    return CurrentSettings.model_validate(asdict(sim.current.config))
 
 
 @router.put("/time_scale", response_model=TimeScale, responses=SETTING)
-def time_scale(body: TimeScaleIn, console: ConsoleDep, _op: OperatorDep) -> dict[str, float]:
-    _sim(console)
-    console.bridge.time_scale = body.time_scale
-    return {"time_scale": body.time_scale}
+def time_scale(body: TimeScaleIn, console: ConsoleDep, _op: OperatorDep) -> TimeScale:
+    _bridge(console).time_scale = body.time_scale
+    return TimeScale(time_scale=body.time_scale)
 
 
 #: A new dive is written to the mission log first: 503 when it cannot be.
@@ -90,12 +101,12 @@ NEW_DIVE = {503: "the mission log cannot be written (the new dive); nothing was 
 @router.post(
     "/reset", response_model=NewDive, responses=errors((*OPERATOR, 409, 503), why=NO_SIM | NEW_DIVE)
 )
-async def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
+async def reset(console: ConsoleDep, _op: OperatorDep) -> NewDive:
     """The vehicle back to its start pose, a full battery and no command: a new dive. Every
     repetition stops; what was on its way ends ``interrupted``. (On the event loop: it stops
     the delivery tasks.)"""
     _sim(console)
-    return {"dive": console.reset_vehicle()}
+    return NewDive(dive=console.reset_vehicle())
 
 
 @router.post(
@@ -112,7 +123,7 @@ async def reset(console: ConsoleDep, _op: OperatorDep) -> dict[str, int]:
         },
     ),
 )
-async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str, Any]:
+async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> ScenarioLoaded:
     """Load one of the paper's scenarios: the vehicle reset to its start, its first command
     sent. The retask is the operator's to send (the preset returns it, ready to preview)."""
     from sim.scenarios import SCENARIOS
@@ -126,15 +137,18 @@ async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> dict[str
     assert console.service is not None
     request = SendRequest(first.pattern, dict(first.params), "scenario")
     record = (await console.service.send(request)).record
-    return {
-        "dive": dive,
-        "scenario": name,
-        "title": sc.title,
-        "sent": record,
-        "next": {"pattern": retask.pattern, "params": retask.params, "at_s": retask.t_s},
-    }
+    return ScenarioLoaded(
+        dive=dive,
+        scenario=name,
+        title=sc.title,
+        sent=record,
+        next=Retask(pattern=retask.pattern, params=dict(retask.params), at_s=retask.t_s),
+    )
 
 
-def _json(config: dict[str, Any]) -> dict[str, Any]:
-    """JSON has no infinity: an unlimited range is null."""
-    return {k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in config.items()}
+def _channel(sim: Simulation) -> ChannelSettings:
+    """The emulated channel's settings; JSON has no infinity: an unlimited range is null."""
+    config = asdict(sim.channel.config)
+    return ChannelSettings.model_validate(
+        {k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in config.items()}
+    )

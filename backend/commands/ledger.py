@@ -31,6 +31,12 @@ class FrameCounts(BaseModel):
     timed_out: int = 0
 
 
+def _counts(frames: int = 0) -> FrameCounts:
+    """Counts with every field given (a count left at its default would be "unset", and
+    left out of a document serialised with ``exclude_unset``)."""
+    return FrameCounts(frames=frames, sent=0, acknowledged=0, rejected=0, timed_out=0)
+
+
 class FrameTotals(BaseModel):
     recent: FrameCounts
     dive: FrameCounts
@@ -51,7 +57,7 @@ class FrameLedger:
     def reset(self) -> None:
         """A new dive."""
         self._recent: deque[_Slot] = deque(maxlen=WINDOW)
-        self._dive = FrameCounts()
+        self._dive = _counts()
         self._awaiting: dict[int, int] = {}  # command id -> its frames awaiting an answer
 
     def frame_out(self, command_id: int, *, answer_expected: bool) -> None:
@@ -73,7 +79,7 @@ class FrameLedger:
                 slot.outcome = outcome
 
     def totals(self) -> FrameTotals:
-        recent = FrameCounts(frames=len(self._recent))
+        recent = _counts(len(self._recent))
         for slot in self._recent:
             if slot.outcome != "awaiting":
                 setattr(recent, slot.outcome, getattr(recent, slot.outcome) + 1)

@@ -44,6 +44,7 @@ from backend.commands.delivery import (
 from backend.commands.lifecycle import ON_ITS_WAY, Event, advance
 from backend.commands.mirror import VehicleMirror
 from backend.commands.records import CommandRecords
+from backend.messages import VehicleMessage
 from backend.mission_log.store import LogWriteError, MissionLog, now_iso
 from backend.telemetry import TelemetryHub
 from codec import Encoded, delivery_probability
@@ -387,7 +388,7 @@ class CommandManager(CommandRecords):
                 record = self.log.command(command_id)
         self.vehicle.on_ack(ack, record)
         self.hub.publish(
-            {"type": "vehicle", "active": self.vehicle.active, "echo_mismatch": self.echo_mismatch}
+            VehicleMessage(active=self.vehicle.active, echo_mismatch=self.echo_mismatch)
         )
 
 

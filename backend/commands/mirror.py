@@ -81,3 +81,14 @@ class VehicleMirror:
         if active is None:
             return False
         return (active.get("pattern"), active.get("params")) != (last["pattern"], last["params"])
+
+    def mismatch_event(self) -> tuple[str, dict[str, Any]]:
+        """An echo mismatch as the mission log keeps it: (detail in words, data)."""
+        last = self.accepted or {}
+        active = self.active or {"pattern": (self.hub.status or {}).get("pattern")}
+        detail = (
+            f"the vehicle runs {active.get('pattern')}, not {last.get('pattern')} (command "
+            f"{last.get('id')}, the last it accepted from this console): retasked by another "
+            "station, restarted, or not this console's vehicle"
+        )
+        return detail, {"vehicle_active": active, "last_accepted_id": last.get("id")}

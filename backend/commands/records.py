@@ -12,9 +12,13 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from typing import Any
 
+from pydantic import ValidationError
+
 from backend.commands.delivery import Delivery
 from backend.commands.ledger import FrameLedger, Outcome
 from backend.commands.lifecycle import Event, IllegalTransition, advance
+from backend.messages import CommandMessage
+from backend.mission_log.records import command_record
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.telemetry import TelemetryHub
 from codec import Encoded
@@ -64,7 +68,12 @@ class CommandRecords:
         if self._held is not None:
             self._held.append(record)
         else:
-            self.hub.publish({"type": "command", "command": record})
+            try:
+                message = CommandMessage(command=command_record(record))
+            except ValidationError as err:  # a bookkeeping bug: say so, keep delivering
+                logger.error("command %s not announced: %s", record.get("id"), err)
+                return
+            self.hub.publish(message)
 
     @contextlib.contextmanager
     def _atomic(self) -> Iterator[None]:

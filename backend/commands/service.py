@@ -30,6 +30,7 @@ from typing import Any, Literal, Protocol
 from backend.commands.checks import CheckLine, SendViolation
 from backend.commands.lifecycle import RETRYABLE
 from backend.commands.manager import CommandManager
+from backend.mission_log.records import CommandRecord, command_record
 from codec import Encoded, encode_frame
 
 #: The ways a frame can leave the console, as the record's ``origin`` names them.
@@ -143,7 +144,7 @@ class SendRequest:
 class SendOutcome:
     """The record as written (queued, or a Surface joined), and what the operator overrode."""
 
-    record: dict[str, Any]
+    record: CommandRecord
     overridden: tuple[SendViolation, ...] = field(default=())
 
 
@@ -159,7 +160,7 @@ class CommandService:
         self.assess = assess
         self.operator = operator
         #: Called with every record the service hands to the manager (scripts count theirs).
-        self.on_sent: Callable[[dict[str, Any]], None] | None = None
+        self.on_sent: Callable[[CommandRecord], None] | None = None
 
     async def send(self, request: SendRequest) -> SendOutcome:
         """Check ``request`` and hand it to the manager (written first, then transmitted).
@@ -182,14 +183,14 @@ class CommandService:
             retry_of=request.retry_of,
             overrides=self._overrides(overridden),
         )
-        return SendOutcome(record, overridden)
+        return SendOutcome(command_record(record), overridden)
 
     async def surface(self, origin: Origin = "surface", retry_of: int | None = None) -> SendOutcome:
         """Surface: never refused by the checks (pressed while another Surface is on its way,
         it joins that one)."""
         enc = encode_frame("surface", {})
         record = await self.manager.submit(enc, kind="surface", origin=origin, retry_of=retry_of)
-        return SendOutcome(record)
+        return SendOutcome(command_record(record))
 
     async def retry(
         self, command_id: int, *, override: bool = False, copies: int | None = None
@@ -201,19 +202,20 @@ class CommandService:
             UnknownCommand: no such record. NotRetryableCommand: not in a retryable state.
             The errors of :meth:`send`.
         """
-        old = self.manager.log.command(command_id)
-        if old is None:
+        row = self.manager.log.command(command_id)
+        if row is None:
             raise UnknownCommand(f"no command {command_id}")
-        if old["state"] not in RETRYABLE:
+        old = command_record(row)
+        if old.state not in RETRYABLE:
             raise NotRetryableCommand(
-                f"command {command_id} is {old['state']}; only "
+                f"command {command_id} is {old.state}; only "
                 f"{', '.join(sorted(RETRYABLE))} commands can be retried"
             )
         kind: Literal["command", "script"] = "command"
         return await self.send(
             SendRequest(
-                old["pattern"],
-                old["params"],
+                old.pattern,
+                old.params,
                 "retry",
                 override=override,
                 copies=copies,

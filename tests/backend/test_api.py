@@ -806,7 +806,9 @@ def test_echo_mismatch_when_another_station_retasks_the_vehicle(client: TestClie
     # a frame this console did not send reaches the vehicle, which accepts it
     other = encode_frame("square", SQUARE).frame.to_bytes()
     assert client.portal is not None
-    client.portal.call(console_of(client).sim.submit_frame, other)
+    sim = console_of(client).sim
+    assert sim is not None
+    client.portal.call(sim.submit_frame, other)
     v = wait_until(
         lambda: (v := client.get("/api/vehicle").json())["echo_mismatch"] and v,
         what="the echo mismatch",

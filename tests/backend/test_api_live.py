@@ -13,6 +13,8 @@ from fastapi.testclient import TestClient
 from starlette.testclient import WebSocketTestSession
 
 from backend.api.live import MAX_CONTROL_BYTES
+from backend.api.schemas.live import message_types
+from backend.messages import News
 from tests.backend.conftest import CIRCLE, TOKEN, WRONG_TOKEN, MakeClient, send
 
 Message = dict[str, Any]
@@ -36,12 +38,12 @@ def receive_until(
 
 
 #: The server's own messages, which may come between a control message and its answer.
-NEWS = ("telemetry", "command", "vehicle", "active_path", "link")
+NEWS = message_types(News)
 
 
 def reply(ws: WebSocketTestSession, control: Message | str) -> Message:
     """Send a control message; its answer (the first message that is not news: telemetry,
-    a command, the vehicle, its active path or the link)."""
+    a command, the vehicle, its active path, the link or an event)."""
     ws.send_text(control if isinstance(control, str) else json.dumps(control))
     seen = receive_until(ws, lambda m: m["type"] not in NEWS)
     return seen[-1]

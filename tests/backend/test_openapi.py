@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Iterator
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +22,7 @@ import httpx
 import pytest
 from fastapi.testclient import TestClient
 from jsonschema import Draft202012Validator
+from pydantic import BaseModel
 from referencing import Registry, Resource
 from referencing.jsonschema import DRAFT202012
 from starlette.requests import Request
@@ -548,9 +550,20 @@ def test_503_when_a_new_dive_cannot_be_logged(
 # --- no field dropped -----------------------------------------------------------------------
 
 
+def dumped(model: Any) -> Any:
+    """A handler's model (or list of them) as the API serialises it."""
+    if isinstance(model, list):
+        return [dumped(m) for m in model]
+    assert isinstance(model, BaseModel), model
+    return model.model_dump(mode="json", by_alias=True, exclude_unset=True)
+
+
 def test_the_models_drop_nothing_the_handlers_return(client: TestClient) -> None:
-    """The responses hold every key of the handlers' own output (called directly), at every
-    depth, and the dictionary and a record are their sources exactly."""
+    """The responses hold every key of the handlers' own models (called directly), at every
+    depth; and of the documents the handlers build them from (the log's rows, the runner's
+    state, the simulator's settings, the telemetry, the profile, the station): a model that
+    dropped a field of its source would fail here. The dictionary and a record are their
+    sources exactly."""
     c = contract(client)
     console = console_of(client)
     first_pose(client)
@@ -577,10 +590,24 @@ def test_the_models_drop_nothing_the_handlers_return(client: TestClient) -> None
         ("/api/training", lambda: training.training(console)),
         ("/api/scripts/run", lambda: scripts.run_state(console)),
     ):
-        same_keys(c.call("GET", url).json(), raw(), url)
+        same_keys(c.call("GET", url).json(), dumped(raw()), url)
     assert c.call("GET", "/api/dives/1").json()["commands"] == console.log.commands(
         dive=1, limit=10, oldest_first=True
     )
+    run = c.call("GET", "/api/scripts/run").json()
+    assert console.runner is not None
+    same_keys({k: v for k, v in run.items() if k != "commands"}, console.runner.state(), "run")
+    sim = console.sim
+    assert sim is not None
+    on = c.call("GET", "/api/training").json()
+    same_keys(on["channel"], asdict(sim.channel.config), "channel")
+    same_keys(on["current"], asdict(sim.current.config), "current")
+    same_keys(on["channel_stats"], asdict(sim.channel.stats), "channel_stats")
+    vehicle = c.call("GET", "/api/vehicle").json()
+    same_keys(vehicle["pose"], console.hub.pose, "pose")
+    same_keys(vehicle["status"], console.hub.status, "status")
+    same_keys(c.call("GET", "/api/session").json()["profile"], asdict(console.profile))
+    same_keys(c.call("GET", "/api/chart").json()["station"], console.station().as_dict())
     preview = c.call("POST", "/api/preview", json={"pattern": "square", "params": SQUARE})
     same_keys(preview.json(), console.preview("square", SQUARE, show=False))
 

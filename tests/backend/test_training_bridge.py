@@ -16,8 +16,10 @@ from vehicle_contract.contract import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC
 
 def test_a_stranger_can_watch_but_not_publish_a_frame(client: TestClient) -> None:
     console = console_of(client)
-    port = console.bridge.port
-    frames_before = console.sim.frames_in
+    sim, bridge = console.sim, console.bridge
+    assert sim is not None and bridge is not None
+    port = bridge.port
+    frames_before = sim.frames_in
     frame = list(encode_frame("hover", {"duration": 60, "depth": 1, "heading": 0}).frame.to_bytes())
     with connect(f"ws://127.0.0.1:{port}", proxy=None, open_timeout=5) as ws:
         for topic in (POSE_TOPIC, MISSION_TOPIC):
@@ -49,7 +51,8 @@ def test_a_stranger_can_watch_but_not_publish_a_frame(client: TestClient) -> Non
         # the console's own command still goes through, and is the only frame the vehicle saw
         cmd = wait_state(client, send(client)["id"])
         assert cmd["state"] == "acknowledged", cmd
-        wait_until(lambda: console.sim.frames_in == frames_before + 1, what="one frame in")
+        wait_until(lambda: sim.frames_in == frames_before + 1, what="one frame in")
         time.sleep(0.2)  # a check for absence: nothing else arrives
-        assert console.sim.frames_in == frames_before + 1
-        assert console.sim.agent.active.pattern == "circle"
+        assert sim.frames_in == frames_before + 1
+        active = sim.agent.active
+        assert active is not None and active.pattern == "circle"

@@ -19,6 +19,7 @@ from jsonschema import Draft202012Validator
 
 from backend.commands.manager import CommandManager
 from backend.commands.mirror import VehicleMirror
+from backend.messages import message_json
 from backend.mission_log.store import MissionLog
 from backend.telemetry import TelemetryHub
 from cli.main import main
@@ -220,7 +221,7 @@ def test_the_console_reads_every_status_the_schema_accepts(name: str) -> None:
     assert unknown == sum(msg.get(k) is None for k in STATUS_NUMBERS)
     hub = TelemetryHub()
     hub.set_status(msg)
-    json.dumps(hub.telemetry())
+    json.loads(message_json(hub.telemetry()))  # the page's telemetry message
     mirror = VehicleMirror(hub, dive=lambda: 1)
     mirror.accepted = {"id": 1, "dive": 1, "pattern": "hover", "params": {}, "ack": {"t_s": None}}
     assert isinstance(mirror.echo_mismatch, bool)

@@ -3,41 +3,18 @@ limit violation, a check's line."""
 
 from __future__ import annotations
 
-from typing import Annotated
-
-from pydantic import BaseModel, Field, WithJsonSchema
+from pydantic import BaseModel, Field
 
 from backend.commands.checks import CheckName, CheckStatus, ViolationKind
 
-#: A number as the source gave it: an integer stays an integer (``3``), a float a float.
-Number = Annotated[int | float, WithJsonSchema({"type": "number"})]
-#: A parameter's value: a number, or a choice's name (``"cw"``).
-ParamValue = Annotated[
-    int | float | str, WithJsonSchema({"anyOf": [{"type": "number"}, {"type": "string"}]})
-]
-#: Parameters by name (units as in ``/api/dictionary``).
-Params = dict[str, ParamValue]
-
-
-class CommandJson(BaseModel):
-    """A command: its pattern (name and ID) and its parameters as sent (snapped)."""
-
-    pattern: str
-    pattern_id: int
-    params: Params
-
-
-class VehicleStateOut(BaseModel):
-    """The vehicle as the planner saw it (NED m, deg, m/s, mission clock s); ``segment``:
-    the active path's segment guidance tracked, when known."""
-
-    x_m: float
-    y_m: float
-    z_m: float
-    heading_deg: float
-    speed_mps: float
-    t_s: float
-    segment: int | None
+# the shapes of the mission log's records, named here too
+from backend.mission_log.records import (
+    CommandJson,
+    Number,
+    Params,
+    ParamValue,
+    VehicleStateOut,
+)
 
 
 class LimitViolation(BaseModel):
@@ -63,3 +40,14 @@ class CheckLineDoc(BaseModel):
     check: CheckName
     status: CheckStatus
     detail: str = Field(description="what the check found, or why it could not run")
+
+
+__all__ = [
+    "CheckLineDoc",
+    "CommandJson",
+    "LimitViolation",
+    "Number",
+    "ParamValue",
+    "Params",
+    "VehicleStateOut",
+]

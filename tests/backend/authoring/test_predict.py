@@ -29,6 +29,7 @@ def _paused_mid_circle(client: TestClient) -> Any:
     telemetry shows exactly the paused state. Returns the simulator."""
     console = console_of(client)
     sim = console.sim
+    assert sim is not None
     send(client, "circle", CIRCLE)
     wait_until(lambda: sim.t_s > 60.0, 30.0, what="a minute on the circle")
     r = client.put("/api/training/time_scale", json={"time_scale": 0}, headers=AUTH)

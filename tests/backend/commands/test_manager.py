@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import asyncio
 import itertools
+import logging
 import time
 from collections.abc import Awaitable, Callable, Coroutine
 from pathlib import Path
@@ -14,10 +15,13 @@ import pytest
 
 from backend.commands.health import assess
 from backend.commands.manager import MIN_SURFACE_COPIES, CommandManager, RateLimited
+from backend.commands.records import CommandRecords
+from backend.messages import CommandMessage, News
 from backend.mission_log.store import MissionLog
 from backend.telemetry import TelemetryHub
 from codec import Encoded, Frame, copies_for, delivery_probability, encode_frame
 from station.link import Capability, Link
+from tests.backend.conftest import command_fields
 
 CIRCLE = encode_frame("circle", {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"})
 HOVER = encode_frame("hover", {"duration": 60, "depth": 2, "heading": 90})
@@ -56,10 +60,10 @@ class RecordingHub(TelemetryHub):
         super().__init__()
         self.states: dict[int, list[str]] = {}
 
-    def publish(self, event: dict[str, Any]) -> None:
-        if event.get("type") == "command":
-            record = event["command"]
-            self.states.setdefault(record["id"], []).append(record["state"])
+    def publish(self, event: News) -> None:
+        if isinstance(event, CommandMessage):
+            record = event.command
+            self.states.setdefault(record.id, []).append(record.state)
 
 
 class Rig:
@@ -415,3 +419,26 @@ def test_reset_during_a_surface_stops_it_and_a_late_ack_changes_nothing(tmp_path
         assert rig.cm.ledger.totals().dive.frames == 0  # a new dive counts afresh
 
     run(tmp_path, TWO_WAY, scenario)
+
+
+def test_a_record_that_does_not_fit_its_model_is_logged_not_raised(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """Announcing a state change never stops a delivery: a record the page's message cannot
+    carry (a bookkeeping bug) is logged, the state is written, the next one announced."""
+    log = MissionLog(tmp_path / "missions.sqlite3")
+    try:
+        hub = RecordingHub()
+        records = CommandRecords(log, hub)
+        dive = log.new_dive("fake")
+        odd = log.insert_command(dive, {**command_fields(), "kind": "mystery"})
+        good = log.insert_command(dive, command_fields())
+        with caplog.at_level(logging.ERROR, logger="backend.commands.manager"):
+            records._update(odd["id"], attempts=1)
+            records._update(good["id"], attempts=1)
+        written = log.command(odd["id"])
+        assert written is not None and written["attempts"] == 1
+        assert hub.states == {good["id"]: ["queued"]}
+        assert f"command {odd['id']} not announced" in caplog.text
+    finally:
+        log.close()

@@ -94,7 +94,7 @@ def test_an_override_is_recorded_with_who_and_which(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         service = service_of(rig, {"hover": (FAST,)})
         out = await service.send(SendRequest("hover", HOVER_PARAMS, "ws", override=True))
-        record = rig.record(out.record["id"])
+        record = rig.record(out.record.id)
         assert record["origin"] == "ws"
         assert record["overrides"] == {
             "by": "op",
@@ -109,7 +109,7 @@ def test_surface_is_never_refused_by_the_checks(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         service = service_of(rig, {"surface": (DEEP,)})
         out = await service.send(SendRequest("surface", {}, "script", kind="script"))
-        assert out.record["kind"] == "surface" and out.record["origin"] == "script"
+        assert out.record.kind == "surface" and out.record.origin == "script"
 
     run(tmp_path, ONE_WAY, scenario)
 
@@ -122,10 +122,10 @@ def test_a_retry_is_a_new_command_naming_the_old(tmp_path: Path, state: str) -> 
         await rig.until_state(rec["id"], "sent")
         rig.log.update_command(rec["id"], state=state, reason="made so by the test")
         again = (await service.retry(rec["id"], copies=2)).record
-        assert again["id"] != rec["id"] and again["retry_of"] == rec["id"]
-        assert again["state"] == "queued" and again["copies"] == 2
-        assert again["origin"] == "retry" and again["created_at"] >= rec["created_at"]
-        await rig.until_state(again["id"], "sent")
+        assert again.id != rec["id"] and again.retry_of == rec["id"]
+        assert again.state == "queued" and again.copies == 2
+        assert again.origin == "retry" and again.created_at >= rec["created_at"]
+        await rig.until_state(again.id, "sent")
         assert rig.state(rec["id"]) == state  # the old record keeps its state
         assert rig.link.count(CIRCLE) == 3
 
@@ -160,7 +160,8 @@ def test_a_retry_is_checked_like_any_send(tmp_path: Path) -> None:
             await service.retry(rec["id"])
         assert len(rig.log.commands()) == 1 and rig.link.count(HOVER) == 1
         out = await service.retry(rec["id"], override=True)
-        assert out.record["overrides"]["violations"][0]["check"] == "top_speed"
+        assert out.record.overrides is not None
+        assert out.record.overrides.violations[0].check == "top_speed"
 
     run(tmp_path, ONE_WAY, scenario)
 
@@ -174,14 +175,14 @@ def test_wire_order_circle_surface_retry(tmp_path: Path) -> None:
         circle = (await service.send(SendRequest("circle", CIRCLE_PARAMS, "api", copies=20))).record
         await until(lambda: rig.link.count(CIRCLE) >= 1)
         surface = (await service.surface()).record
-        await until(lambda: rig.state(circle["id"]) == "superseded")
-        await until(lambda: rig.record(surface["id"])["copies_sent"] >= 1)
-        retried = (await service.retry(circle["id"], copies=1)).record
-        await rig.until_state(retried["id"], "sent")
-        assert rig.cm.last_sent is not None and rig.cm.last_sent["id"] == retried["id"]
+        await until(lambda: rig.state(circle.id) == "superseded")
+        await until(lambda: rig.record(surface.id)["copies_sent"] >= 1)
+        retried = (await service.retry(circle.id, copies=1)).record
+        await rig.until_state(retried.id, "sent")
+        assert rig.cm.last_sent is not None and rig.cm.last_sent["id"] == retried.id
         assert rig.cm.last_sent["pattern"] == "circle"
         oldest_first = [r["id"] for r in rig.log.commands(oldest_first=True)]
-        assert oldest_first == [circle["id"], surface["id"], retried["id"]]
+        assert oldest_first == [circle.id, surface.id, retried.id]
         assert rig.log.last_sent() == rig.cm.last_sent
 
     run(tmp_path, ONE_WAY, scenario)

@@ -1,0 +1,198 @@
+"""What the console tells every page: the news messages of ``/ws`` and the vehicle as the
+console knows it (``GET /api/vehicle``, the same shapes).
+
+Each message is a model whose ``type`` names it (:class:`Message`); the place that publishes
+builds it and the telemetry hub serialises it once (:func:`message_json`) for every page.
+The control protocol (the page's own messages, and the answers to them) and the union of
+every ``/ws`` message, documented in ``docs/live.md``, are in
+:mod:`backend.api.schemas.live`.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from backend.commands.health import LinkHealth
+from backend.mission_log.records import CommandJson, CommandRecord, LogEvent, Params, lenient
+
+
+def _type_required(schema: dict[str, Any]) -> None:
+    """A message's ``type`` is always sent (its default is the only value it takes)."""
+    required = schema.setdefault("required", [])
+    if "type" not in required:
+        required.insert(0, "type")
+
+
+class Message(BaseModel):
+    """A ``/ws`` message: ``type`` (a constant per class) says which. It is always serialised,
+    whatever else is left out as unset (an acknowledgement's fields the vehicle did not send,
+    an error's ``field`` that does not apply)."""
+
+    model_config = ConfigDict(json_schema_extra=_type_required)
+
+    def model_post_init(self, context: Any, /) -> None:
+        self.model_fields_set.add("type")
+
+
+def message_json(message: BaseModel) -> str:
+    """A message as its JSON text: the fields set (so a record's JSON is its row's), by alias
+    (an acknowledgement's ``from``); a non-finite number is ``null``."""
+    return message.model_dump_json(by_alias=True, exclude_unset=True)
+
+
+# --- the vehicle as the console knows it ----------------------------------------------------
+
+
+class Pose(BaseModel):
+    """The vehicle's last pose (NED); a number it did not send (null, NaN) is null;
+    ``lat_deg``/``lon_deg`` from the datum (null without one, or without x/y)."""
+
+    t_s: float | None
+    x_m: float | None
+    y_m: float | None
+    z_m: float | None
+    heading_deg: float | None
+    roll_deg: float | None
+    lat_deg: float | None
+    lon_deg: float | None
+
+
+class VehicleStatus(BaseModel):
+    """The vehicle's last status as it sent it (the vehicle contract's status schema:
+    ``mode``, ``pattern``, ``active``, the simulator's ``link``, ...); the numbers the
+    console reads are a finite number or null."""
+
+    model_config = ConfigDict(extra="allow")
+
+    t_s: float | None
+    depth_m: float | None
+    heading_deg: float | None
+    speed_mps: float | None
+    battery_pct: float | None
+    x_m: float | None
+    y_m: float | None
+
+
+class LastSent(BaseModel):
+    """The last command that left the station."""
+
+    id: int
+    pattern: str
+    pattern_id: int
+    params: Params
+
+
+class ActivePath(BaseModel):
+    """The path the vehicle flies, as the station mirrors it from what it sent and what the
+    vehicle acknowledged (NED m; lat/lon deg, null without a datum)."""
+
+    pattern: str
+    x_m: list[float]
+    y_m: list[float]
+    z_m: list[float]
+    lat_deg: list[float] | None
+    lon_deg: list[float] | None
+
+
+#: The vehicle's echo of its active command: the documented shape when it fits, else as sent.
+ActiveEcho = Annotated[
+    CommandJson | dict[str, Any] | None,
+    lenient("the vehicle's echo of its active command (its last acknowledgement's)"),
+]
+
+
+class VehicleView(BaseModel):
+    """Pose, status, the vehicle's echoed active command vs the last sent, link health."""
+
+    pose: Pose | None
+    status: VehicleStatus | None
+    active: ActiveEcho
+    last_sent: LastSent | None
+    active_path: ActivePath | None = Field(
+        description="the path the vehicle flies, as mirrored; null when none is known"
+    )
+    echo_mismatch: bool
+    age_s: float | None = Field(description="seconds since the vehicle was last heard from")
+    link: LinkHealth
+
+
+# --- the news: server -> every page ---------------------------------------------------------
+
+
+class TelemetryMessage(Message):
+    """The latest pose and status (latest value wins, at most ``telemetry_hz`` a second); as
+    in ``/api/vehicle``."""
+
+    type: Literal["telemetry"] = "telemetry"
+    pose: Pose | None = Field(description="the last pose (null: none yet)")
+    status: VehicleStatus | None = Field(description="the last status (null: none yet)")
+    age_s: float | None = Field(description="seconds since the vehicle was last heard from")
+
+
+class CommandMessage(Message):
+    """A command's record, on every change of its state (in order)."""
+
+    type: Literal["command"] = "command"
+    command: CommandRecord = Field(description="the record as written (its new state)")
+
+
+class VehicleMessage(Message):
+    """The vehicle's echoed active command, when an acknowledgement arrives."""
+
+    type: Literal["vehicle"] = "vehicle"
+    active: ActiveEcho
+    echo_mismatch: bool = Field(description="it differs from the last command it accepted")
+
+
+class ActivePathMessage(Message):
+    """The mirrored path the vehicle flies, when it changes (null: none); every page's chart
+    draws it."""
+
+    type: Literal["active_path"] = "active_path"
+    active_path: ActivePath | None = Field(description="null: no path is known")
+
+
+class LinkMessage(Message):
+    """The vehicle link's health (as in ``/api/vehicle``), every second while a page listens."""
+
+    type: Literal["link"] = "link"
+    link: LinkHealth = Field(description="what the station knows of its link to the vehicle")
+
+
+class EventMessage(Message):
+    """An event the mission log kept (an echo mismatch, a new datum)."""
+
+    type: Literal["event"] = "event"
+    event: LogEvent = Field(description="the event as the mission log wrote it")
+
+
+#: What the hub publishes to every page.
+News = Annotated[
+    TelemetryMessage
+    | CommandMessage
+    | VehicleMessage
+    | ActivePathMessage
+    | LinkMessage
+    | EventMessage,
+    Field(discriminator="type"),
+]
+
+__all__ = [
+    "ActiveEcho",
+    "ActivePath",
+    "ActivePathMessage",
+    "CommandMessage",
+    "EventMessage",
+    "LastSent",
+    "LinkMessage",
+    "Message",
+    "News",
+    "Pose",
+    "TelemetryMessage",
+    "VehicleMessage",
+    "VehicleStatus",
+    "VehicleView",
+    "message_json",
+]
