@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import os
 import platform
 import statistics
@@ -46,6 +47,11 @@ def percentile(values: Sequence[float], q: float) -> float:
     lo = int(pos)
     hi = min(lo + 1, len(ordered) - 1)
     return ordered[lo] + (ordered[hi] - ordered[lo]) * (pos - lo)
+
+
+def ms_cell(value: float) -> str:
+    """A table cell of milliseconds, one decimal; ``-`` for NaN (no sample)."""
+    return "-" if math.isnan(value) else f"{value:.1f}"
 
 
 def table(headers: Sequence[str], rows: Sequence[Sequence[str]]) -> str:
