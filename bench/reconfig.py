@@ -45,13 +45,22 @@ Ratios are paper / ours: how many times faster (or smaller) ours is; below 1 it 
 
 from __future__ import annotations
 
-import copy
 import statistics
 import time
 from dataclasses import dataclass
-from typing import Any, TextIO
+from typing import TextIO
 
 from bench._onboard import DECODE_HEADERS, DecodeTiming, decode_rows, time_decode
+from bench._reconfig_latency import (
+    PAPER_NAMES,
+    PAPER_NORMALISED_MS,
+    PAPER_REPLAN_TRIALS,
+    RetaskCase,
+    ScenarioLatency,
+    measure_latency,
+    receive_afresh,
+    retask_cases,
+)
 from bench._reconfig_memory import (
     MEMORY_ERRORS,
     RETASK_SCENARIOS,
@@ -61,27 +70,29 @@ from bench._reconfig_memory import (
     onboard_arguments,
 )
 from bench._timing import machine, mib, table
-from codec import FRAME_BITS, encode_frame
-from onboard.agent import OnboardAgent
+from codec import encode_frame
 from sim.scenarios import SCENARIOS
-from sim.simulation import SimConfig, Simulation
 
-# The memory half lives in bench._reconfig_memory; its names are re-exported here.
+# The latency half lives in bench._reconfig_latency and the memory half in
+# bench._reconfig_memory; their names are re-exported here.
 __all__ = [
     "MEMORY_ERRORS",
     "PAPER_DECODE_MS",
     "PAPER_NAMES",
     "PAPER_NORMALISED_MS",
+    "PAPER_REPLAN_TRIALS",
     "PAPER_RSS_MB",
     "PAPER_TOTAL_MS",
     "RETASK_SCENARIOS",
     "TARGET_INCREMENT_KB",
     "ReconfigReport",
+    "RetaskCase",
     "ScenarioLatency",
     "compile_onboard",
     "format_report",
     "machine",
     "measure",
+    "measure_latency",
     "measure_memory",
     "onboard_arguments",
     "onboard_decode",
@@ -91,50 +102,13 @@ __all__ = [
     "run",
 ]
 
-#: The paper's Table tab:reconfig_metrics (Intel i7, 16 GB RAM, Ubuntu 20.04, ROS 2 + Gazebo).
+#: The paper's Table tab:reconfig_metrics (Intel i7, 16 GB RAM, Ubuntu 20.04, ROS 2 + Gazebo);
+#: its normalised replan latencies are the latency half's (PAPER_NORMALISED_MS).
 PAPER_DECODE_MS = 0.027
-PAPER_NORMALISED_MS = {"wreck": 42.0, "panel": 15.0, "pod": 46.0}
-PAPER_NAMES = {"wreck": "Shipwreck", "panel": "BOP", "pod": "Pod"}
 PAPER_RSS_MB = 13.2
 #: The paper's "less than 50 ms total latency" claim.
 PAPER_TOTAL_MS = 50.0
 PAPER_DECODE_TRIALS = 30
-PAPER_REPLAN_TRIALS = 10
-
-
-@dataclass(frozen=True, slots=True)
-class RetaskCase:
-    """A scenario's retask frame and the simulated vehicle about to receive it."""
-
-    name: str
-    retask: str  # e.g. "lawnmower -> lawnmower"
-    bits: int
-    sim: Simulation
-
-
-@dataclass(frozen=True, slots=True)
-class ScenarioLatency:
-    """One scenario's replan figures: medians over rounds of each round's 10-trial mean."""
-
-    name: str
-    retask: str
-    waypoints: int
-    replan_ms: float  # total replanning time
-    decode_ms: float  # this scenario's decodes alone
-    round_normalised_ms: tuple[float, ...]  # every round's mean, for the spread
-
-    @property
-    def normalised_ms(self) -> float:
-        """Total replanning time / waypoints (the paper's normalised replan latency)."""
-        return self.replan_ms / self.waypoints
-
-    @property
-    def paper_normalised_ms(self) -> float:
-        return PAPER_NORMALISED_MS[self.name]
-
-    @property
-    def paper_name(self) -> str:
-        return PAPER_NAMES[self.name]
 
 
 @dataclass(frozen=True, slots=True)
@@ -170,72 +144,6 @@ class ReconfigReport:
     @property
     def decode_trials(self) -> int:
         return self.trials_per_scenario * len(self.scenarios)
-
-
-def retask_cases() -> dict[str, RetaskCase]:
-    """Each retask scenario's vehicle at its retask time, flying the first command."""
-    cases: dict[str, RetaskCase] = {}
-    for name in RETASK_SCENARIOS:
-        sc = SCENARIOS[name]
-        sim = Simulation(SimConfig(start_z_m=sc.start_z_m))
-        first, cmd = sc.commands[0], sc.commands[sc.retask]
-        sim.submit_frame(encode_frame(first.pattern, first.params).frame.to_bytes())
-        sim.run_until(cmd.t_s)
-        bits = int(encode_frame(cmd.pattern, cmd.params).frame.bits, 2)
-        cases[name] = RetaskCase(name, f"{first.pattern} -> {cmd.pattern}", bits, sim)
-    return cases
-
-
-def receive_afresh(sim: Simulation, bits: int, label: str) -> tuple[dict[str, Any], float]:
-    """A deep copy of ``sim``'s agent (the same vehicle and plan at every call) receives the
-    frame ``bits``: its acknowledgment and the wall ms of ``receive`` (frame in -> first new
-    setpoint). Raises unless the frame was accepted."""
-    agent: OnboardAgent = copy.deepcopy(sim.agent)
-    state = sim.state()
-    t0 = time.perf_counter()
-    ack, ref = agent.receive(bits, FRAME_BITS, state)
-    wall_ms = (time.perf_counter() - t0) * 1e3
-    if ack["outcome"] != "accepted" or ref is None:
-        raise RuntimeError(f"{label}: the frame was not accepted: {ack['detail']}")
-    return ack, wall_ms
-
-
-def measure_latency(
-    rounds: int, trials: int = PAPER_REPLAN_TRIALS
-) -> tuple[tuple[ScenarioLatency, ...], tuple[float, ...]]:
-    """Per-scenario replan figures and every round's mean decode latency (ms)."""
-    cases = retask_cases()
-    for case in cases.values():  # warm-up, not counted: imports, first-call caches
-        receive_afresh(case.sim, case.bits, case.name)
-    decode_means: list[float] = []
-    replan: dict[str, list[float]] = {n: [] for n in cases}
-    decode_by: dict[str, list[float]] = {n: [] for n in cases}
-    waypoints: dict[str, int] = {}
-    for _ in range(rounds):
-        decodes: list[float] = []
-        replans: dict[str, list[float]] = {n: [] for n in cases}
-        for _ in range(trials):
-            for name, case in cases.items():
-                ack, _ = receive_afresh(case.sim, case.bits, case.name)
-                decodes.append(ack["decode_latency_ms"])
-                decode_by[name].append(ack["decode_latency_ms"])
-                replans[name].append(ack["replan_latency_ms"])
-                waypoints[name] = ack["waypoints"]
-        decode_means.append(statistics.fmean(decodes))
-        for name in cases:
-            replan[name].append(statistics.fmean(replans[name]))
-    scenarios = tuple(
-        ScenarioLatency(
-            name,
-            case.retask,
-            waypoints[name],
-            statistics.median(replan[name]),
-            statistics.median(decode_by[name]),
-            tuple(r / waypoints[name] for r in replan[name]),
-        )
-        for name, case in cases.items()
-    )
-    return scenarios, tuple(decode_means)
 
 
 def onboard_decode(rounds: int, loops: int) -> DecodeTiming:
