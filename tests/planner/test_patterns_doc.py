@@ -53,8 +53,10 @@ def doc() -> str:
     return DOC.read_text(encoding="utf-8")
 
 
-def _generator() -> Callable[[Path | None], list[Path]]:
-    """``main`` of the figure script (``scripts/`` is not a package)."""
+def _generator(monkeypatch: pytest.MonkeyPatch) -> Callable[[Path | None], list[Path]]:
+    """``main`` of the figure script (``scripts/`` is not a package), loaded as Python runs a
+    script: its folder first on the path, where its drawing modules are."""
+    monkeypatch.syspath_prepend(str(SCRIPT.parent))
     spec = importlib.util.spec_from_file_location("gen_pattern_figures", SCRIPT)
     assert spec is not None and spec.loader is not None
     module = importlib.util.module_from_spec(spec)
@@ -70,8 +72,8 @@ def _sections(doc: str) -> dict[str, str]:
     return {parts[i].lstrip("#").strip(): parts[i + 1] for i in range(1, len(parts) - 1, 2)}
 
 
-def test_figures_are_current(tmp_path: Path) -> None:
-    written = _generator()(tmp_path)
+def test_figures_are_current(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    written = _generator(monkeypatch)(tmp_path)
     names = sorted(p.name for p in written)
     assert names == sorted(p.name for p in tmp_path.iterdir())
     committed = sorted(p.name for p in FIGURES.glob("*.svg"))
@@ -80,8 +82,8 @@ def test_figures_are_current(tmp_path: Path) -> None:
     assert not stale, f"figures differ from the planner's output, regenerate: {stale}"
 
 
-def test_figures_are_deterministic(tmp_path: Path) -> None:
-    main = _generator()
+def test_figures_are_deterministic(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    main = _generator(monkeypatch)
     first, second = tmp_path / "1", tmp_path / "2"
     for a, b in zip(main(first), main(second), strict=True):
         assert a.read_bytes() == b.read_bytes(), a.name
