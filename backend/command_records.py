@@ -11,6 +11,7 @@ from collections import OrderedDict
 from collections.abc import Iterator
 from typing import Any
 
+from backend.clock import Timer
 from backend.delivery import Delivery
 from backend.health import FrameLedger, Outcome
 from backend.lifecycle import Event, IllegalTransition, advance
@@ -30,7 +31,7 @@ class CommandRecords:
         self.hub = hub
         self._live: dict[int, Delivery] = {}  # copies still going out
         self._awaiting: OrderedDict[int, Encoded] = OrderedDict()  # id -> frame, oldest first
-        self._timeouts: dict[int, asyncio.TimerHandle] = {}
+        self._timeouts: dict[int, Timer] = {}  # acknowledgement timeouts
         self.ledger = FrameLedger()
         self._held: list[dict[str, Any]] | None = None  # announcements awaiting a commit
 

@@ -40,8 +40,8 @@ from bench._server import REPO, free_port
 
 from .conftest import AUTH, CIRCLE, TOKEN, MakeClient, command_fields, console_of, wait_until
 from .test_commands import CIRCLE as CIRCLE_FRAME
+from .test_commands import COPY_INTERVAL_S, Rig
 from .test_commands import HOVER as HOVER_FRAME
-from .test_commands import Rig, until
 
 #: The line with the operator URL (viser prints a URL of its own, without a token).
 URL_LINE = re.compile(r"(http://[^/\s]+)/\?token=\S+")
@@ -490,12 +490,13 @@ def test_a_failed_commit_sends_nothing_and_stops_what_it_superseded(tmp_path: Pa
     async def scenario(rig: Rig) -> None:
         cm: CommandManager = rig.cm
         old = await cm.submit(CIRCLE_FRAME, copies=20)
-        await until(lambda: rig.link.count(CIRCLE_FRAME) >= 2)
+        await rig.until(lambda: rig.link.count(CIRCLE_FRAME) >= 2)
         with failing_writes(rig.log, "COMMIT"), pytest.raises(LogWriteError) as caught:
             await cm.submit(HOVER_FRAME, copies=2)
         assert str(caught.value) == f"the mission log cannot be written: {DISK_FULL}{NOTHING_SENT}"
         circles = rig.link.count(CIRCLE_FRAME)
-        await asyncio.sleep(0.2)  # ten copy intervals
+        await rig.clock.advance(10 * COPY_INTERVAL_S)
+        assert rig.clock.pending() == []  # no copy of either is due any more
         assert rig.link.count(HOVER_FRAME) == 0  # the new command: nothing left
         assert rig.link.count(CIRCLE_FRAME) == circles  # the old one: stopped
         assert cm._live == {}

@@ -10,7 +10,6 @@ import copy
 import io
 import json
 import re
-import time
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +29,7 @@ from sim_bridge.agent import command_json
 from sim_bridge.contract_doc import DOC_PATH, REGENERATE, render_markdown
 from sim_bridge.rosbridge import TOPIC_TYPES, same_type
 from sim_bridge.sim import SimConfig, Simulation
+from tests.manual_clock import ManualClock
 
 from .test_agent import REJECTS
 
@@ -297,6 +297,7 @@ async def _console_takes(ack: dict[str, Any], enc: Encoded, db: Path) -> dict[st
     log = MissionLog(db)
     dive = log.new_dive("fake")
     link = _TwoWay()
+    clock = ManualClock()
     cm = CommandManager(
         log,
         link,
@@ -306,14 +307,16 @@ async def _console_takes(ack: dict[str, Any], enc: Encoded, db: Path) -> dict[st
         ack_timeout_s=5.0,
         surface_repeat_s=0.05,
         max_sends_per_minute=100,
+        clock=clock,
     )
     try:
         record = await cm.submit(enc)
-        deadline = time.monotonic() + 5
-        while not link.frames:
-            assert time.monotonic() < deadline
-            await asyncio.sleep(0.005)
-        await asyncio.sleep(0.02)
+
+        def transmitted() -> bool:  # the copy is out and written down: an answer is awaited
+            now = log.command(record["id"])
+            return bool(link.frames) and now is not None and now["state"] == "transmitted"
+
+        await clock.advance_until(transmitted, within_s=0.0)
         cm.on_mission(copy.deepcopy(ack))
         assert isinstance(cm.echo_mismatch, bool)
         after = log.command(record["id"])
