@@ -23,8 +23,10 @@ from backend.api import authoring, chart, commands, errors_db, live, predict, sc
 from backend.api import view as view_api
 from backend.api.openapi import security_schemes
 from backend.bounded_input import BodyLimit, shorten, validation_errors
+from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands import RateLimited
 from backend.console import Console
+from backend.link import Link
 from backend.security import HostGuard, allowed_hosts, install_redaction
 from backend.settings import Settings
 from codec import EncodeError
@@ -39,15 +41,23 @@ VENDOR = {
 }
 
 
-def create_app(settings: Settings | None = None, *, viewer: bool = True) -> FastAPI:
-    """The FastAPI app for ``settings`` (default: from the environment)."""
+def create_app(
+    settings: Settings | None = None,
+    *,
+    viewer: bool = True,
+    link: Link | None = None,
+    clock: Clock = SYSTEM_CLOCK,
+) -> FastAPI:
+    """The FastAPI app for ``settings`` (default: from the environment). ``link`` and
+    ``clock`` replace the settings' link (and the simulator) and the system clock: the tests'
+    light app on an in-memory vehicle (:class:`backend.console.Console`)."""
     cfg = settings or Settings.load()
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         # after the server configured its logging: no token reaches any log output
         install_redaction([cfg.token])
-        console = Console(cfg)
+        console = Console(cfg, link=link, clock=clock)
         app.state.console = console
         await console.start(viewer=viewer)
         try:

@@ -124,6 +124,7 @@ def put_channel(client: TestClient, **values: float) -> None:
 # --- session ------------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_session_without_token_is_read_only(client: TestClient) -> None:
     s = client.get("/api/session").json()
     assert s["mode"] == "training"
@@ -234,6 +235,7 @@ def test_preview_frame_snaps_and_sections(client: TestClient) -> None:
     assert decode_frame(bits).command.params == p["params"]
 
 
+@pytest.mark.training
 def test_preview_path_estimate_and_start(client: TestClient) -> None:
     p = preview(client, "circle", CIRCLE).json()
     path = p["path"]
@@ -257,6 +259,7 @@ def test_preview_path_estimate_and_start(client: TestClient) -> None:
     assert (p["two_way"], p["copies"], p["p_delivered"]) == (True, 1, 1.0)
 
 
+@pytest.mark.training
 def test_preview_copies_follow_the_training_channel(client: TestClient) -> None:
     r = client.put("/api/training/channel", json={"ber": 0.02, "loss": 0.1}, headers=AUTH)
     assert r.status_code == 200, r.text
@@ -603,6 +606,7 @@ def test_commands_list_bad_queries_are_422(
     assert loc_of(r.json()) == ["query", name]
 
 
+@pytest.mark.training
 def test_commands_filter_by_the_session_target(client: TestClient) -> None:
     cmd = send(client)
     assert cmd["target"] == client.get("/api/session").json()["target"]
@@ -720,6 +724,7 @@ def test_surface_repeats_until_acknowledged(make_client: MakeClient) -> None:
 # --- dives --------------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_dives_and_track(client: TestClient) -> None:
     first_pose(client)
     cmd = wait_state(client, send(client)["id"])
@@ -758,6 +763,7 @@ def test_dive_replay(client: TestClient) -> None:
 # --- vehicle ------------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_vehicle_pose_status_and_echo(client: TestClient) -> None:
     pose = first_pose(client)
     assert {"t_s", "x_m", "y_m", "z_m", "heading_deg", "roll_deg"} <= set(pose)
@@ -796,6 +802,7 @@ def test_vehicle_pose_status_and_echo(client: TestClient) -> None:
     assert moved["t_s"] > pose["t_s"]
 
 
+@pytest.mark.training
 def test_echo_mismatch_when_another_station_retasks_the_vehicle(client: TestClient) -> None:
     first_pose(client)
     circle = wait_state(client, send(client)["id"])
@@ -829,6 +836,7 @@ def test_echo_mismatch_when_another_station_retasks_the_vehicle(client: TestClie
 # --- training -----------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_training_state(client: TestClient) -> None:
     t = client.get("/api/training").json()
     assert t["enabled"] is True
@@ -856,6 +864,7 @@ def test_training_state(client: TestClient) -> None:
         ("POST", "/api/training/scenario/pod", None),
     ],
 )
+@pytest.mark.training
 def test_training_controls_need_the_token(
     client: TestClient, method: str, path: str, body: dict[str, Any] | None
 ) -> None:
@@ -864,6 +873,7 @@ def test_training_controls_need_the_token(
     assert client.request(method, path, json=body, headers=AUTH).status_code == 200
 
 
+@pytest.mark.training
 def test_training_channel(client: TestClient) -> None:
     body = {"ber": 0.001, "loss": 0.25, "delay_s": 0.5, "range_m": 500, "burst_rate": 0.1}
     r = client.put("/api/training/channel", json=body, headers=AUTH)
@@ -897,6 +907,7 @@ def test_training_values_are_422_naming_the_field(
     assert loc_of(r.json()) == ["body", field]
 
 
+@pytest.mark.training
 def test_training_current_and_time_scale(client: TestClient) -> None:
     body = {"north_mps": 0.2, "east_mps": -0.1, "speed_sigma_mps": 0.01, "direction_sigma_deg": 5}
     r = client.put("/api/training/current", json=body, headers=AUTH)
@@ -908,6 +919,7 @@ def test_training_current_and_time_scale(client: TestClient) -> None:
     assert client.get("/api/training").json()["time_scale"] == 20
 
 
+@pytest.mark.training
 def test_training_reset_starts_a_new_dive_at_the_start(client: TestClient) -> None:
     start = first_pose(client)
     send(client, "straight", {"speed": 0.18, "depth": 2, "duration": 600, "heading": 90})
@@ -936,6 +948,7 @@ def test_training_reset_starts_a_new_dive_at_the_start(client: TestClient) -> No
 
 
 @pytest.mark.parametrize("name", ["wreck", "panel", "pod", "tank"])
+@pytest.mark.training
 def test_training_scenarios(client: TestClient, name: str) -> None:
     first_pose(client)
     r = client.post(f"/api/training/scenario/{name}", headers=AUTH)
@@ -950,6 +963,7 @@ def test_training_scenarios(client: TestClient, name: str) -> None:
     assert preview(client, sc["next"]["pattern"], sc["next"]["params"]).status_code == 200
 
 
+@pytest.mark.training
 def test_training_unknown_scenario_is_404(client: TestClient) -> None:
     r = client.post("/api/training/scenario/atlantis", headers=AUTH)
     assert r.status_code == 404
@@ -1074,6 +1088,7 @@ def run_state(client: TestClient) -> dict[str, Any]:
     return state
 
 
+@pytest.mark.training
 def test_script_run_auto(client: TestClient) -> None:
     first_pose(client)
     body = {"script": SCRIPT, "mode": "auto"}
@@ -1238,6 +1253,7 @@ def test_put_link_refuses_out_of_range_naming_field_and_range(
     assert client.get("/api/vehicle").json()["link"]["ber"] == 1e-3  # nothing changed
 
 
+@pytest.mark.training
 def test_put_link_ber_in_training_is_409(client: TestClient) -> None:
     r = client.put("/api/link", json={"link_ber": 0.01}, headers=AUTH)
     assert r.status_code == 409 and "/api/training/channel" in r.json()["detail"]

@@ -43,6 +43,7 @@ def expected_lat_lon(datum: Datum, xs: list[float], ys: list[float]) -> tuple[An
 # --- session and chart -----------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_training_has_the_documented_site_and_the_transmitter_at_the_datum(
     client: TestClient,
 ) -> None:
@@ -100,6 +101,7 @@ def test_a_configured_datum_and_station(make_client: MakeClient) -> None:
 # --- PUT /api/datum ----------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_setting_the_datum_needs_the_operator(client: TestClient) -> None:
     body = {"lat_deg": 10.0, "lon_deg": 20.0}
     assert client.put("/api/datum", json=body).status_code == 401
@@ -120,6 +122,7 @@ def test_setting_the_datum_needs_the_operator(client: TestClient) -> None:
         ({"lat_deg": 1, "lon_deg": 2, "height_m": 3}, "height_m", "Extra inputs"),
     ],
 )
+@pytest.mark.training
 def test_a_bad_datum_is_422_naming_the_field(
     client: TestClient, body: dict[str, Any], field: str, words: str
 ) -> None:
@@ -138,6 +141,7 @@ def test_the_datum_from_gps_without_a_gps_is_409(client: TestClient) -> None:
     )
 
 
+@pytest.mark.training
 def test_a_new_datum_moves_every_lat_lon_and_is_logged(client: TestClient) -> None:
     wait_until(lambda: client.get("/api/vehicle").json()["pose"], what="a pose")
     r = client.put("/api/datum", json={"lat_deg": 59.9, "lon_deg": 10.7}, headers=AUTH)
@@ -170,6 +174,7 @@ def test_a_new_datum_moves_every_lat_lon_and_is_logged(client: TestClient) -> No
 # --- lat/lon beside x/y ----------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_pose_track_and_preview_carry_lat_lon_from_the_datum(client: TestClient) -> None:
     pose = wait_until(lambda: client.get("/api/vehicle").json()["pose"], what="a pose")
     lat, lon = point(TRAINING_DATUM, pose["x_m"], pose["y_m"])
@@ -329,6 +334,7 @@ def test_the_answers_match_the_openapi(make_client: MakeClient, tmp_path: Path) 
     assert ("PUT", "/api/datum") in secured and ("GET", "/api/chart") not in secured
 
 
+@pytest.mark.training
 def test_the_active_path_is_given_for_every_pages_chart(client: TestClient) -> None:
     """The path the vehicle flies (the station's mirror) comes with /api/vehicle in NED and
     lat/lon, so a page that did not preview it can still draw it; a reset clears it."""

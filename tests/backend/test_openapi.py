@@ -361,6 +361,7 @@ def test_a_real_vehicles_answers_validate(make_client: MakeClient) -> None:
     c.call("POST", "/api/preview", json={"pattern": "circle", "params": CIRCLE})
 
 
+@pytest.mark.training
 def test_404s(client: TestClient) -> None:
     c = contract(client)
     for method, url, auth in (
@@ -532,6 +533,7 @@ def test_503_while_the_console_cannot_take_commands(client: TestClient) -> None:
         console.commands = manager
 
 
+@pytest.mark.training
 def test_503_when_a_new_dive_cannot_be_logged(
     client: TestClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -549,6 +551,7 @@ def test_503_when_a_new_dive_cannot_be_logged(
 # --- no field dropped -----------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_the_models_drop_nothing_the_handlers_return(client: TestClient) -> None:
     """The responses hold every key of the handlers' own output (called directly), at every
     depth, and the dictionary and a record are their sources exactly."""

@@ -57,6 +57,7 @@ def _paused_mid_circle(client: TestClient) -> Any:
     ("pattern", "params"),
     [("lawnmower", LAWNMOWER), ("circle", {**CIRCLE, "radius": 4})],
 )
+@pytest.mark.training
 def test_the_prediction_is_a_full_simulation_from_the_same_state(
     client: TestClient, pattern: str, params: dict[str, Any]
 ) -> None:
@@ -175,6 +176,7 @@ def test_bad_input_is_422_naming_the_field(
         assert got == ["body", "params", "speed"]
 
 
+@pytest.mark.training
 def test_lat_lon_come_from_the_datum_through_backend_geo(client: TestClient) -> None:
     datum = console_of(client).datum
     assert datum is not None  # training's documented site

@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 import time
 
+import pytest
 from fastapi.testclient import TestClient
 from websockets.sync.client import connect
 
@@ -15,6 +16,7 @@ from sim_bridge.contract import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC
 from .conftest import console_of, send, wait_state, wait_until
 
 
+@pytest.mark.training
 def test_a_stranger_can_watch_but_not_publish_a_frame(client: TestClient) -> None:
     console = console_of(client)
     port = console.bridge.port
