@@ -9,12 +9,15 @@ to every test of those kinds, so a test names only what it is:
   behind its rosbridge, or a real transport), added here, as to every ``training`` test (its
   ``client`` is the training console: ``tests/backend/conftest.py``);
 * ``interop``, ``schemathesis``: marked in their modules;
-* ``slow``: marked on the test itself (a subprocess console, a benchmark run, real time).
+* ``slow``: marked on the test itself (a subprocess console, a benchmark run, real time),
+  or added here to every test using a fixture marked by :func:`tests.tiers.slow_fixture`.
 """
 
 from __future__ import annotations
 
 import pytest
+
+from tests.tiers import is_slow_fixture
 
 #: Fixtures that put a test in a marker's kind.
 FIXTURE_MARKERS = {"browser": "browser", "make_client": "console"}
@@ -30,5 +33,9 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
                 item.add_marker(marker)
         if item.get_closest_marker("training") is not None:
             item.add_marker("console")
+        info = getattr(item, "_fixtureinfo", None)
+        defs = info.name2fixturedefs.values() if info is not None else ()
+        if any(is_slow_fixture(d.func) for chain in defs for d in chain):
+            item.add_marker("slow")
         if any(item.get_closest_marker(kind) for kind in NOT_FAST):
             item.add_marker("slow")

@@ -17,6 +17,7 @@ from analysis import ber, results, results_paper
 from analysis.ber import BerConfig
 from analysis.decode_spread import reruns
 from backend import cli
+from tests.tiers import slow_fixture
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -36,6 +37,7 @@ TINY = BerConfig(
 
 
 @pytest.fixture(scope="module")
+@slow_fixture  # builds the whole results page, ~5 s
 def page(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     root = tmp_path_factory.mktemp("results")
     img_dir = root / "docs" / "results"

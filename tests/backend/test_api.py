@@ -1116,6 +1116,7 @@ def test_script_run_auto(client: TestClient) -> None:
     ]
 
 
+@pytest.mark.slow  # a script run's real polling
 def test_script_run_step_mode(client: TestClient) -> None:
     first_pose(client)
     r = client.post("/api/scripts/run", json={"script": SCRIPT, "mode": "step"}, headers=AUTH)

@@ -24,6 +24,9 @@ from bench._server import ConsoleProcess, start_console
 
 from .conftest import TOKEN, clear_nemesys_env
 
+#: A `nemesys console` subprocess per test (uvicorn's own limits): make test, not make test-fast.
+pytestmark = pytest.mark.slow
+
 CAP = 65536
 BIG = 50 * 1024 * 1024
 CHUNK = 65536

@@ -185,6 +185,7 @@ def command_rows(db: Path) -> int:
 # --- at start: the mission log ------------------------------------------------------------
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_file_that_is_not_a_database(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     db.write_bytes(os.urandom(8192))
@@ -195,6 +196,7 @@ def test_a_file_that_is_not_a_database(tmp_path: Path) -> None:
     )
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_corrupted_database(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     corrupt(db)
@@ -203,6 +205,7 @@ def test_a_corrupted_database(tmp_path: Path) -> None:
     assert_refused(run_console(db), str(db), "is corrupted (quick_check: ", "move it aside")
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_database_with_a_damaged_schema(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     make_log(db)
@@ -227,6 +230,7 @@ runpy.run_module("backend.cli", run_name="__main__")
 """
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_read_only_file(tmp_path: Path) -> None:
     db = tmp_path / "logs" / "missions.sqlite3"
     db.parent.mkdir()
@@ -242,6 +246,7 @@ def test_a_read_only_file(tmp_path: Path) -> None:
         db.chmod(0o644)
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_file_sqlite_opens_read_only(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     make_log(db)
@@ -250,6 +255,7 @@ def test_a_file_sqlite_opens_read_only(tmp_path: Path) -> None:
     assert "attempt to write a readonly database" in line
 
 
+@pytest.mark.slow  # `nemesys console` and sqlite3 subprocesses
 @pytest.mark.parametrize("journal", ["wal", "delete"])
 def test_a_database_locked_by_another_process(tmp_path: Path, journal: str) -> None:
     db = tmp_path / "missions.sqlite3"
@@ -266,6 +272,7 @@ def test_a_database_locked_by_another_process(tmp_path: Path, journal: str) -> N
     assert "another console?" in line
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_directory_that_cannot_be_made(tmp_path: Path) -> None:
     blocker = tmp_path / "not-a-directory"
     blocker.write_text("a file where the directory should be")
@@ -277,6 +284,7 @@ def test_a_directory_that_cannot_be_made(tmp_path: Path) -> None:
 # --- at start: the port, the URL ----------------------------------------------------------
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_busy_port(tmp_path: Path) -> None:
     with socket.socket() as other:
         other.bind(("127.0.0.1", 0))
@@ -288,6 +296,7 @@ def test_a_busy_port(tmp_path: Path) -> None:
     )
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_the_url_is_printed_once_the_console_answers_and_a_missing_directory_is_made(
     tmp_path: Path,
 ) -> None:
@@ -516,6 +525,7 @@ def on_disk(db: Path) -> int:
     return count
 
 
+@pytest.mark.slow  # the log's real flush period, ~1 s
 def test_a_track_point_is_on_disk_within_a_second(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     log = MissionLog(db)
@@ -534,6 +544,7 @@ def test_a_track_point_is_on_disk_within_a_second(tmp_path: Path) -> None:
         log.close()
 
 
+@pytest.mark.slow  # the log's real flush period, ~1 s
 def test_track_points_the_log_cannot_take_are_kept_and_written_later(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:

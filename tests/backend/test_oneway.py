@@ -339,6 +339,7 @@ def test_link_settings_out_of_range_are_refused_not_clamped(
 # --- f. shutdown during repeats ---------------------------------------------------------
 
 
+@pytest.mark.slow  # real copies 0.5 s apart on a TCP modem, ~2 s
 def test_shutdown_during_repeats_interrupts_and_silences(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path, wire: FrameGateway
 ) -> None:

@@ -101,6 +101,7 @@ def test_the_prediction_is_a_full_simulation_from_the_same_state(
         assert pred["planned_duration_s"] is None
 
 
+@pytest.mark.slow  # a full-horizon twin run, ~1 s
 def test_the_horizon_is_bounded(client: TestClient) -> None:
     body = {"pattern": "circle", "params": CIRCLE}
     pred = client.post("/api/predict", json=body).json()
@@ -227,6 +228,7 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
+@pytest.mark.slow  # starts and ends the twin's worker process, ~1.3 s
 @pytest.mark.parametrize("ending", ["stop", "kill"])
 def test_the_twin_worker_never_outlives_the_console(tmp_path: Path, ending: str) -> None:
     """Stopped (SIGTERM, the lifespan closes it) or killed (SIGKILL, no shutdown at all): the

@@ -15,6 +15,9 @@ import pytest
 
 from bench import console as bench_console
 
+#: The console benchmark against a `nemesys console` subprocess: make test, not make test-fast.
+pytestmark = pytest.mark.slow
+
 NUMBER = r"-?\d+(?:\.\d+)?"
 
 

@@ -22,6 +22,9 @@ from sim_bridge.contract import TOPIC_TYPES
 
 from .sim_process import nemesys_sim
 
+#: roslibjs through node: the interop tier (make test), not make test-fast.
+pytestmark = pytest.mark.interop
+
 NODE_DIR = Path(__file__).resolve().parents[1] / "node"
 SCRIPT = NODE_DIR / "interop.mjs"
 FRAME = encode_frame("circle", speed=0.18, depth=2.5, radius=4, direction="cw").frame

@@ -23,6 +23,9 @@ from sim_bridge.rosbridge import FRAME_TOPIC, MISSION_TOPIC, POSE_TOPIC, STATUS_
 from .helpers import Inbox, ros_client
 from .sim_process import nemesys_sim
 
+#: roslibpy against `nemesys sim`: the interop tier (make test), not make test-fast.
+pytestmark = pytest.mark.interop
+
 FRAME = encode_frame("square", speed=0.18, depth=2, side_span=6, direction="ccw").frame
 
 

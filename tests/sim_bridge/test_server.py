@@ -271,6 +271,7 @@ class ThreadedServer:
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.interop
 def test_roslibpy_frame_round_trip_and_mission_ack() -> None:
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle) as bridge, ros_client(bridge.port) as ros:
@@ -296,6 +297,7 @@ def test_roslibpy_frame_round_trip_and_mission_ack() -> None:
         mission.unsubscribe()
 
 
+@pytest.mark.interop
 def test_roslibpy_pose_stream_at_least_10_hz() -> None:
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle, pose_hz=20.0) as bridge, ros_client(bridge.port) as ros:
@@ -318,6 +320,7 @@ def test_roslibpy_pose_stream_at_least_10_hz() -> None:
         pose.unsubscribe()
 
 
+@pytest.mark.interop
 def test_roslibpy_status_and_get_topics() -> None:
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle, status_hz=10.0) as bridge, ros_client(bridge.port) as ros:
@@ -342,6 +345,7 @@ def test_roslibpy_status_and_get_topics() -> None:
         status.unsubscribe()
 
 
+@pytest.mark.interop
 def test_roslibpy_bad_frame_is_dropped_and_nothing_comes_back(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
@@ -377,6 +381,7 @@ def test_roslibpy_bad_frame_is_dropped_and_nothing_comes_back(
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # real streams, ~0.7 s
 def test_per_client_subscriptions_and_unsubscribe() -> None:
     async def main() -> None:
         vehicle = FakeVehicle()
@@ -735,6 +740,7 @@ def test_many_clients_at_once() -> None:
     run(main())
 
 
+@pytest.mark.slow  # a stalled client for 1 s of real time
 def test_slow_client_does_not_hold_up_the_others(caplog: pytest.LogCaptureFixture) -> None:
     """A client that stops reading: others keep >= 9 poses/s, and it is dropped."""
     caplog.set_level(logging.INFO, logger=LOGGER)

@@ -51,6 +51,7 @@ def _status(port: int) -> dict[str, Any]:
         return status
 
 
+@pytest.mark.interop
 def test_roslibpy_round_trip_with_the_simulated_vehicle(sim_port: int) -> None:
     with ros_client(sim_port) as ros:
         missions, poses = Inbox(), Inbox()
@@ -116,6 +117,7 @@ async def _faults(port: int) -> None:
                     pass
 
 
+@pytest.mark.slow  # a `nemesys sim` subprocess
 def test_faults_leave_the_server_up_and_the_vehicle_on_its_pattern(sim_port: int) -> None:
     with ros_client(sim_port) as ros:
         missions = Inbox()
@@ -151,6 +153,7 @@ def _send(port: int, *command: str) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow  # a `nemesys sim` subprocess
 def test_nemesys_send_prints_the_vehicles_acknowledgement(sim_port: int) -> None:
     done = _send(sim_port, "hover", "duration=60", "depth=1.5", "heading=90", "--json")
     assert done.returncode == 0, done.stderr
