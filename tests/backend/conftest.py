@@ -27,6 +27,7 @@ from backend.settings import Settings
 from backend.store import FINAL_STATES
 from codec import encode_frame
 from tests.agent_link import TARGET, AgentLink
+from tests.manual_clock import ManualClock
 
 TOKEN = "x" * 20
 WRONG_TOKEN = "y" * 20
@@ -43,7 +44,9 @@ T = TypeVar("T")
 
 
 class MakeClient(Protocol):
-    def __call__(self, *, viewer: bool = False, **overrides: Any) -> TestClient: ...
+    def __call__(
+        self, *, viewer: bool = False, clock: Clock = ..., **overrides: Any
+    ) -> TestClient: ...
 
 
 class MakeLightClient(Protocol):
@@ -78,12 +81,12 @@ def make_client(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Mak
     stack = ExitStack()
     count = 0
 
-    def make(*, viewer: bool = False, **overrides: Any) -> TestClient:
+    def make(*, viewer: bool = False, clock: Clock = SYSTEM_CLOCK, **overrides: Any) -> TestClient:
         nonlocal count
         count += 1
         overrides.setdefault("db_path", tmp_path / f"missions-{count}.sqlite3")
         settings = settings_for(**overrides)
-        client = TestClient(create_app(settings, viewer=viewer))
+        client = TestClient(create_app(settings, viewer=viewer, clock=clock))
         stack.enter_context(client)
         return client
 
@@ -125,6 +128,12 @@ def client(request: pytest.FixtureRequest, make_light_client: MakeLightClient) -
         make: MakeClient = request.getfixturevalue("make_client")
         return make()
     return make_light_client()
+
+
+def advance(client: TestClient, clock: ManualClock, seconds: float) -> None:
+    """Move a started app's command clock ``seconds`` forward, on the app's event loop (every
+    copy, repeat and timeout due on the way happens, in order)."""
+    client.portal.call(clock.advance, seconds)  # type: ignore[union-attr]
 
 
 def link_of(client: TestClient) -> AgentLink:

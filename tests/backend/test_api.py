@@ -18,6 +18,8 @@ from fastapi.testclient import TestClient
 
 from backend.store_csv import csv_rows
 from codec import copies_for, decode_frame, delivery_probability, encode_frame
+from tests.agent_link import AgentLink
+from tests.manual_clock import ManualClock
 
 from .conftest import (
     AUTH,
@@ -27,6 +29,8 @@ from .conftest import (
     TOKEN,
     WRONG_AUTH,
     MakeClient,
+    MakeLightClient,
+    advance,
     console_of,
     loc_of,
     record,
@@ -697,27 +701,26 @@ def test_surface_needs_the_token(client: TestClient) -> None:
     assert client.post("/api/surface", headers=WRONG_AUTH).status_code == 403
 
 
-def test_surface_repeats_until_acknowledged(make_client: MakeClient) -> None:
-    client = make_client(surface_repeat_s=0.1)
-    first_pose(client)
-    put_channel(client, loss=1.0)
+def test_surface_repeats_until_acknowledged(make_light_client: MakeLightClient) -> None:
+    clock, link = ManualClock(), AgentLink()
+    link.answer = False  # the vehicle hears nothing yet
+    client = make_light_client(link, clock=clock, surface_repeat_s=2.0)
     r = client.post("/api/surface", headers=AUTH)
     assert r.status_code == 202
     s = r.json()
     assert s["kind"] == "surface" and s["pattern"] == "surface" and s["params"] == {}
-    grown = wait_until(
-        lambda: (rec := record(client, s["id"]))["attempts"] >= 3 and rec,
-        what="surface repeated",
-    )
-    assert grown["state"] == "transmitted"
-    put_channel(client, loss=0.0)
-    acked = wait_state(client, s["id"], ("acknowledged",))
+    advance(client, clock, 2 * 2.0)  # the first copy and two repeats
+    grown = record(client, s["id"])
+    assert grown["attempts"] == 3 and grown["state"] == "transmitted"
+    link.answer = True
+    advance(client, clock, 2.0)  # the next repeat is answered
+    acked = record(client, s["id"])
+    assert acked["state"] == "acknowledged" and acked["attempts"] == 4
     assert acked["ack"]["command"]["pattern"] == "surface"
-    time.sleep(0.15)  # let a repeat already on its way settle
-    settled = record(client, s["id"])["attempts"]
-    time.sleep(0.5)  # five repeat periods
+    advance(client, clock, 5 * 2.0)  # five repeat periods: no timer left to send another
+    assert clock.pending() == []
     later = record(client, s["id"])
-    assert later["attempts"] == settled
+    assert later["attempts"] == 4 and len(link.frames) == 4
     assert later["state"] == "acknowledged"
 
 

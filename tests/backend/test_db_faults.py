@@ -37,8 +37,19 @@ from backend.commands import CommandManager
 from backend.link import Capability
 from backend.store import TRACK_FLUSH_S, LogWriteError, MissionLog
 from bench._server import REPO, free_port
+from tests.agent_link import AgentLink
+from tests.manual_clock import ManualClock
 
-from .conftest import AUTH, CIRCLE, TOKEN, MakeClient, command_fields, console_of, wait_until
+from .conftest import (
+    AUTH,
+    CIRCLE,
+    TOKEN,
+    MakeClient,
+    MakeLightClient,
+    command_fields,
+    console_of,
+    wait_until,
+)
 from .test_commands import CIRCLE as CIRCLE_FRAME
 from .test_commands import COPY_INTERVAL_S, Rig
 from .test_commands import HOVER as HOVER_FRAME
@@ -373,24 +384,27 @@ def post_circle(client: TestClient) -> httpx.Response:
     ],
 )
 def test_a_send_the_log_cannot_record_is_503_and_nothing_leaves(
-    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch, verb: str, message: str
+    make_light_client: MakeLightClient, verb: str, message: str
 ) -> None:
-    client = make_client()
+    clock, link = ManualClock(), AgentLink()
+    client = make_light_client(link, clock=clock)
     console = console_of(client)
     assert console.log is not None
-    spy = spy_transmit(client, monkeypatch)
     with failing_writes(console.log, verb, message=message):
         r = post_circle(client)
-        time.sleep(0.3)  # a delivery begun by mistake would have sent its copy by now
+        # a delivery begun by mistake sends its first copy at once (no timer before it):
+        # the app's event loop runs whatever is ready, then nothing can be on its way
+        client.portal.call(clock.settle)  # type: ignore[union-attr]
     assert r.status_code == 503, r.text
     assert r.json()["detail"] == f"the mission log cannot be written: {message}{NOTHING_SENT}"
-    assert spy.frames == []
+    assert link.frames == [] and clock.pending() == []
     assert client.get("/api/commands").json() == []
     assert console.commands is not None and console.commands._live == {}
     # the disk fixed, the same send goes through
     sent = post_circle(client)
     assert sent.status_code == 202, sent.text
-    wait_until(lambda: spy.frames, what="the frame of the send after the fault")
+    client.portal.call(clock.settle)  # type: ignore[union-attr]
+    assert link.frames == [sent.json()["hex"]]
 
 
 def test_a_real_read_only_connection_fails_the_send(
@@ -556,9 +570,13 @@ def test_track_points_the_log_cannot_take_are_kept_and_written_later(
         with failing_writes(log, "INSERT"):
             for i in range(12):  # past a batch: no exception reaches the telemetry
                 log.add_track(dive, float(i), 0.0, 0.0, 2.0, 0.0)
-            time.sleep(TRACK_FLUSH_S + 0.2)
+            # the flush that failed says so: until then nothing was on its way to the disk
+            wait_until(
+                lambda: any("track points are kept in memory only" in m for m in caplog.messages),
+                timeout_s=5.0,
+                what="the failed flush",
+            )
             assert on_disk(db) == 0
-        assert any("track points are kept in memory only" in m for m in caplog.messages)
         log.add_track(dive, 12.0, 0.0, 0.0, 2.0, 0.0)
         wait_until(lambda: on_disk(db) == 13, timeout_s=1.0, interval_s=0.01)
     finally:
