@@ -9,7 +9,6 @@ import itertools
 import json
 import math
 import socket
-import time
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
@@ -1127,7 +1126,12 @@ def test_script_run_step_mode(client: TestClient) -> None:
     s = r.json()
     assert s["waiting_for"] == "operator"
     assert s["next"]["index"] == 0 and s["next"]["pattern"] == "square"
-    time.sleep(0.3)  # the run's loop polls: nothing is sent without the operator's go
+    # the run's loop polls again (its clock moves on), proposing without sending: nothing
+    # leaves without the operator's go
+    wait_until(
+        lambda: run_state(client)["elapsed_s"] > (s["elapsed_s"] or 0.0) + 0.01,
+        what="the run's loop to poll again",
+    )
     assert client.get("/api/commands").json() == []
     assert client.post("/api/scripts/run/next").status_code == 401
     r = client.post("/api/scripts/run/next", headers=AUTH)
