@@ -44,9 +44,7 @@ T = TypeVar("T")
 
 
 class MakeClient(Protocol):
-    def __call__(
-        self, *, viewer: bool = False, clock: Clock = ..., **overrides: Any
-    ) -> TestClient: ...
+    def __call__(self, *, viewer: bool = False, **overrides: Any) -> TestClient: ...
 
 
 class MakeLightClient(Protocol):
@@ -81,12 +79,12 @@ def make_client(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Mak
     stack = ExitStack()
     count = 0
 
-    def make(*, viewer: bool = False, clock: Clock = SYSTEM_CLOCK, **overrides: Any) -> TestClient:
+    def make(*, viewer: bool = False, **overrides: Any) -> TestClient:
         nonlocal count
         count += 1
         overrides.setdefault("db_path", tmp_path / f"missions-{count}.sqlite3")
         settings = settings_for(**overrides)
-        client = TestClient(create_app(settings, viewer=viewer, clock=clock))
+        client = TestClient(create_app(settings, viewer=viewer))
         stack.enter_context(client)
         return client
 
@@ -134,13 +132,6 @@ def advance(client: TestClient, clock: ManualClock, seconds: float) -> None:
     """Move a started app's command clock ``seconds`` forward, on the app's event loop (every
     copy, repeat and timeout due on the way happens, in order)."""
     client.portal.call(clock.advance, seconds)  # type: ignore[union-attr]
-
-
-def link_of(client: TestClient) -> AgentLink:
-    """The in-memory link of a light app."""
-    link = console_of(client).link
-    assert isinstance(link, AgentLink), link
-    return link
 
 
 def console_of(client: TestClient) -> Console:
