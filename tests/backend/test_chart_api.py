@@ -15,7 +15,16 @@ from backend.geo import TRAINING_DATUM, Datum, geodetic_to_ned, ned_to_geodetic
 from backend.gps import Station
 from backend.reach import MARGINAL_FRACTION, lat_lon, link_reach, point_lat_lon
 
-from .conftest import AUTH, CIRCLE, WRONG_AUTH, MakeClient, console_of, loc_of, wait_until
+from .conftest import (
+    AUTH,
+    CIRCLE,
+    WRONG_AUTH,
+    MakeClient,
+    MakeLightClient,
+    console_of,
+    loc_of,
+    wait_until,
+)
 from .test_openapi import Contract
 from .test_tiles import tile_dir
 
@@ -122,10 +131,11 @@ def test_setting_the_datum_needs_the_operator(client: TestClient) -> None:
         ({"lat_deg": 1, "lon_deg": 2, "height_m": 3}, "height_m", "Extra inputs"),
     ],
 )
-@pytest.mark.training
 def test_a_bad_datum_is_422_naming_the_field(
-    client: TestClient, body: dict[str, Any], field: str, words: str
+    make_light_client: MakeLightClient, body: dict[str, Any], field: str, words: str
 ) -> None:
+    client = make_light_client(datum_lat_deg=SITE["lat_deg"], datum_lon_deg=SITE["lon_deg"])
+    assert client.get("/api/session").json()["datum"] == SITE
     r = client.put("/api/datum", json=body, headers=AUTH)
     assert r.status_code == 422, r.text
     assert loc_of(r.json()) == ["body", field]
