@@ -11,6 +11,10 @@ to every test of those kinds, so a test names only what it is:
 * ``interop``, ``schemathesis``: marked in their modules;
 * ``slow``: marked on the test itself (a subprocess console, a benchmark run, real time),
   or added here to every test using a fixture marked by :func:`tests.tiers.slow_fixture`.
+
+A test outside the slow tier that took more than :data:`FAST_TEST_BUDGET_S` is named at the
+end of the run (a warning, not a failure: a loaded machine slows everything), so the fast tier
+stays fast as tests are added.
 """
 
 from __future__ import annotations
@@ -23,6 +27,10 @@ from tests.tiers import is_slow_fixture
 FIXTURE_MARKERS = {"browser": "browser", "make_client": "console"}
 #: Kinds that are never in the fast tier.
 NOT_FAST = ("browser", "console", "interop", "schemathesis")
+#: Setup, call and teardown of a fast-tier test together (s).
+FAST_TEST_BUDGET_S = 1.0
+#: Seconds each fast-tier test took so far (setup + call + teardown), by node id.
+_fast_times: dict[str, float] = {}
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
@@ -39,3 +47,23 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             item.add_marker("slow")
         if any(item.get_closest_marker(kind) for kind in NOT_FAST):
             item.add_marker("slow")
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    if "slow" not in report.keywords:
+        _fast_times[report.nodeid] = _fast_times.get(report.nodeid, 0.0) + report.duration
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    over = sorted(
+        ((t, nodeid) for nodeid, t in _fast_times.items() if t > FAST_TEST_BUDGET_S),
+        reverse=True,
+    )
+    if over:
+        terminalreporter.section("fast-tier tests over budget")
+        terminalreporter.write_line(
+            f"{len(over)} tests not marked slow took more than {FAST_TEST_BUDGET_S:g} s: mark "
+            "them @pytest.mark.slow, or make them faster (tests/conftest.py)"
+        )
+        for t, nodeid in over:
+            terminalreporter.write_line(f"{t:6.2f} s  {nodeid}")
