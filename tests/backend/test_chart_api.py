@@ -110,8 +110,8 @@ def test_a_configured_datum_and_station(make_client: MakeClient) -> None:
 # --- PUT /api/datum ----------------------------------------------------------------------------
 
 
-@pytest.mark.training
-def test_setting_the_datum_needs_the_operator(client: TestClient) -> None:
+def test_setting_the_datum_needs_the_operator(make_light_client: MakeLightClient) -> None:
+    client = make_light_client(datum_lat_deg=SITE["lat_deg"], datum_lon_deg=SITE["lon_deg"])
     body = {"lat_deg": 10.0, "lon_deg": 20.0}
     assert client.put("/api/datum", json=body).status_code == 401
     assert client.put("/api/datum", json=body, headers=WRONG_AUTH).status_code == 403
