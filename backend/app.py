@@ -23,6 +23,7 @@ from backend.api import authoring, chart, commands, errors_db, live, predict, sc
 from backend.api import view as view_api
 from backend.api.openapi import security_schemes
 from backend.bounded_input import BodyLimit, shorten, validation_errors
+from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.manager import RateLimited
 from backend.commands.service import SendRefused, refusal_detail
 from backend.console import Console
@@ -32,6 +33,7 @@ from backend.strict_input import strict_json_body
 from backend.token_file import with_kept_token
 from codec import EncodeError
 from planner import PlanError
+from station.link import Link
 
 FRONTEND = Path(__file__).resolve().parent.parent / "frontend"
 #: The page's chart and plot libraries, installed from npm by the Makefile (no CDN at sea):
@@ -42,17 +44,26 @@ VENDOR = {
 }
 
 
-def create_app(settings: Settings | None = None, *, viewer: bool = True) -> FastAPI:
-    """The FastAPI app for ``settings`` (default: from the environment). Without an explicit
-    token it takes the one kept beside the mission log, so that pages keep working across a
-    restart (``backend.token_file.TokenFileError`` if that file is unsafe or unreadable)."""
+def create_app(
+    settings: Settings | None = None,
+    *,
+    viewer: bool = True,
+    link: Link | None = None,
+    clock: Clock = SYSTEM_CLOCK,
+) -> FastAPI:
+    """The FastAPI app for ``settings`` (default: from the environment). ``link`` and
+    ``clock`` replace the settings' link (and the simulator) and the system clock: the tests'
+    light app on an in-memory vehicle (:class:`backend.console.Console`). Without an
+    explicit token it takes the one kept beside the mission log, so that pages keep working
+    across a restart (``backend.token_file.TokenFileError`` if that file is unsafe or
+    unreadable)."""
     cfg = with_kept_token(settings or Settings.load())
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         # after the server configured its logging: no token reaches any log output
         install_redaction([cfg.token])
-        console = Console(cfg)
+        console = Console(cfg, link=link, clock=clock)
         app.state.console = console
         await console.start(viewer=viewer)
         try:

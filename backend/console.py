@@ -23,6 +23,7 @@ from backend.chart.geo import Datum, initial_datum
 from backend.chart.gps import GpsFix, GpsReader, Station, parse_gps, station_of
 from backend.chart.reach import active_path_doc, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
+from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.checks import SendViolation
 from backend.commands.health import LinkHealth, link_health_of
 from backend.commands.manager import CommandManager
@@ -58,8 +59,14 @@ SCENARIO_PRESETS = ("wreck", "panel", "pod", "tank")
 class Console:
     """The running console (one per app)."""
 
-    def __init__(self, settings: Settings) -> None:
+    def __init__(
+        self, settings: Settings, *, link: Link | None = None, clock: Clock = SYSTEM_CLOCK
+    ) -> None:
+        """``link``: the link to use instead of the one the settings name (no simulator
+        either), e.g. a test's in-memory vehicle; ``clock``: the command delivery's."""
         self.settings = settings
+        self._given_link = link
+        self.clock = clock
         self.limits = Limits(max_depth_m=settings.max_depth_m, max_speed_mps=settings.max_speed_mps)
         #: The NED origin's latitude and longitude (None: not known, positions in metres only).
         self.datum: Datum | None = initial_datum(settings)
@@ -111,7 +118,9 @@ class Console:
                 "%d commands an earlier run left on their way are interrupted", recovered
             )
         self.dive = self.log.new_dive(s.target)
-        if s.training:
+        if self._given_link is not None:
+            link: Link = self._given_link
+        elif s.training:
             from rosbridge.server import BridgeServer
             from sim.simulation import SimConfig, Simulation
 
@@ -126,7 +135,7 @@ class Console:
                 auth_secret=secret,
             )
             await self.bridge.start()
-            link: Link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}", auth_secret=secret)
+            link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}", auth_secret=secret)
         else:
             link = open_link(s.target, s.bitrate_bps)
         self.link = link
@@ -147,6 +156,7 @@ class Console:
             link_delay_s=self._link_delay_s,
             airtime_s=airtime_s(s.bitrate_bps),
             target=s.target,
+            clock=self.clock,
         )
         self.service = CommandService(self.commands, self.assess, s.operator)
         link.on_mission = self._on_mission

@@ -255,7 +255,8 @@ async def measure(server: ConsoleProcess, sizes: Sizes) -> Results:
     return Results(sizes, api, [before, after, delayed], telemetry, airtime * 1e3, predict)
 
 
-def run(out: TextIO, quick: bool = False) -> int:
+def run(out: TextIO, quick: bool = False, sizes: Sizes | None = None) -> int:
+    """Measure and print every table; ``sizes`` (the tests' smaller run) overrides ``quick``."""
     with (
         tempfile.TemporaryDirectory(prefix="nemesys-bench-console-") as tmp,
         console_server(Path(tmp)) as server,
@@ -266,7 +267,7 @@ def run(out: TextIO, quick: bool = False) -> int:
             f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at the start\n\n"
         )
         out.flush()
-        res = asyncio.run(measure(server, QUICK if quick else FULL))
+        res = asyncio.run(measure(server, sizes or (QUICK if quick else FULL)))
     api_s = res.sizes.api_s
     out.write(
         f"Preview/encode latency: POST /api/preview then /api/encode, every pattern at its "

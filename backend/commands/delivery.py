@@ -4,12 +4,12 @@ bookkeeping, the rate limit and which record an acknowledgement answers."""
 from __future__ import annotations
 
 import asyncio
-import time
 from collections import deque
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Final
 
+from backend.clock import SYSTEM_CLOCK, Clock
 from codec import Encoded, RejectReason, copies_for
 from station.transmit import ack_match
 
@@ -36,8 +36,9 @@ class RateLimited(Exception):
 class RateLimiter:
     """At most ``per_minute`` transmissions in any 60 s (Surface does not ask)."""
 
-    def __init__(self, per_minute: int) -> None:
+    def __init__(self, per_minute: int, clock: Clock = SYSTEM_CLOCK) -> None:
         self.per_minute = per_minute
+        self._clock = clock
         self._sends: deque[float] = deque()
 
     def take(self) -> None:
@@ -46,7 +47,7 @@ class RateLimiter:
         Raises:
             RateLimited: the limit is reached; nothing is counted.
         """
-        now = time.monotonic()
+        now = self._clock.monotonic()
         while self._sends and now - self._sends[0] > 60.0:
             self._sends.popleft()
         if len(self._sends) >= self.per_minute:

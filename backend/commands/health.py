@@ -10,7 +10,6 @@ acknowledgement and telemetry into a green / amber / red level and a list of nam
 
 from __future__ import annotations
 
-import time
 from typing import Final, Literal
 
 from pydantic import BaseModel
@@ -126,7 +125,7 @@ def link_health_of(
     link's own facts, the command ledger's and the telemetry's ages, and the assessment."""
     totals = cm.ledger.totals()
     telemetry_age_s = hub.age_s()
-    ack_age_s = None if cm.last_ack_s is None else time.monotonic() - cm.last_ack_s
+    ack_age_s = None if cm.last_ack_s is None else cm.clock.monotonic() - cm.last_ack_s
     level, problems = assess(
         connected=link.connected,
         connection_problem=link.connection_problem,

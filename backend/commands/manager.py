@@ -27,10 +27,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import time
 from collections.abc import Callable
 from typing import Any
 
+from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.delivery import (
     DAMAGE_REASONS,
     MIN_SURFACE_COPIES,
@@ -82,8 +82,12 @@ class CommandManager(CommandRecords):
         link_delay_s: Callable[[], float] = lambda: 0.0,
         airtime_s: float = 100 / 36000,
         target: str | None = None,
+        clock: Clock = SYSTEM_CLOCK,
     ) -> None:
         super().__init__(log, hub)
+        #: Copy spacing, Surface repeats, acknowledgement timeouts and the rate limit run on
+        #: it (a test's clock moves by hand: :mod:`backend.clock`).
+        self.clock = clock
         self.link = link
         #: What the log records as the target (the settings' name for it, e.g. "sim").
         self.target = target or link.target
@@ -97,9 +101,9 @@ class CommandManager(CommandRecords):
         self.link_ber = link_ber
         self._link_delay_s = link_delay_s
         self.airtime_s = airtime_s
-        self._rate = RateLimiter(max_sends_per_minute)
+        self._rate = RateLimiter(max_sends_per_minute, clock)
         self._tx_lock = asyncio.Lock()
-        self.last_ack_s: float | None = None  # monotonic arrival of the last acknowledgement
+        self.last_ack_s: float | None = None  # arrival of the last acknowledgement (clock s)
         #: The command whose first copy left most recently (wire order), from the log at start.
         self.last_sent: dict[str, Any] | None = log.last_sent()
         self.vehicle = VehicleMirror(hub, dive)
@@ -267,8 +271,12 @@ class CommandManager(CommandRecords):
             await asyncio.shield(self._send_copy(d))
             if self._live.get(d.command_id) is not d or not d.more():
                 break
-            with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(d.wake.wait(), d.interval_s)
+            # the next copy at the interval, or sooner when woken (a Surface pressed again)
+            timer = self.clock.call_later(d.interval_s, d.wake.set)
+            try:
+                await d.wake.wait()
+            finally:
+                timer.cancel()
             d.wake.clear()
         if self._live.get(d.command_id) is d:
             try:
@@ -328,8 +336,9 @@ class CommandManager(CommandRecords):
         if old is not None:
             old.cancel()
         wait = self.ack_timeout_s + self.airtime_s + self._link_delay_s()
-        loop = asyncio.get_running_loop()
-        self._timeouts[command_id] = loop.call_later(wait, self._timed_out, command_id)
+        self._timeouts[command_id] = self.clock.call_later(
+            wait, lambda: self._timed_out(command_id)
+        )
 
     def _copies_done(self, d: Delivery) -> None:
         cid = d.command_id
@@ -361,7 +370,7 @@ class CommandManager(CommandRecords):
 
     def on_mission(self, ack: dict[str, Any]) -> None:
         """An acknowledgement from the vehicle: settle the command it answers."""
-        self.last_ack_s = time.monotonic()
+        self.last_ack_s = self.clock.monotonic()
         command_id = best_match(self._awaiting, ack)
         record = None
         if command_id is not None:

@@ -14,6 +14,7 @@ from typing import Any
 
 from pydantic import ValidationError
 
+from backend.clock import Timer
 from backend.commands.delivery import Delivery
 from backend.commands.ledger import FrameLedger, Outcome
 from backend.commands.lifecycle import Event, IllegalTransition, advance
@@ -35,7 +36,7 @@ class CommandRecords:
         self.hub = hub
         self._live: dict[int, Delivery] = {}  # copies still going out
         self._awaiting: OrderedDict[int, Encoded] = OrderedDict()  # id -> frame, oldest first
-        self._timeouts: dict[int, asyncio.TimerHandle] = {}
+        self._timeouts: dict[int, Timer] = {}  # acknowledgement timeouts
         self.ledger = FrameLedger()
         self._held: list[dict[str, Any]] | None = None  # announcements awaiting a commit
 

@@ -32,6 +32,7 @@ from analysis.ber import (
 from cli.main import main
 from codec import DICTIONARY, BCHCode, DecodeError, command_of_message
 from codec.batch import decode_frames, encode_messages, inject_errors, messages_of_payloads
+from tests.tiers import slow_fixture
 
 #: Research note (codec.md section 6), n = 56 + 8T: P(<= T errors in n) at BER 1e-2 and 3e-2.
 RESEARCH = {
@@ -47,6 +48,7 @@ RESEARCH = {
 
 
 @pytest.fixture(scope="module")
+@slow_fixture  # a BER analysis run, ~2.5 s
 def run(tmp_path_factory: pytest.TempPathFactory) -> tuple[BerReport, str]:
     progress = io.StringIO()
     out = tmp_path_factory.mktemp("ber")
@@ -306,6 +308,7 @@ def test_progress_bar_and_report_text(run: tuple[BerReport, str]) -> None:
     assert str(report.png_path) in text and str(report.csv_path) in text
 
 
+@pytest.mark.slow  # two analysis runs, ~1 s
 def test_same_seed_same_figures(tmp_path: Path) -> None:
     tiny = BerConfig("tiny", 3000, 500, 3000, 500, ts=(1, 2), bers=(1e-2,), wrong_ts=(1,),
                      wrong_bers=(0.1,), burst_lengths=())  # fmt: skip
@@ -319,6 +322,7 @@ def test_same_seed_same_figures(tmp_path: Path) -> None:
 # --- command line -------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # an analysis run through the CLI
 def test_cli_analyze_ber(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -8,9 +8,11 @@ import pytest
 
 from analysis import decode_spread
 from bench.reconfig import PAPER_DECODE_MS, ReconfigReport, measure
+from tests.tiers import slow_fixture
 
 
 @pytest.fixture(scope="module")
+@slow_fixture  # a reconfiguration report, ~1.4 s
 def base() -> ReconfigReport:
     return measure(quick=True)
 
@@ -37,6 +39,7 @@ def test_reruns_keep_every_run(base: ReconfigReport) -> None:
     assert text.startswith("10.0 / ") and text.endswith(" / 30.0")
 
 
+@pytest.mark.slow  # real reruns, ~2 s
 def test_real_reruns_measure_a_positive_decode(base: ReconfigReport) -> None:
     spread = decode_spread.reruns(2, quick=True, first=base)
     assert spread.runs == 2 and spread.reports[1] is not base

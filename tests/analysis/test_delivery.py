@@ -21,12 +21,14 @@ from analysis.delivery import CommandDraw, DeliveryRow, received_command
 from cli.main import main as cli_main
 from codec import DICTIONARY, FRAME_BITS, SYNC_BITS, delivery_probability, encode_frame, frame_of
 from sim.channel import Delivery, MEChannel
+from tests.tiers import slow_fixture
 
 TRIALS = 20_000
 SEED = 0
 
 
 @pytest.fixture(scope="module")
+@slow_fixture  # a delivery analysis, ~0.7 s
 def rows() -> tuple[DeliveryRow, ...]:
     return delivery.run((1e-2, 2e-2), (1, 2, 3), trials=TRIALS, seed=SEED)
 

@@ -18,6 +18,7 @@ from analysis.ber import BerConfig
 from analysis.decode_spread import reruns
 from cli import main as cli
 from cli.common import EXIT_OK
+from tests.tiers import slow_fixture
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -37,6 +38,7 @@ TINY = BerConfig(
 
 
 @pytest.fixture(scope="module")
+@slow_fixture  # builds the whole results page, ~5 s
 def page(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, str]:
     root = tmp_path_factory.mktemp("results")
     img_dir = root / "docs" / "results"

@@ -7,11 +7,13 @@ from pathlib import Path
 import pytest
 
 from analysis import twin
+from tests.tiers import slow_fixture
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
 
 @pytest.fixture(scope="module")
+@slow_fixture  # the twin's report, ~1.6 s
 def report(tmp_path_factory: pytest.TempPathFactory) -> twin.TwinReport:
     return twin.reproduce(tmp_path_factory.mktemp("twin"))
 

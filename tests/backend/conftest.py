@@ -1,5 +1,12 @@
-"""Shared fixtures of the console tests: an app on the simulated vehicle (fast time), its
-operator token, and polling helpers with deadlines (no fixed long sleeps)."""
+"""Shared fixtures of the console tests: the light app (``client``: the console on an
+in-memory vehicle link, ``tests/agent_link.py``), the whole training console (``client`` of a
+test marked ``training``, and ``make_client``: the simulated vehicle at 50x behind its
+rosbridge), the operator token, and polling helpers with deadlines (no fixed long sleeps).
+
+A test takes the light app unless it needs the simulator (a vehicle that moves, its telemetry
+stream, the training controls and datum) or a real transport. Tests marked ``training`` or
+using ``make_client`` are ``console`` tests (and so ``slow``: not in ``make test-fast``):
+``tests/conftest.py``."""
 
 from __future__ import annotations
 
@@ -14,10 +21,13 @@ import pytest
 from fastapi.testclient import TestClient
 
 from backend.app import create_app
+from backend.clock import SYSTEM_CLOCK, Clock
 from backend.console import Console
 from backend.mission_log.store import FINAL_STATES
 from backend.settings import Settings
 from codec import encode_frame
+from tests.agent_link import TARGET, AgentLink
+from tests.manual_clock import ManualClock
 
 TOKEN = "x" * 20
 WRONG_TOKEN = "y" * 20
@@ -35,6 +45,12 @@ T = TypeVar("T")
 
 class MakeClient(Protocol):
     def __call__(self, *, viewer: bool = False, **overrides: Any) -> TestClient: ...
+
+
+class MakeLightClient(Protocol):
+    def __call__(
+        self, link: AgentLink | None = None, *, clock: Clock = ..., **overrides: Any
+    ) -> TestClient: ...
 
 
 def clear_nemesys_env(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -77,9 +93,45 @@ def make_client(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Mak
 
 
 @pytest.fixture
-def client(make_client: MakeClient) -> TestClient:
-    """The console in training mode: the simulated vehicle at 50x."""
-    return make_client()
+def make_light_client(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[MakeLightClient]:
+    """Build a started light app: the console (vehicle mode, no viewer) on ``link`` (default:
+    a two-way :class:`AgentLink`), command delivery on ``clock``; stopped at teardown."""
+    clear_nemesys_env(monkeypatch)
+    stack = ExitStack()
+    count = 0
+
+    def make(
+        link: AgentLink | None = None, *, clock: Clock = SYSTEM_CLOCK, **overrides: Any
+    ) -> TestClient:
+        nonlocal count
+        count += 1
+        overrides.setdefault("db_path", tmp_path / f"light-{count}.sqlite3")
+        overrides.setdefault("target", TARGET)
+        settings = settings_for(**overrides)
+        app = create_app(settings, viewer=False, link=link or AgentLink(), clock=clock)
+        client = TestClient(app)
+        stack.enter_context(client)
+        return client
+
+    with stack:
+        yield make
+
+
+@pytest.fixture
+def client(request: pytest.FixtureRequest, make_light_client: MakeLightClient) -> TestClient:
+    """The light app: the console on an in-memory two-way vehicle link (the onboard agent of
+    a vehicle holding still), no simulator. For a test marked ``training``: the console in
+    training mode, the simulated vehicle at 50x."""
+    if request.node.get_closest_marker("training") is not None:
+        make: MakeClient = request.getfixturevalue("make_client")
+        return make()
+    return make_light_client()
+
+
+def advance(client: TestClient, clock: ManualClock, seconds: float) -> None:
+    """Move a started app's command clock ``seconds`` forward, on the app's event loop (every
+    copy, repeat and timeout due on the way happens, in order)."""
+    client.portal.call(clock.advance, seconds)  # type: ignore[union-attr]
 
 
 def console_of(client: TestClient) -> Console:

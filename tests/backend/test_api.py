@@ -9,7 +9,6 @@ import itertools
 import json
 import math
 import socket
-import time
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
@@ -18,6 +17,7 @@ from fastapi.testclient import TestClient
 
 from backend.mission_log.export import csv_rows
 from codec import copies_for, decode_frame, delivery_probability, encode_frame
+from tests.agent_link import AgentLink
 from tests.backend.conftest import (
     AUTH,
     CIRCLE,
@@ -26,6 +26,8 @@ from tests.backend.conftest import (
     TOKEN,
     WRONG_AUTH,
     MakeClient,
+    MakeLightClient,
+    advance,
     console_of,
     loc_of,
     record,
@@ -33,6 +35,7 @@ from tests.backend.conftest import (
     wait_state,
     wait_until,
 )
+from tests.manual_clock import ManualClock
 
 PATTERNS = {
     "straight": 0,
@@ -123,6 +126,7 @@ def put_channel(client: TestClient, **values: float) -> None:
 # --- session ------------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_session_without_token_is_read_only(client: TestClient) -> None:
     s = client.get("/api/session").json()
     assert s["mode"] == "training"
@@ -233,6 +237,7 @@ def test_preview_frame_snaps_and_sections(client: TestClient) -> None:
     assert decode_frame(bits).command.params == p["params"]
 
 
+@pytest.mark.training
 def test_preview_path_estimate_and_start(client: TestClient) -> None:
     p = preview(client, "circle", CIRCLE).json()
     path = p["path"]
@@ -256,6 +261,7 @@ def test_preview_path_estimate_and_start(client: TestClient) -> None:
     assert (p["two_way"], p["copies"], p["p_delivered"]) == (True, 1, 1.0)
 
 
+@pytest.mark.training
 def test_preview_copies_follow_the_training_channel(client: TestClient) -> None:
     r = client.put("/api/training/channel", json={"ber": 0.02, "loss": 0.1}, headers=AUTH)
     assert r.status_code == 200, r.text
@@ -603,6 +609,7 @@ def test_commands_list_bad_queries_are_422(
     assert loc_of(r.json()) == ["query", name]
 
 
+@pytest.mark.training
 def test_commands_filter_by_the_session_target(client: TestClient) -> None:
     cmd = send(client)
     assert cmd["target"] == client.get("/api/session").json()["target"]
@@ -695,33 +702,33 @@ def test_surface_needs_the_token(client: TestClient) -> None:
     assert client.post("/api/surface", headers=WRONG_AUTH).status_code == 403
 
 
-def test_surface_repeats_until_acknowledged(make_client: MakeClient) -> None:
-    client = make_client(surface_repeat_s=0.1)
-    first_pose(client)
-    put_channel(client, loss=1.0)
+def test_surface_repeats_until_acknowledged(make_light_client: MakeLightClient) -> None:
+    clock, link = ManualClock(), AgentLink()
+    link.answer = False  # the vehicle hears nothing yet
+    client = make_light_client(link, clock=clock, surface_repeat_s=2.0)
     r = client.post("/api/surface", headers=AUTH)
     assert r.status_code == 202
     s = r.json()
     assert s["kind"] == "surface" and s["pattern"] == "surface" and s["params"] == {}
-    grown = wait_until(
-        lambda: (rec := record(client, s["id"]))["attempts"] >= 3 and rec,
-        what="surface repeated",
-    )
-    assert grown["state"] == "transmitted"
-    put_channel(client, loss=0.0)
-    acked = wait_state(client, s["id"], ("acknowledged",))
+    advance(client, clock, 2 * 2.0)  # the first copy and two repeats
+    grown = record(client, s["id"])
+    assert grown["attempts"] == 3 and grown["state"] == "transmitted"
+    link.answer = True
+    advance(client, clock, 2.0)  # the next repeat is answered
+    acked = record(client, s["id"])
+    assert acked["state"] == "acknowledged" and acked["attempts"] == 4
     assert acked["ack"]["command"]["pattern"] == "surface"
-    time.sleep(0.15)  # let a repeat already on its way settle
-    settled = record(client, s["id"])["attempts"]
-    time.sleep(0.5)  # five repeat periods
+    advance(client, clock, 5 * 2.0)  # five repeat periods: no timer left to send another
+    assert clock.pending() == []
     later = record(client, s["id"])
-    assert later["attempts"] == settled
+    assert later["attempts"] == 4 and len(link.frames) == 4
     assert later["state"] == "acknowledged"
 
 
 # --- dives --------------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_dives_and_track(client: TestClient) -> None:
     first_pose(client)
     cmd = wait_state(client, send(client)["id"])
@@ -760,6 +767,7 @@ def test_dive_replay(client: TestClient) -> None:
 # --- vehicle ------------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_vehicle_pose_status_and_echo(client: TestClient) -> None:
     pose = first_pose(client)
     assert {"t_s", "x_m", "y_m", "z_m", "heading_deg", "roll_deg"} <= set(pose)
@@ -798,6 +806,7 @@ def test_vehicle_pose_status_and_echo(client: TestClient) -> None:
     assert moved["t_s"] > pose["t_s"]
 
 
+@pytest.mark.training
 def test_echo_mismatch_when_another_station_retasks_the_vehicle(client: TestClient) -> None:
     first_pose(client)
     circle = wait_state(client, send(client)["id"])
@@ -833,6 +842,7 @@ def test_echo_mismatch_when_another_station_retasks_the_vehicle(client: TestClie
 # --- training -----------------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_training_state(client: TestClient) -> None:
     t = client.get("/api/training").json()
     assert t["enabled"] is True
@@ -860,6 +870,7 @@ def test_training_state(client: TestClient) -> None:
         ("POST", "/api/training/scenario/pod", None),
     ],
 )
+@pytest.mark.training
 def test_training_controls_need_the_token(
     client: TestClient, method: str, path: str, body: dict[str, Any] | None
 ) -> None:
@@ -868,6 +879,7 @@ def test_training_controls_need_the_token(
     assert client.request(method, path, json=body, headers=AUTH).status_code == 200
 
 
+@pytest.mark.training
 def test_training_channel(client: TestClient) -> None:
     body = {"ber": 0.001, "loss": 0.25, "delay_s": 0.5, "range_m": 500, "burst_rate": 0.1}
     r = client.put("/api/training/channel", json=body, headers=AUTH)
@@ -901,6 +913,7 @@ def test_training_values_are_422_naming_the_field(
     assert loc_of(r.json()) == ["body", field]
 
 
+@pytest.mark.training
 def test_training_current_and_time_scale(client: TestClient) -> None:
     body = {"north_mps": 0.2, "east_mps": -0.1, "speed_sigma_mps": 0.01, "direction_sigma_deg": 5}
     r = client.put("/api/training/current", json=body, headers=AUTH)
@@ -912,6 +925,7 @@ def test_training_current_and_time_scale(client: TestClient) -> None:
     assert client.get("/api/training").json()["time_scale"] == 20
 
 
+@pytest.mark.training
 def test_training_reset_starts_a_new_dive_at_the_start(client: TestClient) -> None:
     start = first_pose(client)
     send(client, "straight", {"speed": 0.18, "depth": 2, "duration": 600, "heading": 90})
@@ -940,6 +954,7 @@ def test_training_reset_starts_a_new_dive_at_the_start(client: TestClient) -> No
 
 
 @pytest.mark.parametrize("name", ["wreck", "panel", "pod", "tank"])
+@pytest.mark.training
 def test_training_scenarios(client: TestClient, name: str) -> None:
     first_pose(client)
     r = client.post(f"/api/training/scenario/{name}", headers=AUTH)
@@ -954,6 +969,7 @@ def test_training_scenarios(client: TestClient, name: str) -> None:
     assert preview(client, sc["next"]["pattern"], sc["next"]["params"]).status_code == 200
 
 
+@pytest.mark.training
 def test_training_unknown_scenario_is_404(client: TestClient) -> None:
     r = client.post("/api/training/scenario/atlantis", headers=AUTH)
     assert r.status_code == 404
@@ -1078,6 +1094,7 @@ def run_state(client: TestClient) -> dict[str, Any]:
     return state
 
 
+@pytest.mark.training
 def test_script_run_auto(client: TestClient) -> None:
     first_pose(client)
     body = {"script": SCRIPT, "mode": "auto"}
@@ -1105,6 +1122,7 @@ def test_script_run_auto(client: TestClient) -> None:
     ]
 
 
+@pytest.mark.slow  # a script run's real polling
 def test_script_run_step_mode(client: TestClient) -> None:
     first_pose(client)
     r = client.post("/api/scripts/run", json={"script": SCRIPT, "mode": "step"}, headers=AUTH)
@@ -1112,7 +1130,12 @@ def test_script_run_step_mode(client: TestClient) -> None:
     s = r.json()
     assert s["waiting_for"] == "operator"
     assert s["next"]["index"] == 0 and s["next"]["pattern"] == "square"
-    time.sleep(0.3)  # the run's loop polls: nothing is sent without the operator's go
+    # the run's loop polls again (its clock moves on), proposing without sending: nothing
+    # leaves without the operator's go
+    wait_until(
+        lambda: run_state(client)["elapsed_s"] > (s["elapsed_s"] or 0.0) + 0.01,
+        what="the run's loop to poll again",
+    )
     assert client.get("/api/commands").json() == []
     assert client.post("/api/scripts/run/next").status_code == 401
     r = client.post("/api/scripts/run/next", headers=AUTH)
@@ -1242,6 +1265,7 @@ def test_put_link_refuses_out_of_range_naming_field_and_range(
     assert client.get("/api/vehicle").json()["link"]["ber"] == 1e-3  # nothing changed
 
 
+@pytest.mark.training
 def test_put_link_ber_in_training_is_409(client: TestClient) -> None:
     r = client.put("/api/link", json={"link_ber": 0.01}, headers=AUTH)
     assert r.status_code == 409 and "/api/training/channel" in r.json()["detail"]

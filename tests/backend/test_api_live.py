@@ -114,6 +114,7 @@ def test_every_client_gets_the_events(client: TestClient) -> None:
     "control",
     [{"type": "surface"}, {"type": "send", "pattern": "circle", "params": CIRCLE}],
 )
+@pytest.mark.training
 def test_control_without_auth_is_refused_and_the_socket_stays_open(
     client: TestClient, control: Message
 ) -> None:
@@ -156,6 +157,7 @@ def test_auth_then_surface_is_queued(client: TestClient) -> None:
     assert client.get(f"/api/commands/{surface['id']}").json()["state"] == "acknowledged"
 
 
+@pytest.mark.training
 def test_auth_then_send(client: TestClient) -> None:
     with client.websocket_connect("/ws") as ws:
         assert reply(ws, {"type": "auth", "token": TOKEN})["type"] == "auth_ok"

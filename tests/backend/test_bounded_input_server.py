@@ -23,6 +23,9 @@ from backend.api.live import MAX_CONTROL_BYTES, MAX_CONTROL_DEPTH
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import TOKEN, clear_nemesys_env
 
+#: A `nemesys console` subprocess per test (uvicorn's own limits): make test, not make test-fast.
+pytestmark = pytest.mark.slow
+
 CAP = 65536
 BIG = 50 * 1024 * 1024
 CHUNK = 65536

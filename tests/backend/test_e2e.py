@@ -19,6 +19,9 @@ from backend.settings import Settings
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import CIRCLE, FINAL, SQUARE, TOKEN, clear_nemesys_env, wait_until
 
+#: `nemesys console` subprocesses: make test, not make test-fast.
+pytestmark = pytest.mark.slow
+
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 EAST = {"speed": 0.18, "depth": 2, "duration": 600, "heading": 90}
 #: Links to anything off this machine in the page's HTML, scripts or styles.

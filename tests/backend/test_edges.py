@@ -16,6 +16,9 @@ from websockets.sync.client import connect
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import TOKEN, clear_nemesys_env, wait_until
 
+#: A `nemesys console` subprocess per test: make test, not make test-fast.
+pytestmark = pytest.mark.slow
+
 CIRCLE = {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"}
 
 

@@ -184,6 +184,7 @@ def test_a_client_message_that_does_not_fit_names_the_field(
 # --- the wire -------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # a live session long enough for every message type
 def test_every_message_on_the_wire_is_documented(client: TestClient) -> None:
     """A session that sees every server message: each validates against docs/live.md's
     schema (closed objects: no field the document does not name) and parses as its model."""

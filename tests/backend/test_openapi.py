@@ -362,6 +362,7 @@ def test_a_real_vehicles_answers_validate(make_client: MakeClient) -> None:
     c.call("POST", "/api/preview", json={"pattern": "circle", "params": CIRCLE})
 
 
+@pytest.mark.training
 def test_404s(client: TestClient) -> None:
     c = contract(client)
     for method, url, auth in (
@@ -533,6 +534,7 @@ def test_503_while_the_console_cannot_take_commands(client: TestClient) -> None:
         console.service = service
 
 
+@pytest.mark.training
 def test_503_when_a_new_dive_cannot_be_logged(
     client: TestClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
@@ -558,6 +560,7 @@ def dumped(model: Any) -> Any:
     return model.model_dump(mode="json", by_alias=True, exclude_unset=True)
 
 
+@pytest.mark.training
 def test_the_models_drop_nothing_the_handlers_return(client: TestClient) -> None:
     """The responses hold every key of the handlers' own models (called directly), at every
     depth; and of the documents the handlers build them from (the log's rows, the runner's

@@ -43,6 +43,9 @@ from schemathesis.engine.recorder import CheckFailureInfo
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import TOKEN, clear_nemesys_env
 
+#: The fuzzer against a live console (~30 s): make test, not make test-fast.
+pytestmark = pytest.mark.schemathesis
+
 #: Examples an operation (each phase); the whole test (both runs) takes about 25 s here.
 MAX_EXAMPLES = 25
 SEED = 20260513

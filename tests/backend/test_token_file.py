@@ -239,6 +239,7 @@ def run_console(db: Path, *extra: str, env: dict[str, str] | None = None) -> str
     return lines[0]
 
 
+@pytest.mark.slow  # three real `nemesys console` processes
 def test_console_restarts_keep_the_token_and_new_token_replaces_it(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     path = token_path(db)

@@ -15,7 +15,13 @@ import pytest
 
 from bench import console as bench_console
 
+#: The console benchmark against a `nemesys console` subprocess: make test, not make test-fast.
+pytestmark = pytest.mark.slow
+
 NUMBER = r"-?\d+(?:\.\d+)?"
+#: Every table with a few samples each (the quick run's loads take 36 s; the figures are
+#: the benchmark's business, the tables and the server's end the test's).
+SIZES = bench_console.Sizes(api_s=0.6, sends=4, telemetry_s=3.0, predictions=1)
 
 
 def _gone(pid: int, base_url: str) -> bool:
@@ -35,9 +41,9 @@ def _row(lines: list[str], prefix: str) -> str:
     return next(ln for ln in lines if ln.startswith(prefix))
 
 
-def test_quick_run_prints_every_table_and_stops_the_server() -> None:
+def test_a_run_prints_every_table_and_stops_the_server() -> None:
     out = io.StringIO()
-    assert bench_console.run(out, quick=True) == 0
+    assert bench_console.run(out, sizes=SIZES) == 0
     text = out.getvalue()
     lines = text.splitlines()
     header = re.search(r"pid (\d+), (http://\S+);", text)
@@ -66,7 +72,7 @@ def test_quick_run_prints_every_table_and_stops_the_server() -> None:
         row = _row(lines, channel)
         match = re.search(rf"(\d+)/(\d+)(?:\s+{NUMBER}){{5}}\s+<= 50", row)
         assert match is not None, row
-        assert int(match.group(2)) == 10 and int(match.group(1)) > 0
+        assert int(match.group(2)) == SIZES.sends and int(match.group(1)) > 0
         assert "met" in row or "MISSED" in row
 
     # 3. 50 telemetry clients
@@ -77,7 +83,8 @@ def test_quick_run_prints_every_table_and_stops_the_server() -> None:
     assert re.search(rf"{NUMBER} ms \(before \+ after, \d+ sends\)", without), without
     errors = _row(lines, "errors and closes, all clients")
     assert re.search(r"\s\d+\s+0\s+(met|MISSED)", errors), errors
-    assert re.search(rf"{NUMBER} ms \(\d+/10 acked\)", _row(lines, "send->ack excess median, with"))
+    with_clients = _row(lines, "send->ack excess median, with")
+    assert re.search(rf"{NUMBER} ms \(\d+/{SIZES.sends} acked\)", with_clients), with_clients
     effect = _row(lines, "with - without (medians)")
     assert re.search(rf"[+-]{NUMBER} ms \(ratio {NUMBER}\)\s+<= \+10 ms", effect), effect
     assert "met" in effect or "MISSED" in effect

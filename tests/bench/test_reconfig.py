@@ -19,6 +19,7 @@ def _row(lines: list[str], start: str) -> list[str]:
     return [c.strip() for c in row[len(start) :].split("  ") if c.strip()]
 
 
+@pytest.mark.slow  # a benchmark run, ~2 s
 def test_quick_run_prints_paper_ours_and_ratio() -> None:
     out = io.StringIO()
     assert reconfig.run(out, quick=True) == 0
@@ -55,6 +56,7 @@ def test_quick_run_prints_paper_ours_and_ratio() -> None:
     assert "bare interpreter" in text and "Machine:" in text
 
 
+@pytest.mark.slow  # a benchmark run, ~1.5 s
 def test_measure_quick_report_is_consistent() -> None:
     report = reconfig.measure(quick=True)
     assert [s.name for s in report.scenarios] == ["wreck", "panel", "pod"]
@@ -78,6 +80,7 @@ def test_measure_quick_report_is_consistent() -> None:
     )
 
 
+@pytest.mark.slow  # onboard subprocesses, ~1 s
 def test_memory_arguments_carry_the_errors_the_agent_corrects() -> None:
     args = reconfig.onboard_arguments()
     received = [int(item.split(",")[0], 16) for arg in args for item in arg.split(";")]
@@ -90,6 +93,7 @@ def test_memory_arguments_carry_the_errors_the_agent_corrects() -> None:
     assert corrected == expected and {1, 2} <= set(corrected)
 
 
+@pytest.mark.slow  # onboard subprocesses, ~1 s
 def test_onboard_arguments_carry_both_frames_of_each_scenario() -> None:
     args = reconfig.onboard_arguments()
     assert len(args) == 3

@@ -5,10 +5,13 @@ from __future__ import annotations
 
 import io
 
+import pytest
+
 from bench import sim as bench_sim
 from codec import DICTIONARY
 
 
+@pytest.mark.slow  # a benchmark run, ~2.5 s
 def test_quick_run_prints_speed_fleet_and_latency_rows() -> None:
     out = io.StringIO()
     assert bench_sim.run(out, quick=True) == 0

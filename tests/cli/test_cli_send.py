@@ -187,6 +187,7 @@ def test_send_waits_for_the_vehicles_subscriber_then_publishes_at_once(
     assert elapsed_s < 1.0  # the subscriber was there: no waiting for the 1 s bound
 
 
+@pytest.mark.slow  # the transmitter's real 1 s bound
 def test_send_without_a_subscriber_publishes_after_1_s_and_says_so(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
@@ -204,6 +205,7 @@ def test_send_without_a_subscriber_publishes_after_1_s_and_says_so(
     )
 
 
+@pytest.mark.slow  # the transmitter's real 1 s bound
 def test_send_without_waiting_still_says_the_frame_may_be_lost(
     capsys: pytest.CaptureFixture[str],
 ) -> None:

@@ -50,6 +50,7 @@ def _status(port: int) -> dict[str, Any]:
         return status
 
 
+@pytest.mark.interop
 def test_roslibpy_round_trip_with_the_simulated_vehicle(sim_port: int) -> None:
     with ros_client(sim_port) as ros:
         missions, poses = Inbox(), Inbox()
@@ -115,6 +116,7 @@ async def _faults(port: int) -> None:
                     pass
 
 
+@pytest.mark.slow  # a `nemesys sim` subprocess
 def test_faults_leave_the_server_up_and_the_vehicle_on_its_pattern(sim_port: int) -> None:
     with ros_client(sim_port) as ros:
         missions = Inbox()
@@ -134,7 +136,7 @@ def test_faults_leave_the_server_up_and_the_vehicle_on_its_pattern(sim_port: int
         assert acks[0]["reason"] == "malformed"
         assert acks[1]["reason"] in {"uncorrectable", "crc_mismatch", "unknown_pattern"}
         assert all(a["active"]["pattern"] == "square" for a in acks)
-    time.sleep(0.5)
+    # both frames were answered (rejected): nothing of them is pending in the vehicle
     status = _status(sim_port)
     assert status["pattern"] == "square" and status["mode"] == "running"
 
@@ -150,6 +152,7 @@ def _send(port: int, *command: str) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow  # a `nemesys sim` subprocess
 def test_nemesys_send_prints_the_vehicles_acknowledgement(sim_port: int) -> None:
     done = _send(sim_port, "hover", "duration=60", "depth=1.5", "heading=90", "--json")
     assert done.returncode == 0, done.stderr

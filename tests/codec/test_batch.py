@@ -64,6 +64,7 @@ def test_decode_frames_matches_decode_frame(ber: float) -> None:
         assert result.sync_errors[i] == decoded.sync_errors
 
 
+@pytest.mark.slow  # a large batch at high BER, ~1.5 s
 def test_every_reject_reason_appears_at_high_ber_and_matches() -> None:
     """At BER 0.1 every status occurs in a large batch, so the comparison above covers them."""
     _, frames = _commands_and_frames(5, 20000)

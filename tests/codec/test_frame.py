@@ -577,6 +577,7 @@ ANYTHING = st.one_of(
 )
 
 
+@pytest.mark.slow  # a fuzz run
 @settings(max_examples=200, deadline=None)
 @given(anything=ANYTHING)
 def test_fuzz_any_python_value(anything: object) -> None:
@@ -625,6 +626,7 @@ def test_fuzz_random_100_bit_ints(value: int) -> None:
     header_errors=st.sets(st.integers(0, 23), max_size=2),
     guard=st.integers(0, 15),
 )
+@pytest.mark.slow  # a fuzz run
 def test_fuzz_near_valid_frames(
     *,
     pattern_id: int,

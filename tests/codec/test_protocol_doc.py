@@ -110,6 +110,7 @@ def test_delimiter_table_is_current(doc: str) -> None:
     assert tables == [run.stdout], f"paste the output of scripts/choose_delimiter.py:\n{run.stdout}"
 
 
+@pytest.mark.slow  # console sessions behind the protocol document, ~1 s
 def test_console_sessions(doc: str) -> None:
     sessions = _blocks(doc, "console")
     assert sessions, "no console sessions found"

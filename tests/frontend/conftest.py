@@ -12,7 +12,7 @@ import os
 import re
 import shutil
 import warnings
-from collections.abc import Iterator
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -25,8 +25,14 @@ from playwright.sync_api import Error as PlaywrightError
 from bench._server import ConsoleProcess, start_console
 
 REPO = Path(__file__).resolve().parents[2]
-#: Screenshots of every test (artefacts, not committed: see .gitignore).
+#: Screenshots of failed tests (artefacts, not committed: see .gitignore).
 ARTIFACTS = REPO / "test-artifacts"
+#: ``NEMESYS_TEST_SCREENSHOTS=all``: a screenshot of every test, passed or not. By default
+#: only of a failed one: the full-page screenshot makes Chromium render the 3D view below the
+#: fold (seconds of SwiftShader per test on a 2-core machine, a third of a passing test).
+ALL_SCREENSHOTS = os.environ.get("NEMESYS_TEST_SCREENSHOTS") == "all"
+#: Set on a test item whose setup or call failed.
+FAILED = pytest.StashKey[bool]()
 TOKEN = "frontend-test-token-0123456789abcdef"
 #: Chromium flags that give WebGL through SwiftShader on a machine without a GPU.
 CHROMIUM_ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
@@ -157,15 +163,26 @@ class Watched:
         )
 
 
+@pytest.hookimpl(wrapper=True)
+def pytest_runtest_makereport(
+    item: pytest.Item,
+) -> Generator[None, pytest.TestReport, pytest.TestReport]:
+    """Remember a failed setup or call, for the screenshot at teardown."""
+    report = yield
+    if report.failed:
+        item.stash[FAILED] = True
+    return report
+
+
 @pytest.fixture
 def watched(browser: Browser, request: pytest.FixtureRequest) -> Iterator[Watched]:
     """A fresh page (own context, so no stored token) that records requests and page errors;
-    a screenshot of it goes to test-artifacts/ whatever the outcome, and the test fails on an
-    uncaught page error."""
+    a screenshot of it goes to test-artifacts/ when the test failed (or always: see
+    :data:`ALL_SCREENSHOTS`), and the test fails on an uncaught page error."""
     # 1100 px wide: the page's one-column layout, where the 3D view starts below the fold.
     # Chromium then does not render it until the screenshot, which saves ~6 s of SwiftShader
     # start-up per test on a 2-CPU machine; its scene tree (what the tests check) still
-    # follows every message. The full-page screenshot shows the rendered view.
+    # follows every message. A full-page screenshot shows the rendered view.
     context = browser.new_context(viewport={"width": 1100, "height": 800})
     page = context.new_page()
     page.set_default_timeout(30_000)  # a loaded 2-core machine: conditions, not sleeps
@@ -179,12 +196,13 @@ def watched(browser: Browser, request: pytest.FixtureRequest) -> Iterator[Watche
     try:
         yield w
     finally:
-        ARTIFACTS.mkdir(exist_ok=True)
         name = re.sub(r"[^A-Za-z0-9_.-]+", "_", request.node.name)
         try:
-            # an artefact, best effort: a busy machine may not take it in time
-            page.evaluate("() => window.scrollTo(0, 0)")  # the sticky header back on top
-            page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True, timeout=10_000)
+            if ALL_SCREENSHOTS or request.node.stash.get(FAILED, False):
+                ARTIFACTS.mkdir(exist_ok=True)
+                # an artefact, best effort: a busy machine may not take it in time
+                page.evaluate("() => window.scrollTo(0, 0)")  # the sticky header back on top
+                page.screenshot(path=str(ARTIFACTS / f"{name}.png"), full_page=True, timeout=10_000)
         except PlaywrightError as err:
             warnings.warn(f"no screenshot of {name}: {err}", stacklevel=1)
         finally:

@@ -132,6 +132,7 @@ def at_corner(p: Plan) -> bool:
 @example(  # the entry is a corner
     case=CASES[0], current=CURRENTS[0], x=0.0, y=0.0, z=2.0, heading=45.0, speed=0.5
 )
+@pytest.mark.slow  # a sweep of poses, ~1.5 s
 def test_join_starts_on_the_vehicle_pose(
     case: tuple[str, dict[str, ParamValue]],
     current: tuple[str, Plan | None],

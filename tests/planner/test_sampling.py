@@ -177,6 +177,7 @@ def round_commands(draw: st.DrawFn) -> Command:
     z=st.floats(0, 20),
     heading=st.floats(0, 360, exclude_max=True),
 )
+@pytest.mark.slow  # a randomized sweep, ~3 s
 def test_chord_bound_random(cmd: Command, x: float, y: float, z: float, heading: float) -> None:
     r0, r1, total, s = _shape(cmd)
     p = plan(cmd, vehicle(x, y, z, heading, num(cmd, "speed")))

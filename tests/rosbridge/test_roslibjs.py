@@ -21,6 +21,9 @@ from codec import encode_frame
 from tests.sim.sim_process import nemesys_sim
 from vehicle_contract.contract import TOPIC_TYPES
 
+#: roslibjs through node: the interop tier (make test), not make test-fast.
+pytestmark = pytest.mark.interop
+
 NODE_DIR = Path(__file__).resolve().parents[1] / "node"
 SCRIPT = NODE_DIR / "interop.mjs"
 FRAME = encode_frame("circle", speed=0.18, depth=2.5, radius=4, direction="cw").frame

@@ -22,6 +22,9 @@ from tests.rosbridge.helpers import Inbox, ros_client
 from tests.sim.sim_process import nemesys_sim
 from vehicle_contract.contract import TOPIC_TYPES
 
+#: roslibpy against `nemesys sim`: the interop tier (make test), not make test-fast.
+pytestmark = pytest.mark.interop
+
 FRAME = encode_frame("square", speed=0.18, depth=2, side_span=6, direction="ccw").frame
 
 

@@ -270,6 +270,7 @@ class ThreadedServer:
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.interop
 def test_roslibpy_frame_round_trip_and_mission_ack() -> None:
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle) as bridge, ros_client(bridge.port) as ros:
@@ -295,6 +296,7 @@ def test_roslibpy_frame_round_trip_and_mission_ack() -> None:
         mission.unsubscribe()
 
 
+@pytest.mark.interop
 def test_roslibpy_pose_stream_at_least_10_hz() -> None:
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle, pose_hz=20.0) as bridge, ros_client(bridge.port) as ros:
@@ -317,6 +319,7 @@ def test_roslibpy_pose_stream_at_least_10_hz() -> None:
         pose.unsubscribe()
 
 
+@pytest.mark.interop
 def test_roslibpy_status_and_get_topics() -> None:
     vehicle = FakeVehicle()
     with ThreadedServer(vehicle, status_hz=10.0) as bridge, ros_client(bridge.port) as ros:
@@ -341,6 +344,7 @@ def test_roslibpy_status_and_get_topics() -> None:
         status.unsubscribe()
 
 
+@pytest.mark.interop
 def test_roslibpy_bad_frame_is_dropped_and_nothing_comes_back(
     caplog: pytest.LogCaptureFixture,
 ) -> None:
@@ -376,6 +380,7 @@ def test_roslibpy_bad_frame_is_dropped_and_nothing_comes_back(
 # ------------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # real streams, ~0.7 s
 def test_per_client_subscriptions_and_unsubscribe() -> None:
     async def main() -> None:
         vehicle = FakeVehicle()
@@ -734,6 +739,7 @@ def test_many_clients_at_once() -> None:
     run(main())
 
 
+@pytest.mark.slow  # a stalled client for 1 s of real time
 def test_slow_client_does_not_hold_up_the_others(caplog: pytest.LogCaptureFixture) -> None:
     """A client that stops reading: others keep >= 9 poses/s, and it is dropped."""
     caplog.set_level(logging.INFO, logger=LOGGER)
@@ -862,10 +868,13 @@ def test_endpoint_failure_is_logged_and_the_server_keeps_going(
         async with serving(vehicle) as server, client(server) as ws:
             await send(ws, {"op": "subscribe", "topic": POSE_TOPIC})
             await receive(ws, topic(POSE_TOPIC))
-            await asyncio.sleep(0.1)
-            vehicle.fail_advance = False
-            await asyncio.sleep(0.1)
-            assert vehicle.t_s > 0.0
+            async with asyncio.timeout(5):  # the failure is logged; the server goes on
+                while not any("advance failed" in r.getMessage() for r in caplog.records):
+                    await asyncio.sleep(0.01)
+                await receive(ws, topic(POSE_TOPIC))
+                vehicle.fail_advance = False
+                while vehicle.t_s <= 0.0:  # the clock moves again
+                    await asyncio.sleep(0.01)
 
     run(main())
     failures = [r for r in caplog.records if "endpoint.advance failed" in r.getMessage()]

@@ -550,6 +550,7 @@ _MESSAGES = st.fixed_dictionaries(
 )
 
 
+@pytest.mark.slow  # a fuzz run, ~2 s
 @settings(max_examples=150, deadline=None)
 @given(messages=st.lists(_MESSAGES, max_size=6))
 def test_session_never_raises_and_only_passes_valid_frames(messages: list[dict[str, Any]]) -> None:

@@ -77,6 +77,7 @@ def test_more_thrust_is_faster_and_more_yaw_damping_is_slower() -> None:
     assert yaw_test(replace(q, nrr=0.2)) > yaw_test(q) > yaw_test(replace(q, nrr=0.8))
 
 
+@pytest.mark.slow  # a calibration fit, ~1.5 s
 def test_calibrate_from_wrong_starting_values_recovers_both_rates() -> None:
     wrong = replace(VehicleParams(), thrust_max_n=2.5, nrr=0.1)
     assert heave_test(wrong) > 2 * PAPER_HEAVE_MPS  # really wrong to start with

@@ -49,6 +49,7 @@ def _after(r: ScenarioResult) -> list[Sample]:
     return [s for s in r.track if s.t_s > t]
 
 
+@pytest.mark.slow  # a whole scenario flown, ~0.7 s
 def test_wreck_extension_keeps_the_lane_and_flies_the_longer_sweep() -> None:
     r = result("wreck")
     old, new = r.plans

@@ -77,6 +77,7 @@ def test_a_vehicle_without_the_agent_is_telemetry_only(
     assert frames["frames"] == frames["sent"] == 3 and frames["timed_out"] == 0
 
 
+@pytest.mark.slow  # a rosbridge vehicle on loopback
 def test_null_pose_numbers_are_unknown_and_counted(
     make_client: MakeClient, pose_only: Rosbridge
 ) -> None:
@@ -147,6 +148,7 @@ def test_a_reconnect_redetects_the_capability(make_client: MakeClient) -> None:
             bridge.stop()
 
 
+@pytest.mark.slow  # the link's real rosapi timeout
 def test_rosapi_that_never_answers_is_unknown_naming_rosapi() -> None:
     silent = Rosbridge(POSE_ONLY, rosapi=False).start()
 
@@ -180,6 +182,7 @@ def test_rosapi_that_never_answers_is_unknown_naming_rosapi() -> None:
     assert acknowledges is False and telemetry is False
 
 
+@pytest.mark.slow  # the link's real rosapi timeout
 def test_the_rosapi_problem_names_the_timeout_it_waited() -> None:
     silent = Rosbridge(POSE_ONLY, rosapi=False).start()
 

@@ -532,6 +532,7 @@ def test_a_subscriber_that_appears_late_is_waited_for() -> None:
     assert result.ok and result.warning is None
 
 
+@pytest.mark.slow  # the transmitter's real bound
 def test_no_subscriber_ever_publishes_after_the_bound_with_a_warning() -> None:
     with FakeRosbridge(respond=None, subscribers=[]) as fake:
         result, elapsed_s = _timed_send(fake, wait_ack_s=0.2, subscriber_wait_s=0.5)

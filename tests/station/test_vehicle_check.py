@@ -76,6 +76,7 @@ def rows(table: str) -> dict[str, tuple[str, str]]:
     return found
 
 
+@pytest.mark.slow  # a probe's real listening window
 def test_the_simulator_passes_and_nothing_is_sent_without_an_active_command(
     served: Served, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -108,6 +109,7 @@ def test_the_simulator_passes_and_nothing_is_sent_without_an_active_command(
     assert served.sim.frames_in == 0  # the server got no frame
 
 
+@pytest.mark.slow  # a probe's real listening window
 def test_the_probe_repeats_the_active_command_and_the_vehicle_does_not_replan(
     served: Served, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -140,6 +142,7 @@ def test_the_probe_repeats_the_active_command_and_the_vehicle_does_not_replan(
     assert agent.accepted == accepted + 1
 
 
+@pytest.mark.slow  # a probe's real listening window
 def test_json_output_has_the_rows(served: Served, capsys: pytest.CaptureFixture[str]) -> None:
     status, out, _ = run(["vehicle-check", served.url, "--json", *FAST], capsys)
     assert status == 0
@@ -153,6 +156,7 @@ def test_json_output_has_the_rows(served: Served, capsys: pytest.CaptureFixture[
     assert names[0] == "connect" and "ack path (probe)" in names and "pose rate" in names
 
 
+@pytest.mark.slow  # a probe's real listening window
 def test_a_vehicle_serving_a_pose_only_fails_naming_the_missing_topics(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
@@ -180,6 +184,7 @@ def test_a_vehicle_serving_a_pose_only_fails_naming_the_missing_topics(
     assert "topic /nemesys/mission" in summary and "topic /nemesys/status" in summary
 
 
+@pytest.mark.slow  # the probe's real rosapi timeout
 def test_rosapi_that_does_not_answer_fails_with_the_reason(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
@@ -199,6 +204,7 @@ def test_rosapi_that_does_not_answer_fails_with_the_reason(
     assert table["topic /nemesys/mission"][0] == "skipped"
 
 
+@pytest.mark.slow  # a probe's real listening window
 def test_a_status_missing_a_field_fails_naming_it(capsys: pytest.CaptureFixture[str]) -> None:
     class NoBattery(Simulation):
         def status(self) -> dict[str, Any]:

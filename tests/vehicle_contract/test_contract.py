@@ -10,7 +10,6 @@ import copy
 import io
 import json
 import re
-import time
 from pathlib import Path
 from typing import Any
 
@@ -29,6 +28,7 @@ from planner import Limits
 from rosbridge.protocol import TOPIC_TYPES, same_type
 from sim.simulation import SimConfig, Simulation
 from station.link import Capability, Link
+from tests.manual_clock import ManualClock
 from tests.onboard.test_agent import REJECTS
 from vehicle_contract import codes, contract, payloads
 from vehicle_contract.doc import DOC_PATH, REGENERATE, render_markdown
@@ -298,6 +298,7 @@ async def _console_takes(ack: dict[str, Any], enc: Encoded, db: Path) -> dict[st
     log = MissionLog(db)
     dive = log.new_dive("fake")
     link = _TwoWay()
+    clock = ManualClock()
     cm = CommandManager(
         log,
         link,
@@ -307,14 +308,16 @@ async def _console_takes(ack: dict[str, Any], enc: Encoded, db: Path) -> dict[st
         ack_timeout_s=5.0,
         surface_repeat_s=0.05,
         max_sends_per_minute=100,
+        clock=clock,
     )
     try:
         record = await cm.submit(enc)
-        deadline = time.monotonic() + 5
-        while not link.frames:
-            assert time.monotonic() < deadline
-            await asyncio.sleep(0.005)
-        await asyncio.sleep(0.02)
+
+        def transmitted() -> bool:  # the copy is out and written down: an answer is awaited
+            now = log.command(record["id"])
+            return bool(link.frames) and now is not None and now["state"] == "transmitted"
+
+        await clock.advance_until(transmitted, within_s=0.0)
         cm.on_mission(copy.deepcopy(ack))
         assert isinstance(cm.echo_mismatch, bool)
         after = log.command(record["id"])

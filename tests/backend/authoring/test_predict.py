@@ -57,6 +57,7 @@ def _paused_mid_circle(client: TestClient) -> Any:
     ("pattern", "params"),
     [("lawnmower", LAWNMOWER), ("circle", {**CIRCLE, "radius": 4})],
 )
+@pytest.mark.training
 def test_the_prediction_is_a_full_simulation_from_the_same_state(
     client: TestClient, pattern: str, params: dict[str, Any]
 ) -> None:
@@ -100,6 +101,7 @@ def test_the_prediction_is_a_full_simulation_from_the_same_state(
         assert pred["planned_duration_s"] is None
 
 
+@pytest.mark.slow  # a full-horizon twin run, ~1 s
 def test_the_horizon_is_bounded(client: TestClient) -> None:
     body = {"pattern": "circle", "params": CIRCLE}
     pred = client.post("/api/predict", json=body).json()
@@ -175,6 +177,7 @@ def test_bad_input_is_422_naming_the_field(
         assert got == ["body", "params", "speed"]
 
 
+@pytest.mark.training
 def test_lat_lon_come_from_the_datum_through_backend_geo(client: TestClient) -> None:
     datum = console_of(client).datum
     assert datum is not None  # training's documented site
@@ -225,6 +228,7 @@ def _alive(pid: int) -> bool:
     return state != "Z"
 
 
+@pytest.mark.slow  # starts and ends the twin's worker process, ~1.3 s
 @pytest.mark.parametrize("ending", ["stop", "kill"])
 def test_the_twin_worker_never_outlives_the_console(tmp_path: Path, ending: str) -> None:
     """Stopped (SIGTERM, the lifespan closes it) or killed (SIGKILL, no shutdown at all): the

@@ -99,6 +99,7 @@ def test_a_setting_overrides_the_twins_figure_in_training(tmp_path: Path) -> Non
     assert p.heave_rate_mps == twin_profile(100.0).heave_rate_mps
 
 
+@pytest.mark.training
 def test_the_session_gives_the_profile(client: TestClient) -> None:
     profile = client.get("/api/session").json()["profile"]
     assert profile["source"] == "twin"
@@ -148,6 +149,7 @@ def test_the_maximum_speed_check_stays_and_comes_alone(client: TestClient) -> No
     assert v["limit"] == 1.0 and "maximum speed" in v["message"]
 
 
+@pytest.mark.training
 def test_preview_estimates_are_at_the_speed_the_vehicle_can_fly(client: TestClient) -> None:
     top = twin_profile(100.0).top_speed_mps
     assert top is not None

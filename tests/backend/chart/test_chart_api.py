@@ -20,6 +20,7 @@ from tests.backend.conftest import (
     CIRCLE,
     WRONG_AUTH,
     MakeClient,
+    MakeLightClient,
     console_of,
     loc_of,
     wait_until,
@@ -50,6 +51,7 @@ def expected_lat_lon(datum: Datum, xs: list[float], ys: list[float]) -> tuple[An
 # --- session and chart -----------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_training_has_the_documented_site_and_the_transmitter_at_the_datum(
     client: TestClient,
 ) -> None:
@@ -107,7 +109,8 @@ def test_a_configured_datum_and_station(make_client: MakeClient) -> None:
 # --- PUT /api/datum ----------------------------------------------------------------------------
 
 
-def test_setting_the_datum_needs_the_operator(client: TestClient) -> None:
+def test_setting_the_datum_needs_the_operator(make_light_client: MakeLightClient) -> None:
+    client = make_light_client(datum_lat_deg=SITE["lat_deg"], datum_lon_deg=SITE["lon_deg"])
     body = {"lat_deg": 10.0, "lon_deg": 20.0}
     assert client.put("/api/datum", json=body).status_code == 401
     assert client.put("/api/datum", json=body, headers=WRONG_AUTH).status_code == 403
@@ -128,8 +131,10 @@ def test_setting_the_datum_needs_the_operator(client: TestClient) -> None:
     ],
 )
 def test_a_bad_datum_is_422_naming_the_field(
-    client: TestClient, body: dict[str, Any], field: str, words: str
+    make_light_client: MakeLightClient, body: dict[str, Any], field: str, words: str
 ) -> None:
+    client = make_light_client(datum_lat_deg=SITE["lat_deg"], datum_lon_deg=SITE["lon_deg"])
+    assert client.get("/api/session").json()["datum"] == SITE
     r = client.put("/api/datum", json=body, headers=AUTH)
     assert r.status_code == 422, r.text
     assert loc_of(r.json()) == ["body", field]
@@ -145,6 +150,7 @@ def test_the_datum_from_gps_without_a_gps_is_409(client: TestClient) -> None:
     )
 
 
+@pytest.mark.training
 def test_a_new_datum_moves_every_lat_lon_and_is_logged(client: TestClient) -> None:
     wait_until(lambda: client.get("/api/vehicle").json()["pose"], what="a pose")
     r = client.put("/api/datum", json={"lat_deg": 59.9, "lon_deg": 10.7}, headers=AUTH)
@@ -177,6 +183,7 @@ def test_a_new_datum_moves_every_lat_lon_and_is_logged(client: TestClient) -> No
 # --- lat/lon beside x/y ----------------------------------------------------------------------
 
 
+@pytest.mark.training
 def test_pose_track_and_preview_carry_lat_lon_from_the_datum(client: TestClient) -> None:
     pose = wait_until(lambda: client.get("/api/vehicle").json()["pose"], what="a pose")
     lat, lon = point(TRAINING_DATUM, pose["x_m"], pose["y_m"])
@@ -342,6 +349,7 @@ def test_the_answers_match_the_openapi(make_client: MakeClient, tmp_path: Path) 
     assert ("PUT", "/api/datum") in secured and ("GET", "/api/chart") not in secured
 
 
+@pytest.mark.training
 def test_the_active_path_is_given_for_every_pages_chart(client: TestClient) -> None:
     """The path the vehicle flies (the station's mirror) comes with /api/vehicle in NED and
     lat/lon, so a page that did not preview it can still draw it; a reset clears it."""

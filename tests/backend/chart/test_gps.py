@@ -196,6 +196,7 @@ def test_no_line_makes_the_reader_raise() -> None:
     assert reader.errors >= 700
 
 
+@pytest.mark.slow  # a pseudo-terminal read at its real pace
 def test_the_serial_path_reads_a_pseudo_terminal() -> None:
     """serial:///dev/pts/N: the pyserial thread reads what the other end writes."""
     master, slave = os.openpty()

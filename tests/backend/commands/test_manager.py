@@ -1,12 +1,15 @@
 """The command manager against an in-memory link: every transition of the lifecycle as the
-manager drives it, superseding, Surface (joined, bounded, reset, shutdown) and retries."""
+manager drives it, superseding, Surface (joined, bounded, reset, shutdown) and retries.
+
+Time is a :class:`tests.manual_clock.ManualClock` moved by the test, with the console's default
+intervals: copies and timeouts happen at their exact times, and "nothing more went out" is
+proved by moving the clock past every timer that could have sent it (no real waiting)."""
 
 from __future__ import annotations
 
 import asyncio
 import itertools
 import logging
-import time
 from collections.abc import Awaitable, Callable, Coroutine
 from pathlib import Path
 from typing import Any
@@ -22,19 +25,26 @@ from backend.telemetry import TelemetryHub
 from codec import Encoded, Frame, copies_for, delivery_probability, encode_frame
 from station.link import Capability, Link
 from tests.backend.conftest import command_fields
+from tests.manual_clock import ManualClock
 
 CIRCLE = encode_frame("circle", {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"})
 HOVER = encode_frame("hover", {"duration": 60, "depth": 2, "heading": 90})
 SURFACE = encode_frame("surface", {})
-INTERVAL_S = 0.02
+#: The console's defaults (backend/settings.py), on the manual clock (s).
+COPY_INTERVAL_S = 1.0
+SURFACE_REPEAT_S = 2.0
+ACK_TIMEOUT_S = 5.0
+AIRTIME_S = 100 / 36000
 
 
 class FakeLink(Link):
-    """Frames out into a list (in order, with their time); ``fail`` makes them fail."""
+    """Frames out into a list (in order, with their time on ``clock``); ``fail`` makes them
+    fail."""
 
-    def __init__(self, capability: Capability) -> None:
+    def __init__(self, capability: Capability, clock: ManualClock) -> None:
         super().__init__("fake://vehicle")
         self.capability = capability
+        self.clock = clock
         self.frames: list[tuple[float, str]] = []
         self.fail: str | None = None
 
@@ -46,7 +56,7 @@ class FakeLink(Link):
         await asyncio.sleep(0)
         if self.fail is not None:
             return self.fail
-        self.frames.append((time.monotonic(), frame.hex))
+        self.frames.append((self.clock.monotonic(), frame.hex))
         return None
 
     def count(self, enc: Encoded) -> int:
@@ -70,7 +80,8 @@ class Rig:
     def __init__(self, tmp_path: Path, capability: Capability, ber: float = 1e-2) -> None:
         self.log = MissionLog(tmp_path / "missions.sqlite3")
         self.dive = self.log.new_dive("fake")
-        self.link = FakeLink(capability)
+        self.clock = ManualClock()
+        self.link = FakeLink(capability, self.clock)
         self.hub = RecordingHub()
         self.ber = ber
         self.cm = CommandManager(
@@ -79,11 +90,13 @@ class Rig:
             self.hub,
             dive=lambda: self.dive,
             operator="op",
-            ack_timeout_s=0.3,
-            surface_repeat_s=INTERVAL_S,
+            ack_timeout_s=ACK_TIMEOUT_S,
+            surface_repeat_s=SURFACE_REPEAT_S,
             max_sends_per_minute=5,
-            copy_interval_s=INTERVAL_S,
+            copy_interval_s=COPY_INTERVAL_S,
             link_ber=lambda: (self.ber, 0.0),
+            airtime_s=AIRTIME_S,
+            clock=self.clock,
         )
 
     async def surface(self) -> dict[str, Any]:
@@ -100,8 +113,12 @@ class Rig:
         assert record is not None
         return record
 
-    async def until_state(self, command_id: int, *states: str, timeout_s: float = 5.0) -> None:
-        await until(lambda: self.state(command_id) in states, timeout_s)
+    async def until(self, probe: Callable[[], bool], within_s: float = 60.0) -> float:
+        """Move the clock timer by timer until ``probe()`` holds; the clock seconds it took."""
+        return await self.clock.advance_until(probe, within_s)
+
+    async def until_state(self, command_id: int, *states: str, within_s: float = 60.0) -> float:
+        return await self.until(lambda: self.state(command_id) in states, within_s)
 
     def ack(self, enc: Encoded, outcome: str = "accepted", reason: str | None = None) -> None:
         self.cm.on_mission(
@@ -113,14 +130,6 @@ class Rig:
                 "active": None,
             }
         )
-
-
-async def until(probe: Callable[[], bool], timeout_s: float = 5.0) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not probe():
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout_s} s")
-        await asyncio.sleep(0.002)
 
 
 def run(tmp_path: Path, capability: Capability, scenario: Callable[[Rig], Awaitable[None]]) -> Rig:
@@ -150,13 +159,15 @@ def test_one_way_sends_copies_chosen_from_the_ber_then_ends_sent(tmp_path: Path)
         r = copies_for(1e-2, 0.999)
         assert r == 3 and rec["copies"] == r and rec["state"] == "queued"
         assert rec["two_way"] is False and rec["ber"] == 1e-2
-        await rig.until_state(rec["id"], "sent")
+        took_s = await rig.until_state(rec["id"], "sent")
         done = rig.record(rec["id"])
         assert done["copies_sent"] == r and done["attempts"] == r
         assert done["p_delivered"] == pytest.approx(delivery_probability(1e-2, r))
         assert rig.link.count(CIRCLE) == r
         times = [t for t, _ in rig.link.frames]
-        assert all(b - a >= INTERVAL_S * 0.9 for a, b in itertools.pairwise(times))
+        assert all(b - a == COPY_INTERVAL_S for a, b in itertools.pairwise(times))
+        assert took_s == (r - 1) * COPY_INTERVAL_S  # sent once the last copy is out
+        assert rig.clock.pending() == []  # nothing left that could send again
         assert rig.hub.states[rec["id"]] == ["queued", *["transmitted"] * r, "sent"]
         totals = rig.cm.ledger.totals()
         assert totals.dive.frames == r and totals.dive.sent == r
@@ -190,7 +201,7 @@ def test_some_copies_failing_still_ends_sent_with_what_went_out(tmp_path: Path) 
     async def scenario(rig: Rig) -> None:
         rig.link.fail = "timeout"
         rec = await rig.cm.submit(CIRCLE, copies=3)
-        await until(lambda: rig.record(rec["id"])["attempts"] == 1)
+        await rig.until(lambda: rig.record(rec["id"])["attempts"] == 1)
         rig.link.fail = None
         await rig.until_state(rec["id"], "sent")
         done = rig.record(rec["id"])
@@ -203,7 +214,7 @@ def test_some_copies_failing_still_ends_sent_with_what_went_out(tmp_path: Path) 
 def test_a_newer_command_supersedes_one_still_repeating(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         old = await rig.cm.submit(CIRCLE, copies=20)
-        await until(lambda: rig.link.count(CIRCLE) >= 2)
+        await rig.until(lambda: rig.link.count(CIRCLE) >= 2)
         new = await rig.cm.submit(HOVER, copies=2)
         assert rig.state(old["id"]) == "superseded"  # at once, before any hover frame
         await rig.until_state(new["id"], "sent")
@@ -234,7 +245,7 @@ def test_surface_on_a_one_way_link_is_bounded(tmp_path: Path) -> None:
 def test_surface_pressed_during_a_surface_joins_it(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         first = await rig.surface()
-        await until(lambda: rig.link.count(SURFACE) >= 1)
+        await rig.until(lambda: rig.link.count(SURFACE) >= 1)
         presses = await asyncio.gather(*(rig.surface() for _ in range(20)))
         assert {p["id"] for p in presses} == {first["id"]}
         await rig.until_state(first["id"], "sent")
@@ -248,13 +259,13 @@ def test_surface_pressed_during_a_surface_joins_it(tmp_path: Path) -> None:
 
 def test_a_command_supersedes_a_repeating_surface(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
-        rig.cm.surface_repeat_s = 0.2
         surface = await rig.surface()
-        await until(lambda: rig.link.count(SURFACE) >= 1)
+        await rig.until(lambda: rig.link.count(SURFACE) >= 1)
         hover = await rig.cm.submit(HOVER, copies=1)
         await rig.until_state(hover["id"], "sent")
         assert rig.state(surface["id"]) == "superseded"
-        await asyncio.sleep(0.5)  # two more Surface intervals: nothing more may go out
+        await rig.clock.advance(2 * SURFACE_REPEAT_S)  # two more Surface intervals
+        assert rig.clock.pending() == []
         hexes = [h for _, h in rig.link.frames]
         assert hexes[-1] == HOVER.frame.hex and hexes.count(SURFACE.frame.hex) == 1
 
@@ -267,11 +278,12 @@ def test_shutdown_during_repeats_interrupts(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         rec = await rig.cm.submit(CIRCLE, copies=20)
         ids.append(rec["id"])
-        await until(lambda: rig.link.count(CIRCLE) >= 2)
+        await rig.until(lambda: rig.link.count(CIRCLE) >= 2)
         await rig.cm.close()
         out = rig.link.count(CIRCLE)
-        await asyncio.sleep(5 * INTERVAL_S)
+        await rig.clock.advance(5 * COPY_INTERVAL_S)
         assert rig.link.count(CIRCLE) == out  # nothing after shutdown
+        assert rig.clock.pending() == []
 
     rig = run(tmp_path, ONE_WAY, scenario)
     done = rig.record(ids[0])
@@ -282,9 +294,15 @@ def test_rate_limit_never_applies_to_surface(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         for _ in range(5):
             await rig.cm.submit(CIRCLE, copies=1)
+            await rig.clock.advance(10.0)
+        with pytest.raises(RateLimited) as limited:
+            await rig.cm.submit(CIRCLE, copies=1)
+        assert limited.value.retry_after_s == pytest.approx(10.0)  # the first send's minute
+        assert (await rig.surface())["kind"] == "surface"
+        await rig.clock.advance(10.001)  # the first send is over a minute old: one more
+        await rig.cm.submit(CIRCLE, copies=1)
         with pytest.raises(RateLimited):
             await rig.cm.submit(CIRCLE, copies=1)
-        assert (await rig.surface())["kind"] == "surface"
 
     run(tmp_path, ONE_WAY, scenario)
 
@@ -296,7 +314,7 @@ def test_two_way_accepted(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         rec = await rig.cm.submit(CIRCLE)
         assert rec["copies"] == 1 and rec["two_way"] is True
-        await until(lambda: rig.link.count(CIRCLE) == 1)
+        await rig.until(lambda: rig.link.count(CIRCLE) == 1)
         rig.ack(CIRCLE)
         assert rig.state(rec["id"]) == "acknowledged"
         assert rig.hub.states[rec["id"]] == ["queued", "transmitted", "acknowledged"]
@@ -308,25 +326,25 @@ def test_two_way_accepted(tmp_path: Path) -> None:
 def test_two_way_rejected_for_its_content(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         rec = await rig.cm.submit(CIRCLE, copies=3)
-        await until(lambda: rig.link.count(CIRCLE) == 1)
+        await rig.until(lambda: rig.link.count(CIRCLE) == 1)
         rig.ack(CIRCLE, "rejected", "limit_violation")
         assert rig.state(rec["id"]) == "rejected"
         assert rig.record(rec["id"])["reason"].startswith("limit_violation")
-        await asyncio.sleep(3 * INTERVAL_S)
+        await rig.clock.advance(3 * COPY_INTERVAL_S)
         assert rig.link.count(CIRCLE) == 1  # no more copies of a rejected command
+        assert rig.clock.pending() == []
 
     run(tmp_path, TWO_WAY, scenario)
 
 
 def test_two_way_damaged_copy_waits_for_the_next(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
-        rig.cm.copy_interval_s = 0.2
         rec = await rig.cm.submit(CIRCLE, copies=3)
-        await until(lambda: rig.link.count(CIRCLE) == 1)
+        await rig.until(lambda: rig.link.count(CIRCLE) == 1)
         rig.ack(CIRCLE, "rejected", "uncorrectable")
         assert rig.state(rec["id"]) == "transmitted"
         assert "damaged" in rig.record(rec["id"])["reason"]
-        await until(lambda: rig.link.count(CIRCLE) == 2)
+        await rig.until(lambda: rig.link.count(CIRCLE) == 2)
         rig.ack(CIRCLE)
         assert rig.state(rec["id"]) == "acknowledged"
 
@@ -336,7 +354,9 @@ def test_two_way_damaged_copy_waits_for_the_next(tmp_path: Path) -> None:
 def test_two_way_timeout_after_the_last_copy(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         rec = await rig.cm.submit(CIRCLE, copies=2)
-        await rig.until_state(rec["id"], "timed_out")
+        took_s = await rig.until_state(rec["id"], "timed_out")
+        # the timeout runs from the last copy (and its airtime), not the first
+        assert took_s == pytest.approx(COPY_INTERVAL_S + ACK_TIMEOUT_S + AIRTIME_S)
         done = rig.record(rec["id"])
         assert done["copies_sent"] == 2 and "no acknowledgement" in done["reason"]
         late = rig.record(rec["id"])
@@ -361,10 +381,10 @@ def test_two_way_timeout_after_the_last_copy(tmp_path: Path) -> None:
 def test_a_command_awaiting_its_ack_is_not_superseded(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         old = await rig.cm.submit(CIRCLE)
-        await until(lambda: rig.link.count(CIRCLE) == 1)
+        await rig.until(lambda: rig.link.count(CIRCLE) == 1)
         new = await rig.cm.submit(HOVER)
         assert rig.state(old["id"]) == "transmitted"  # all its copies are out: it waits
-        await until(lambda: rig.link.count(HOVER) == 1)
+        await rig.until(lambda: rig.link.count(HOVER) == 1)
         rig.ack(CIRCLE)
         rig.ack(HOVER)
         assert (rig.state(old["id"]), rig.state(new["id"])) == ("acknowledged", "acknowledged")
@@ -374,16 +394,18 @@ def test_a_command_awaiting_its_ack_is_not_superseded(tmp_path: Path) -> None:
 
 def test_two_way_surface_repeats_until_acknowledged(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
-        rig.cm.ack_timeout_s = 0.01  # per-copy timeouts must not end a Surface
+        rig.cm.ack_timeout_s = 0.5  # per-copy timeouts (between repeats) must not end it
         rec = await rig.surface()
         assert rec["copies"] is None
-        await until(lambda: rig.link.count(SURFACE) >= 5)
+        took_s = await rig.until(lambda: rig.link.count(SURFACE) >= 5)
+        assert took_s == 4 * SURFACE_REPEAT_S
         assert rig.state(rec["id"]) == "transmitted"
         rig.ack(SURFACE)
         assert rig.state(rec["id"]) == "acknowledged"
         out = rig.link.count(SURFACE)
-        await asyncio.sleep(5 * INTERVAL_S)
+        await rig.clock.advance(5 * SURFACE_REPEAT_S)
         assert rig.link.count(SURFACE) == out
+        assert rig.clock.pending() == []
 
     run(tmp_path, TWO_WAY, scenario)
 
@@ -391,9 +413,9 @@ def test_two_way_surface_repeats_until_acknowledged(tmp_path: Path) -> None:
 def test_two_way_surface_is_superseded_by_a_newer_command(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         surface = await rig.surface()
-        await until(lambda: rig.link.count(SURFACE) >= 2)
+        await rig.until(lambda: rig.link.count(SURFACE) >= 2)
         hover = await rig.cm.submit(HOVER)
-        await until(lambda: rig.link.count(HOVER) == 1)
+        await rig.until(lambda: rig.link.count(HOVER) == 1)
         rig.ack(SURFACE)  # a late acknowledgement of a replaced Surface changes nothing
         assert rig.state(surface["id"]) == "superseded"
         rig.ack(HOVER)
@@ -407,13 +429,14 @@ def test_two_way_surface_is_superseded_by_a_newer_command(tmp_path: Path) -> Non
 def test_reset_during_a_surface_stops_it_and_a_late_ack_changes_nothing(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         rec = await rig.surface()
-        await until(lambda: rig.link.count(SURFACE) >= 2)
+        await rig.until(lambda: rig.link.count(SURFACE) >= 2)
         rig.cm.reset_vehicle()
         assert rig.state(rec["id"]) == "interrupted"
         assert "reset" in rig.record(rec["id"])["reason"]
         out = rig.link.count(SURFACE)
-        await asyncio.sleep(5 * INTERVAL_S)
+        await rig.clock.advance(5 * SURFACE_REPEAT_S)
         assert rig.link.count(SURFACE) == out
+        assert rig.clock.pending() == []
         rig.ack(SURFACE)
         assert rig.state(rec["id"]) == "interrupted"
         assert rig.cm.ledger.totals().dive.frames == 0  # a new dive counts afresh

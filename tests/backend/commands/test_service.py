@@ -21,7 +21,7 @@ from backend.commands.service import (
     decide,
 )
 from codec import encode_frame
-from tests.backend.commands.test_manager import CIRCLE, HOVER, ONE_WAY, Rig, run, until
+from tests.backend.commands.test_manager import CIRCLE, HOVER, ONE_WAY, Rig, run
 
 DEEP = SendViolation(
     "depth_rating",
@@ -173,10 +173,10 @@ def test_wire_order_circle_surface_retry(tmp_path: Path) -> None:
     async def scenario(rig: Rig) -> None:
         service = service_of(rig)
         circle = (await service.send(SendRequest("circle", CIRCLE_PARAMS, "api", copies=20))).record
-        await until(lambda: rig.link.count(CIRCLE) >= 1)
+        await rig.until(lambda: rig.link.count(CIRCLE) >= 1)
         surface = (await service.surface()).record
-        await until(lambda: rig.state(circle.id) == "superseded")
-        await until(lambda: rig.record(surface.id)["copies_sent"] >= 1)
+        await rig.until(lambda: rig.state(circle.id) == "superseded")
+        await rig.until(lambda: rig.record(surface.id)["copies_sent"] >= 1)
         retried = (await service.retry(circle.id, copies=1)).record
         await rig.until_state(retried.id, "sent")
         assert rig.cm.last_sent is not None and rig.cm.last_sent["id"] == retried.id

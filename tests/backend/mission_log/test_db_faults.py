@@ -37,18 +37,21 @@ from backend.commands.manager import CommandManager
 from backend.mission_log.store import TRACK_FLUSH_S, LogWriteError, MissionLog
 from bench._server import REPO, free_port
 from station.link import Capability
+from tests.agent_link import AgentLink
 from tests.backend.commands.test_manager import CIRCLE as CIRCLE_FRAME
+from tests.backend.commands.test_manager import COPY_INTERVAL_S, Rig
 from tests.backend.commands.test_manager import HOVER as HOVER_FRAME
-from tests.backend.commands.test_manager import Rig, until
 from tests.backend.conftest import (
     AUTH,
     CIRCLE,
     TOKEN,
     MakeClient,
+    MakeLightClient,
     command_fields,
     console_of,
     wait_until,
 )
+from tests.manual_clock import ManualClock
 
 #: The line with the operator URL (viser prints a URL of its own, without a token).
 URL_LINE = re.compile(r"(http://[^/\s]+)/\?token=\S+")
@@ -192,6 +195,7 @@ def command_rows(db: Path) -> int:
 # --- at start: the mission log ------------------------------------------------------------
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_file_that_is_not_a_database(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     db.write_bytes(os.urandom(8192))
@@ -202,6 +206,7 @@ def test_a_file_that_is_not_a_database(tmp_path: Path) -> None:
     )
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_corrupted_database(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     corrupt(db)
@@ -210,6 +215,7 @@ def test_a_corrupted_database(tmp_path: Path) -> None:
     assert_refused(run_console(db), str(db), "is corrupted (quick_check: ", "move it aside")
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_database_with_a_damaged_schema(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     make_log(db)
@@ -234,6 +240,7 @@ runpy.run_module("cli.main", run_name="__main__")
 """
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_read_only_file(tmp_path: Path) -> None:
     db = tmp_path / "logs" / "missions.sqlite3"
     db.parent.mkdir()
@@ -249,6 +256,7 @@ def test_a_read_only_file(tmp_path: Path) -> None:
         db.chmod(0o644)
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_file_sqlite_opens_read_only(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     make_log(db)
@@ -257,6 +265,7 @@ def test_a_file_sqlite_opens_read_only(tmp_path: Path) -> None:
     assert "attempt to write a readonly database" in line
 
 
+@pytest.mark.slow  # `nemesys console` and sqlite3 subprocesses
 @pytest.mark.parametrize("journal", ["wal", "delete"])
 def test_a_database_locked_by_another_process(tmp_path: Path, journal: str) -> None:
     db = tmp_path / "missions.sqlite3"
@@ -273,6 +282,7 @@ def test_a_database_locked_by_another_process(tmp_path: Path, journal: str) -> N
     assert "another console?" in line
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_directory_that_cannot_be_made(tmp_path: Path) -> None:
     blocker = tmp_path / "not-a-directory"
     blocker.write_text("a file where the directory should be")
@@ -284,6 +294,7 @@ def test_a_directory_that_cannot_be_made(tmp_path: Path) -> None:
 # --- at start: the port, the URL ----------------------------------------------------------
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_a_busy_port(tmp_path: Path) -> None:
     with socket.socket() as other:
         other.bind(("127.0.0.1", 0))
@@ -295,6 +306,7 @@ def test_a_busy_port(tmp_path: Path) -> None:
     )
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
 def test_the_url_is_printed_once_the_console_answers_and_a_missing_directory_is_made(
     tmp_path: Path,
 ) -> None:
@@ -371,24 +383,27 @@ def post_circle(client: TestClient) -> httpx.Response:
     ],
 )
 def test_a_send_the_log_cannot_record_is_503_and_nothing_leaves(
-    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch, verb: str, message: str
+    make_light_client: MakeLightClient, verb: str, message: str
 ) -> None:
-    client = make_client()
+    clock, link = ManualClock(), AgentLink()
+    client = make_light_client(link, clock=clock)
     console = console_of(client)
     assert console.log is not None
-    spy = spy_transmit(client, monkeypatch)
     with failing_writes(console.log, verb, message=message):
         r = post_circle(client)
-        time.sleep(0.3)  # a delivery begun by mistake would have sent its copy by now
+        # a delivery begun by mistake sends its first copy at once (no timer before it):
+        # the app's event loop runs whatever is ready, then nothing can be on its way
+        client.portal.call(clock.settle)  # type: ignore[union-attr]
     assert r.status_code == 503, r.text
     assert r.json()["detail"] == f"the mission log cannot be written: {message}{NOTHING_SENT}"
-    assert spy.frames == []
+    assert link.frames == [] and clock.pending() == []
     assert client.get("/api/commands").json() == []
     assert console.commands is not None and console.commands._live == {}
     # the disk fixed, the same send goes through
     sent = post_circle(client)
     assert sent.status_code == 202, sent.text
-    wait_until(lambda: spy.frames, what="the frame of the send after the fault")
+    client.portal.call(clock.settle)  # type: ignore[union-attr]
+    assert link.frames == [sent.json()["hex"]]
 
 
 def test_a_real_read_only_connection_fails_the_send(
@@ -497,12 +512,13 @@ def test_a_failed_commit_sends_nothing_and_stops_what_it_superseded(tmp_path: Pa
     async def scenario(rig: Rig) -> None:
         cm: CommandManager = rig.cm
         old = await cm.submit(CIRCLE_FRAME, copies=20)
-        await until(lambda: rig.link.count(CIRCLE_FRAME) >= 2)
+        await rig.until(lambda: rig.link.count(CIRCLE_FRAME) >= 2)
         with failing_writes(rig.log, "COMMIT"), pytest.raises(LogWriteError) as caught:
             await cm.submit(HOVER_FRAME, copies=2)
         assert str(caught.value) == f"the mission log cannot be written: {DISK_FULL}{NOTHING_SENT}"
         circles = rig.link.count(CIRCLE_FRAME)
-        await asyncio.sleep(0.2)  # ten copy intervals
+        await rig.clock.advance(10 * COPY_INTERVAL_S)
+        assert rig.clock.pending() == []  # no copy of either is due any more
         assert rig.link.count(HOVER_FRAME) == 0  # the new command: nothing left
         assert rig.link.count(CIRCLE_FRAME) == circles  # the old one: stopped
         assert cm._live == {}
@@ -522,6 +538,7 @@ def on_disk(db: Path) -> int:
     return count
 
 
+@pytest.mark.slow  # the log's real flush period, ~1 s
 def test_a_track_point_is_on_disk_within_a_second(tmp_path: Path) -> None:
     db = tmp_path / "missions.sqlite3"
     log = MissionLog(db)
@@ -540,6 +557,7 @@ def test_a_track_point_is_on_disk_within_a_second(tmp_path: Path) -> None:
         log.close()
 
 
+@pytest.mark.slow  # the log's real flush period, ~1 s
 def test_track_points_the_log_cannot_take_are_kept_and_written_later(
     tmp_path: Path, caplog: pytest.LogCaptureFixture
 ) -> None:
@@ -551,9 +569,13 @@ def test_track_points_the_log_cannot_take_are_kept_and_written_later(
         with failing_writes(log, "INSERT"):
             for i in range(12):  # past a batch: no exception reaches the telemetry
                 log.add_track(dive, float(i), 0.0, 0.0, 2.0, 0.0)
-            time.sleep(TRACK_FLUSH_S + 0.2)
+            # the flush that failed says so: until then nothing was on its way to the disk
+            wait_until(
+                lambda: any("track points are kept in memory only" in m for m in caplog.messages),
+                timeout_s=5.0,
+                what="the failed flush",
+            )
             assert on_disk(db) == 0
-        assert any("track points are kept in memory only" in m for m in caplog.messages)
         log.add_track(dive, 12.0, 0.0, 0.0, 2.0, 0.0)
         wait_until(lambda: on_disk(db) == 13, timeout_s=1.0, interval_s=0.01)
     finally:

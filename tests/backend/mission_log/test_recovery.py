@@ -20,6 +20,9 @@ from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import CIRCLE, TOKEN, clear_nemesys_env, command_fields, wait_until
 
+#: `nemesys console` subprocesses, killed and restarted: make test, not make test-fast.
+pytestmark = pytest.mark.slow
+
 AUTH = {"Authorization": f"Bearer {TOKEN}"}
 #: The line ``nemesys console`` prints when it recovered records (before its URL).
 RECOVERED_LINE = re.compile(

@@ -183,6 +183,7 @@ def run_to_the_end(client: TestClient, body: dict[str, Any], timeout_s: float) -
     return done
 
 
+@pytest.mark.training
 def test_the_issue_stall_now_sends_the_circle(client: TestClient) -> None:
     first_pose(client)
     # the vehicle has flown a hover and holds: the script's hover retasks it
@@ -203,6 +204,7 @@ def test_the_issue_stall_now_sends_the_circle(client: TestClient) -> None:
     )
 
 
+@pytest.mark.training
 def test_timeline_export_and_run_agree(client: TestClient) -> None:
     first_pose(client)
     body = doc(
