@@ -108,7 +108,6 @@ PAPER_DECODE_MS = 0.027
 PAPER_RSS_MB = 13.2
 #: The paper's "less than 50 ms total latency" claim.
 PAPER_TOTAL_MS = 50.0
-PAPER_DECODE_TRIALS = 30
 
 
 @dataclass(frozen=True, slots=True)

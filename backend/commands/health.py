@@ -45,7 +45,6 @@ RED_TELEMETRY_S: Final = 10.0
 UNKNOWN_VALUES_RECENT_S: Final = 10.0
 
 Level = Literal["green", "amber", "red"]
-_ANSWERS: Final = ("acknowledged", "rejected", "timed_out")
 
 
 class LinkHealth(BaseModel):

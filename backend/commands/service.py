@@ -23,7 +23,7 @@ Surface is never refused by the checks: it is the way out.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
@@ -159,8 +159,6 @@ class CommandService:
         self.manager = manager
         self.assess = assess
         self.operator = operator
-        #: Called with every record the service hands to the manager (scripts count theirs).
-        self.on_sent: Callable[[CommandRecord], None] | None = None
 
     async def send(self, request: SendRequest) -> SendOutcome:
         """Check ``request`` and hand it to the manager (written first, then transmitted).
