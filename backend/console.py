@@ -128,11 +128,7 @@ class Console:
             # frames only from this console: a per-start secret for the rosbridge auth op
             secret = secrets.token_hex(16)
             self.bridge = BridgeServer(
-                self.sim,
-                "127.0.0.1",
-                s.sim_port,
-                time_scale=s.sim_time_scale,
-                auth_secret=secret,
+                self.sim, "127.0.0.1", s.sim_port, time_scale=s.sim_time_scale, auth_secret=secret
             )
             await self.bridge.start()
             link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}", auth_secret=secret)

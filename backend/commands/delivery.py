@@ -101,3 +101,9 @@ def best_match(awaiting: Mapping[int, Encoded], ack: Mapping[str, Any]) -> int |
         if best is None or rank < best[0]:
             best = (rank, cid)
     return best[1] if best is not None else None
+
+
+def delivery_kind(kind: str, pattern: str) -> str:
+    """How a command is delivered: ``surface`` for every surface frame (never rate limited,
+    its own count of copies, joined by a later press), else its kind."""
+    return "surface" if pattern == "surface" else kind

@@ -39,6 +39,7 @@ from backend.commands.delivery import (
     RateLimited,
     RateLimiter,
     best_match,
+    delivery_kind,
     planned_copies,
 )
 from backend.commands.lifecycle import ON_ITS_WAY, Event, advance
@@ -54,12 +55,7 @@ from station.link import Link
 
 logger = logging.getLogger("backend.commands.manager")
 
-__all__ = [
-    "MIN_SURFACE_COPIES",
-    "SURFACE_DELIVERY_TARGET",
-    "CommandManager",
-    "RateLimited",
-]
+__all__ = ["MIN_SURFACE_COPIES", "SURFACE_DELIVERY_TARGET", "CommandManager", "RateLimited"]
 
 
 class CommandManager(CommandRecords):
@@ -186,7 +182,7 @@ class CommandManager(CommandRecords):
         """
         record_kind = kind
         # a surface frame is a Surface however it was sent (button, /api/commands, a script)
-        kind = _delivery_kind(kind, enc.command.pattern.name)
+        kind = delivery_kind(kind, enc.command.pattern.name)
         if kind == "surface":
             joined = self._join_surface()
             if joined is not None:
@@ -399,9 +395,3 @@ class CommandManager(CommandRecords):
         self.hub.publish(
             VehicleMessage(active=self.vehicle.active, echo_mismatch=self.echo_mismatch)
         )
-
-
-def _delivery_kind(kind: str, pattern: str) -> str:
-    """How a command is delivered: ``surface`` for every surface frame (never rate limited,
-    its own count of copies, joined by a later press), else its kind."""
-    return "surface" if pattern == "surface" else kind
