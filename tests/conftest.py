@@ -47,6 +47,27 @@ def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
             item.add_marker("slow")
         if any(item.get_closest_marker(kind) for kind in NOT_FAST):
             item.add_marker("slow")
+    _longest_files_first(items)
+
+
+#: The kinds of test whose files take longest, in that order (browser files run for minutes).
+_LONG_KINDS = ("browser", "console", "slow")
+
+
+def _longest_files_first(items: list[pytest.Item]) -> None:
+    """Files of browser tests first, then of whole consoles, then the other slow ones, then
+    the rest, each file kept whole and in its own order: the workers of ``make test``
+    (xdist, one file at a time) start the long files early and end on short ones."""
+
+    def rank(item: pytest.Item) -> int:
+        kinds = [i for i, kind in enumerate(_LONG_KINDS) if item.get_closest_marker(kind)]
+        return min(kinds, default=len(_LONG_KINDS))
+
+    by_file: dict[str, int] = {}
+    for item in items:
+        path = str(item.path)
+        by_file[path] = min(by_file.get(path, len(_LONG_KINDS)), rank(item))
+    items.sort(key=lambda item: by_file[str(item.path)])
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:
