@@ -1,7 +1,7 @@
-"""The checks of a send as the command service takes them (:class:`Assessment`): the
-console's (from where the vehicle is now) and the command line's (from the surface at the NED
-origin: ``nemesys send`` does not know where the vehicle is). Both are
-:func:`backend.commands.checks.check_plan`, the preview's checks too."""
+"""The checks of a send from the command line (:class:`Assessment`), from the surface at the
+NED origin: ``nemesys send`` does not know where the vehicle is. The same
+:func:`backend.commands.checks.check_plan` as the console's (``Console.assess``) and the
+preview's."""
 
 from __future__ import annotations
 
@@ -9,29 +9,11 @@ from collections.abc import Mapping
 from typing import Any
 
 from backend.authoring.profile import VehicleProfile
-from backend.chart.gps import Station
 from backend.commands.checks import check_plan
 from backend.commands.service import Assessment
 from backend.settings import Settings
-from codec import Encoded, decode_frame, encode_frame
-from planner import Limits, Plan, VehicleState, plan
-
-
-def assess_plan(
-    enc: Encoded,
-    new: Plan,
-    *,
-    limits: Limits,
-    profile: VehicleProfile | None,
-    soc_pct: float | None,
-    station: Station | None,
-    range_m: float | None,
-) -> Assessment:
-    """The frame ``enc`` and the checks of its plan ``new``."""
-    report = check_plan(
-        new, limits=limits, profile=profile, soc_pct=soc_pct, station=station, range_m=range_m
-    )
-    return Assessment(enc, report.violations, report.lines)
+from codec import decode_frame, encode_frame
+from planner import Limits, VehicleState, plan
 
 
 def assess_from(
@@ -47,6 +29,7 @@ def assess_from(
     enc = encode_frame(pattern, dict(params))
     new = plan(decode_frame(enc.frame.bits).command, VehicleState(0.0, 0.0, 0.0), None)
     limits = Limits(max_depth_m=settings.max_depth_m, max_speed_mps=settings.max_speed_mps)
-    return assess_plan(
-        enc, new, limits=limits, profile=profile, soc_pct=None, station=None, range_m=None
+    report = check_plan(
+        new, limits=limits, profile=profile, soc_pct=None, station=None, range_m=None
     )
+    return Assessment(enc, report.violations, report.lines)

@@ -96,24 +96,9 @@ class SendMessage(SendIn):
 
 # --- the unions -----------------------------------------------------------------------------
 
-#: What a page may send.
-ClientMessage = Annotated[AuthMessage | SurfaceMessage | SendMessage, Field(discriminator="type")]
-#: What the console sends a page: the news, and the answers to its own messages.
-ServerMessage = Annotated[
-    TelemetryMessage
-    | CommandMessage
-    | VehicleMessage
-    | ActivePathMessage
-    | LinkMessage
-    | EventMessage
-    | AuthOk
-    | AuthRefused
-    | Queued
-    | ErrorReply,
-    Field(discriminator="type"),
-]
-#: Every message of ``/ws``, either way.
-LiveMessage = Annotated[
+#: The models of each direction, plain unions (each used once below, with its discriminator).
+_Client = AuthMessage | SurfaceMessage | SendMessage
+_Server = (
     TelemetryMessage
     | CommandMessage
     | VehicleMessage
@@ -124,14 +109,16 @@ LiveMessage = Annotated[
     | AuthRefused
     | Queued
     | ErrorReply
-    | AuthMessage
-    | SurfaceMessage
-    | SendMessage,
-    Field(discriminator="type"),
-]
+)
+#: What a page may send.
+ClientMessage = Annotated[_Client, Field(discriminator="type")]
+#: What the console sends a page: the news, and the answers to its own messages.
+ServerMessage = Annotated[_Server, Field(discriminator="type")]
+#: Every message of ``/ws``, either way.
+LiveMessage = Annotated[_Server | _Client, Field(discriminator="type")]
 
 #: Parses a page's message (after the size, nesting and number checks of the handler).
-CLIENT_MESSAGE: TypeAdapter[AuthMessage | SurfaceMessage | SendMessage] = TypeAdapter(ClientMessage)
+CLIENT_MESSAGE: TypeAdapter[_Client] = TypeAdapter(ClientMessage)
 
 
 def message_models(union: Any) -> tuple[type[BaseModel], ...]:
