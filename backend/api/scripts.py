@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import time
 from collections.abc import Callable
 from typing import Any, Literal
 
@@ -22,30 +21,35 @@ from backend.api.schemas import (
     errors,
 )
 from backend.api.view import ViewHeader
+from backend.clock import Clock
 from backend.commands.service import SendRequest
 from backend.console import Console
 from backend.mission_log.store import FINAL_STATES
 from backend.scripts.checks import refuse_unsafe, step_violations
 from backend.scripts.operations import (
+    CompletionBy,
     MissionScript,
     ScriptError,
     ScriptPreview,
     ScriptRunError,
     ScriptRunner,
+    completion_refusal,
     expand,
     export_onboard,
     onboard_csv,
     preview,
 )
-from planner import Plan
+from station.link import Capability
+from vehicle_contract.messages import number
 
 router = APIRouter(prefix="/api/scripts", tags=["scripts"])
 
-#: How often a run checks its triggers at most (wall s); it wakes sooner for a due step.
+#: How often a run checks its triggers, acknowledgements and the vehicle's status at most
+#: (s on the console's clock, :mod:`backend.clock`); it wakes sooner for a due step.
 POLL_S = 0.2
-#: Shortest sleep of a run's loop (wall s).
+#: Shortest sleep of a run's loop (s on the console's clock).
 MIN_SLEEP_S = 0.005
-#: How often a due step's loop looks for the previous step's acknowledgement (wall s).
+#: How often a due step's loop looks for the previous step's acknowledgement (s, same clock).
 ACK_POLL_S = 0.05
 #: The run state before any run: every key of a run's, empty.
 IDLE: dict[str, Any] = {
@@ -59,7 +63,10 @@ IDLE: dict[str, Any] = {
     "due_s": None,
     "elapsed_s": None,
     "steps": [],
+    "completion_by": None,
+    "completed_s": None,
     "reason": None,
+    "summary": "not running",
 }
 #: The errors of a run control.
 RUN_CONTROL = errors((*OPERATOR, 409), why={409: "no step awaits the operator's go"})
@@ -105,7 +112,8 @@ def script_preview(
             models={409: LimitViolationError, 422: ValidationErrorResponse | LimitViolationError},
             why={
                 409: "a step breaks an overridable limit without its override",
-                422: "invalid script, or a step breaks a limit no operator can override",
+                422: "invalid script, a step 'on completion' (the onboard script cannot "
+                "carry it), or a step breaks a limit no operator can override",
             },
         ),
         200: {
@@ -119,10 +127,19 @@ def script_preview(
 def script_export(
     script: MissionScript, console: ConsoleDep, format: Literal["json", "csv"] = "json"
 ) -> Response:
-    """The onboard script the paper's field trials used: a timed list of frames."""
+    """The onboard script the paper's field trials used: a timed list of frames. A step "on
+    completion" is refused (422 at its trigger): the onboard script cannot carry it
+    (:mod:`backend.scripts.onboard`)."""
     mirror = console.commands.mirror if console.commands else None
     name = "".join(c if c.isalnum() else "-" for c in script.name)
-    _refuse_unsafe(console, script, mirror)
+    try:
+        expanded = expand(script, console.vehicle_state(), mirror)
+        refusal = completion_refusal(expanded)
+        if refusal is not None:
+            raise refusal
+    except ScriptError as err:
+        raise _plan_error(err) from None
+    refuse_unsafe(script, step_violations(expanded, console.plan_violations))
     try:
         if format == "csv":
             return Response(
@@ -136,15 +153,6 @@ def script_export(
     return JSONResponse(
         doc, headers={"Content-Disposition": f'attachment; filename="{name}-onboard.json"'}
     )
-
-
-def _refuse_unsafe(console: Console, script: MissionScript, mirror: Plan | None) -> None:
-    """The send policy on the whole script (LimitRefused 422 / OverrideNeeded 409)."""
-    try:
-        expanded = expand(script, console.vehicle_state(), mirror)
-    except ScriptError as err:
-        raise _plan_error(err) from None
-    refuse_unsafe(script, step_violations(expanded, console.plan_violations))
 
 
 def _state(console: Console) -> RunState:
@@ -187,8 +195,15 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> RunState:
             422, [{**e, "loc": ["body", "script", *e["loc"]]} for e in err.errors()]
         ) from None
     refuse_unsafe(body.script, step_violations(expanded, console.plan_violations))
+    profile = console.profile
     console.runner = ScriptRunner.planned(
-        body.script, expanded, body.mode, clock=run_clock(console)
+        body.script,
+        expanded,
+        body.mode,
+        clock=run_clock(console),
+        top_speed_mps=profile.top_speed_mps,
+        heave_rate_mps=profile.heave_rate_mps,
+        completion_by=_completion_by(console, "plan"),
     )
     console.script_commands = {}
     console.start_script_loop(_loop(console))
@@ -244,17 +259,19 @@ def run_clock(console: Console) -> Callable[[], float]:
 
     In training it follows the simulator's own clock (``sim.t_s``: it runs at the time
     scale and lags it under load, so the run keeps the vehicle's time, not the wall's); on a
-    real link, where a one-way modem gives no telemetry, the station's monotonic clock. It
-    only ever moves forward (a training reset does not send it back).
+    real link, where a one-way modem gives no telemetry, the console's clock
+    (:attr:`Console.clock`: a test's manual clock moves it by hand). It only ever moves
+    forward (a training reset does not send it back).
     """
     sim = getattr(console, "sim", None)
-    last_wall = time.monotonic()
+    clock = console.clock
+    last_wall = clock.monotonic()
     last_sim = float(sim.t_s) if sim is not None else 0.0
     elapsed = 0.0
 
     def now() -> float:
         nonlocal last_wall, last_sim, elapsed
-        wall = time.monotonic()
+        wall = clock.monotonic()
         if sim is not None:
             t = float(sim.t_s)
             elapsed += max(0.0, t - last_sim)
@@ -267,12 +284,40 @@ def run_clock(console: Console) -> Callable[[], float]:
     return now
 
 
+def _completion_by(console: Console, was: CompletionBy) -> CompletionBy:
+    """How a run knows its last step completed: from the vehicle's status where the link
+    carries it, else by the plan (estimated). A link whose capability is not known (yet, or
+    again while it reconnects) changes nothing: a vehicle that reports is not taken for one
+    that does not."""
+    link = console.link
+    if link is None or link.capability is Capability.UNKNOWN:
+        return was
+    return "vehicle" if link.telemetry else "plan"
+
+
+async def _sleep(clock: Clock, seconds: float) -> None:
+    """Wait ``seconds`` on ``clock`` (a timer, not ``asyncio.sleep``: a test's manual clock
+    fires it when it moves past it, with no real waiting)."""
+    woken: asyncio.Future[None] = asyncio.get_running_loop().create_future()
+
+    def wake() -> None:
+        if not woken.done():
+            woken.set_result(None)
+
+    timer = clock.call_later(seconds, wake)
+    try:
+        await woken
+    finally:
+        timer.cancel()
+
+
 def _sleep_s(console: Console, runner: ScriptRunner) -> float:
-    """Wall seconds to sleep: :data:`POLL_S`, or less when a step falls due sooner."""
+    """Seconds to sleep (console clock): :data:`POLL_S`, or less when a step falls due
+    sooner (run-clock seconds over the time scale)."""
     due, now = runner.due_s(), runner.now_s
     scale = _time_scale(console)
-    if due is None or now is None or scale <= 0:
-        return POLL_S
+    if due is None or now is None or scale <= 0 or runner.next_index is None:
+        return POLL_S  # nothing due, or only the last step's completion to wait for
     if due <= now:  # due, waiting for the previous step's acknowledgement
         return ACK_POLL_S
     return min(POLL_S, max(MIN_SLEEP_S, (due - now) / scale))
@@ -282,6 +327,7 @@ async def _loop(console: Console) -> None:
     runner = console.runner
     assert runner is not None and console.log is not None
     while runner.running:
+        runner.completion_by = _completion_by(console, runner.completion_by)
         # only the steps on their way are looked up in the log (one at a time, in practice)
         for index, command_id in list(console.script_commands.items()):
             if runner.step_state(index) != "sent":
@@ -291,9 +337,15 @@ async def _loop(console: Console) -> None:
                 continue
             # sent: a one-way link's end, all that can be known; the run goes on
             if record["state"] in ("acknowledged", "sent"):
-                runner.mark_acknowledged(index)
+                ack = record.get("ack") or {}
+                runner.mark_acknowledged(
+                    index,
+                    by_vehicle=record["state"] == "acknowledged",
+                    vehicle_t_s=number(ack.get("t_s")) if isinstance(ack, dict) else None,
+                )
             elif record["state"] in FINAL_STATES:  # rejected, timed_out, failed, ...
                 runner.mark_failed(index, f"{record['state']}: {record['reason']}")
         for index in runner.poll():
             await _send(console, runner, index)
-        await asyncio.sleep(_sleep_s(console, runner))
+        runner.observe(console.hub.status)  # the last step's completion, as reported
+        await _sleep(console.clock, _sleep_s(console, runner))

@@ -90,10 +90,11 @@ def _state_at(p: Plan, t_rel_s: float, t_abs_s: float) -> VehicleState:
 
 
 def describe_trigger(trigger: Trigger, index: int) -> str:
-    """``at 30 s``, ``after step 2 completes`` or ``on the operator's go`` (0-based
-    ``index``; steps named from 1)."""
+    """``at its set time``, ``after step 2 completes`` or ``on the operator's go`` (0-based
+    ``index``; steps named from 1): beside the time the step takes effect, which the timeline
+    gives as a time from the run's start."""
     if trigger.kind == "at":
-        return f"at {trigger.t_s:g} s"
+        return "at its set time"
     if trigger.kind == "after_previous":
         return f"after step {index} completes"
     return "on the operator's go"

@@ -190,18 +190,21 @@ class MissionScript(BaseModel):
 
 
 class ScriptError(ValueError):
-    """A valid script that cannot be expanded (the planner refused a step).
+    """A valid script that cannot be expanded (the planner refused a step), or exported (the
+    onboard script cannot carry a step's trigger).
 
     Attributes:
         loc: where, as in a validation error: ``("steps", 2, "params", "radius")``.
         message: why (the planner's message, naming the parameter).
+        kind: the error's ``type`` (``plan_error``; the onboard export's refusals say theirs).
     """
 
-    def __init__(self, message: str, loc: Loc) -> None:
+    def __init__(self, message: str, loc: Loc, kind: str = "plan_error") -> None:
         super().__init__(f"{'.'.join(map(str, loc))}: {message}")
         self.message = message
         self.loc = loc
+        self.kind = kind
 
     def errors(self) -> list[dict[str, Any]]:
         """The error in FastAPI's 422 ``detail`` shape (without the ``body`` prefix)."""
-        return [{"loc": list(self.loc), "msg": self.message, "type": "plan_error"}]
+        return [{"loc": list(self.loc), "msg": self.message, "type": self.kind}]

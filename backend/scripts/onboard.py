@@ -2,9 +2,20 @@
 paper's field trials).
 
 A frame's ``t_s`` is when its step takes effect in the expansion
-(:func:`backend.scripts.expand.expand`): an ``after_previous`` step at the previous step's
-start plus its completion time (:mod:`backend.scripts.completion`), the same time the
-preview's timeline shows and the run sends at.
+(:func:`backend.scripts.expand.expand`), s from the start of the run: an ``at`` step's own time.
+
+What the export does with the other triggers:
+
+* **on completion** (``after_previous``) is **refused**, naming the step and why. The onboard
+  script is a list of timed frames; nothing in it, and nothing the onboard agent runs
+  (:mod:`onboard.agent`: decode, validate, replan for each frame it receives), evaluates a
+  completion. Writing the step at the previous step's planned completion time would turn "on
+  completion" into a fixed time without saying so (issue 20: "on completion" became t = 20 s):
+  the vehicle would be retasked early when the pattern runs slow (a head current, a speed
+  above its top speed) and hold idle when it runs fast. The refusal gives the planned time, so
+  the operator who wants a fixed time writes it ('at') knowingly.
+* **on the operator's go** becomes the expected time, with a ``note`` saying so (the vehicle
+  out of contact has no operator to wait for).
 """
 
 from __future__ import annotations
@@ -12,13 +23,38 @@ from __future__ import annotations
 from typing import Any
 
 from backend.scripts.expand import ExpandedStep, expand
-from backend.scripts.model import MissionScript
+from backend.scripts.labels import at_time
+from backend.scripts.model import MissionScript, ScriptError
 from planner import Plan, VehicleState
 
 ONBOARD_FORMAT = "nemesys-onboard-script"
 
 
+def completion_refusal(expanded: list[ExpandedStep]) -> ScriptError | None:
+    """Why the onboard script cannot hold this script: its first step "on completion" (a
+    422 at ``steps.<i>.trigger.kind`` naming the step, why, and the planned time), or
+    ``None``."""
+    for s in expanded:
+        if s.step.trigger.kind != "after_previous":
+            continue
+        prev = expanded[s.index - 1]
+        name = prev.step.pattern.replace("_", " ")
+        return ScriptError(
+            f"step {s.index + 1} waits for step {s.index} ({name}) to complete, but an "
+            "onboard script holds only timed frames: the vehicle cannot evaluate a completion "
+            "from it, and a fixed time would retask it early or late if the pattern runs slow "
+            f"or fast. Give step {s.index + 1} a time ('at'): by the plan step {s.index} "
+            f"completes {at_time(s.t_start_s)}",
+            ("steps", s.index, "trigger", "kind"),
+            "onboard_completion_trigger",
+        )
+    return None
+
+
 def _onboard(script: MissionScript, expanded: list[ExpandedStep]) -> dict[str, Any]:
+    refusal = completion_refusal(expanded)
+    if refusal is not None:
+        raise refusal
     frames: list[dict[str, Any]] = []
     for s in expanded:
         frame: dict[str, Any] = {
@@ -27,16 +63,9 @@ def _onboard(script: MissionScript, expanded: list[ExpandedStep]) -> dict[str, A
             "hex": s.encoded.frame.hex,
             "bits": s.encoded.frame.bits,
         }
-        kind = s.step.trigger.kind
         notes: list[str] = []
-        if kind == "operator":
+        if s.step.trigger.kind == "operator":
             notes.append("operator go in the script: the vehicle sends it at the expected time")
-        elif kind == "after_previous":
-            prev = expanded[s.index - 1]
-            notes.append(
-                f"after step {s.index} completes: {prev.completion_s or 0.0:.1f} s after it "
-                "takes effect"
-            )
         notes.extend(s.warnings)
         if notes:
             frame["note"] = "; ".join(notes)
@@ -51,16 +80,18 @@ def export_onboard(
 
     ``{"format": "nemesys-onboard-script", "version": 1, "name", "frames": [{"t_s", "pattern",
     "hex", "bits", "note"?}]}``; times are the preview's trigger times (s from the start), so
-    ``operator`` and ``after_previous`` steps become their expected times, with a ``note``.
+    an ``operator`` step becomes its expected time, with a ``note``.
 
     Raises:
-        ScriptError: the planner cannot expand a step.
+        ScriptError: the planner cannot expand a step, or a step waits for the previous one
+            to complete (:func:`completion_refusal`).
     """
     return _onboard(script, expand(script, start, current))
 
 
 def onboard_csv(script: MissionScript, start: VehicleState, current: Plan | None = None) -> str:
-    """The onboard script as CSV: ``t_s,pattern,hex``, one frame per line."""
+    """The onboard script as CSV: ``t_s,pattern,hex``, one frame per line (the same refusal
+    as :func:`export_onboard`)."""
     rows = ["t_s,pattern,hex"]
     for f in export_onboard(script, start, current)["frames"]:
         rows.append(f"{f['t_s']:.3f},{f['pattern']},{f['hex']}")

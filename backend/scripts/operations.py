@@ -13,8 +13,9 @@ endpoints, ``docs/scripts.md`` the rules)::
 
 Triggers:
 
-* ``at``: ``t_s`` seconds after the run starts (0 = immediately). ``at`` times never decrease
-  along the script.
+* ``at``: ``t_s`` seconds after the run starts (0 = immediately; "at 60 s from the run's
+  start", never "into the dive": a script is run at any point of a dive). ``at`` times never
+  decrease along the script.
 * ``after_previous``: when the previous step completes (:mod:`backend.scripts.completion`
   defines it: a finite pattern at the end of its path, a hover after its duration). A
   repeating pattern (square, circle) never completes, so a step "on completion" after one is
@@ -34,9 +35,11 @@ from here:
   fly them, each from where the previous one has taken the vehicle when it triggers;
 * :mod:`backend.scripts.preview`: :func:`preview`, one path and a timeline;
 * :mod:`backend.scripts.onboard`: :func:`export_onboard` / :func:`onboard_csv` give the onboard
-  script of the paper's field trials: the timed frames the vehicle injects itself;
+  script of the paper's field trials: the timed frames the vehicle injects itself (a step "on
+  completion" is refused: the onboard script cannot carry it);
 * :mod:`backend.scripts.runner`: :class:`ScriptRunner` is the state machine the console
-  drives during a run.
+  drives during a run;
+* :mod:`backend.scripts.labels`: the triggers and a run's state in the operator's words.
 
 Times in the preview, the export and the run's state are seconds from the start of the run;
 the planner's states use the vehicle's mission clock (``start.t_s`` + script time).
@@ -46,6 +49,7 @@ from __future__ import annotations
 
 from backend.scripts.completion import REPEATING, after_repeating, completion_s, repeats
 from backend.scripts.expand import ExpandedStep, describe_trigger, expand
+from backend.scripts.labels import TRIGGER_WORDS
 from backend.scripts.model import (
     MAX_SCRIPT_TIME_S,
     SCRIPT_FORMAT,
@@ -59,7 +63,12 @@ from backend.scripts.model import (
     TriggerKind,
     WaitingFor,
 )
-from backend.scripts.onboard import ONBOARD_FORMAT, export_onboard, onboard_csv
+from backend.scripts.onboard import (
+    ONBOARD_FORMAT,
+    completion_refusal,
+    export_onboard,
+    onboard_csv,
+)
 from backend.scripts.preview import (
     PREVIEW_MAX_POINTS,
     PREVIEW_MIN_POINTS_PER_STEP,
@@ -71,7 +80,7 @@ from backend.scripts.preview import (
     TimelineEvent,
     preview,
 )
-from backend.scripts.runner import ScriptRunError, ScriptRunner
+from backend.scripts.runner import CompletionBy, Outcome, ScriptRunError, ScriptRunner
 
 __all__ = [
     "MAX_SCRIPT_TIME_S",
@@ -80,9 +89,12 @@ __all__ = [
     "PREVIEW_MIN_POINTS_PER_STEP",
     "REPEATING",
     "SCRIPT_FORMAT",
+    "TRIGGER_WORDS",
+    "CompletionBy",
     "ExpandedStep",
     "Loc",
     "MissionScript",
+    "Outcome",
     "PreviewPath",
     "RunMode",
     "ScriptError",
@@ -99,6 +111,7 @@ __all__ = [
     "TriggerKind",
     "WaitingFor",
     "after_repeating",
+    "completion_refusal",
     "completion_s",
     "describe_trigger",
     "expand",

@@ -18,6 +18,7 @@ from pydantic import BaseModel, Field
 from backend.commands.checks import SendViolation
 from backend.scripts.checks import PlanCheck, step_violations, step_warning
 from backend.scripts.expand import ExpandedStep, describe_trigger, expand
+from backend.scripts.labels import at_time, takes
 from backend.scripts.model import MissionScript, Trigger
 from planner import Path, Plan, VehicleState
 
@@ -84,6 +85,7 @@ class StepPreview(BaseModel):
         default_factory=list, description="the send policy's checks of this step"
     )
     override: bool = Field(False, description="the step's override of soft violations")
+    timing_text: str = Field("", description="when it takes effect and how long it takes, in words")
 
 
 class PreviewPath(BaseModel):
@@ -102,9 +104,10 @@ class PreviewPath(BaseModel):
 
 
 class TimelineEvent(BaseModel):
-    t_s: float
+    t_s: float = Field(description="a time: s from the run's start")
     step: int | None
     text: str
+    label: str = Field(description="the event as the page shows it: its time, then the text")
 
 
 class ScriptPreview(BaseModel):
@@ -232,21 +235,24 @@ def _combined_path(
     )
 
 
+def _event(*, t_s: float, step: int, text: str) -> TimelineEvent:
+    """A timeline event, labelled with its time from the run's start."""
+    return TimelineEvent(t_s=t_s, step=step, text=text, label=f"{at_time(t_s)}: {text}")
+
+
 def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
     events: list[TimelineEvent] = []
     for k, s in enumerate(expanded):
         pattern = s.step.pattern
         how = describe_trigger(s.step.trigger, s.index)
         verb = "starts" if k == 0 else "retasks the vehicle"
-        events.append(
-            TimelineEvent(t_s=s.t_start_s, step=s.index, text=f"{pattern} {verb} ({how})")
-        )
+        events.append(_event(t_s=s.t_start_s, step=s.index, text=f"{pattern} {verb} ({how})"))
         done = s.completion_s
         last = k == len(expanded) - 1
         if done is None:
             if last:
                 events.append(
-                    TimelineEvent(
+                    _event(
                         t_s=s.t_start_s + s.duration_s,
                         step=s.index,
                         text=f"{pattern}: one lap shown; it repeats until retasked",
@@ -261,7 +267,7 @@ def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
                 if pattern == "surface"
                 else f"{pattern} completes: the vehicle holds at {where}, {end.zs[-1]:.1f} m depth"
             )
-            events.append(TimelineEvent(t_s=t_done, step=s.index, text=text))
+            events.append(_event(t_s=t_done, step=s.index, text=text))
     events.sort(key=lambda e: (e.t_s, -1 if e.step is None else e.step))
     return events
 
@@ -296,6 +302,7 @@ def _step_preview(
             StepViolation.model_validate(v.as_json()) for v in violations if v.step == s.index
         ],
         override=s.step.override,
+        timing_text=f"starts {at_time(s.t_start_s)}, {takes(s.completion_s)}",
     )
 
 

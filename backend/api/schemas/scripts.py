@@ -8,7 +8,15 @@ from typing import Literal
 from pydantic import BaseModel, Field
 
 from backend.api.schemas.common import Params
-from backend.scripts.operations import RunMode, StepState, Trigger, TriggerKind, WaitingFor
+from backend.scripts.operations import (
+    CompletionBy,
+    Outcome,
+    RunMode,
+    StepState,
+    Trigger,
+    TriggerKind,
+    WaitingFor,
+)
 
 
 class OnboardFrame(BaseModel):
@@ -44,22 +52,37 @@ class RunStep(BaseModel):
     index: int
     pattern: str
     trigger: TriggerKind
+    t_s: float | None = Field(description="an 'at' trigger's time, s from the run's start")
     state: StepState
     transmitted: bool
+    acknowledged_by_vehicle: bool = Field(
+        description="the vehicle acknowledged it (false on a link without acknowledgements, "
+        "where 'acknowledged' means its last copy left)"
+    )
     sent_s: float | None = Field(
         description="s from the run's start when the step was handed out for sending"
     )
     completion_s: float | None = Field(
-        description="planned completion, s after the step takes effect (the end of its path; "
-        "a hover: its duration); null: it repeats until retasked"
+        description="a duration: how long the step takes, s after it takes effect (the end of "
+        "its path; a hover: its duration); null: it repeats until retasked"
     )
+    completed_s: float | None = Field(
+        description="the last step: when it completed, s from the run's start (see the run's "
+        "completion_by); null for the others"
+    )
+    trigger_text: str = Field(description="the trigger in words ('at 60 s from the run's start')")
+    takes_text: str = Field(description="the duration in words ('takes 127.8 s')")
+    state_text: str = Field(description="where the step is, in words ('sent at 3 s ...')")
 
 
 class RunState(BaseModel):
     """A script run's state (all null / empty before any run)."""
 
     running: bool
-    outcome: Literal["running", "completed", "stopped", "failed"] | None
+    outcome: Outcome | None = Field(
+        description="completed: the last step's pattern completed; until_retasked: every step "
+        "was sent and the last one repeats (the vehicle runs it until retasked)"
+    )
     mode: RunMode | None
     name: str | None
     step: int | None = Field(description="the next step to hand out")
@@ -67,9 +90,17 @@ class RunState(BaseModel):
     waiting_for: WaitingFor | None
     due_s: float | None = Field(
         description="when the next step is due, s from the run's start (at: its time; "
-        "after_previous: the previous step's send time plus its planned completion)"
+        "after_previous: the previous step's send time plus its planned completion); once "
+        "every step is sent, when the last is expected to complete (its send time plus its "
+        "flyable duration)"
     )
     elapsed_s: float | None = Field(description="run clock: vehicle s since the run started")
+    completion_by: CompletionBy | None = Field(
+        description="how the last step's completion is known: vehicle (its status reports it) "
+        "or plan (estimated: the link reports nothing)"
+    )
+    completed_s: float | None = Field(description="when the run completed, s from the run's start")
     steps: list[RunStep]
     reason: str | None
+    summary: str = Field(description="the run's state in words, as the page shows it")
     commands: dict[int, int] = Field(description="step index -> command id, steps sent so far")

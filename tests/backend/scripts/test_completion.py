@@ -15,6 +15,7 @@ from fastapi.testclient import TestClient
 from backend.scripts.operations import (
     REPEATING,
     MissionScript,
+    ScriptError,
     completion_s,
     expand,
     export_onboard,
@@ -82,9 +83,11 @@ def test_hover_completes_after_its_duration() -> None:
     assert texts["circle retasks the vehicle (after step 1 completes)"] == pytest.approx(30.0)
     done = [t for text, t in texts.items() if text.startswith("hover completes")]
     assert done == [pytest.approx(30.0)]
-    frames = export_onboard(s, START)["frames"]
-    assert [f["t_s"] for f in frames] == [0.0, 30.0]
-    assert "30.0 s after it takes effect" in frames[1]["note"]
+    # the onboard export refuses "on completion" rather than writing t = 30 s in its place
+    with pytest.raises(ScriptError) as info:
+        export_onboard(s, START)
+    assert info.value.loc == ("steps", 1, "trigger", "kind")
+    assert "by the plan step 1 completes at 30 s from the run's start" in info.value.message
 
 
 def test_hover_longer_than_its_approach_still_completes_at_its_duration() -> None:
@@ -105,7 +108,13 @@ def test_finite_pattern_completes_at_its_path_end() -> None:
     assert mow.completion_s == mow.plan.path.times[-1]
     assert line.t_start_s == pytest.approx(5.0 + mow.plan.path.times[-1])
     assert hov.t_start_s == pytest.approx(line.t_start_s + line.plan.path.times[-1])
-    frames = export_onboard(s, START)["frames"]
+    # the same times written as 'at' triggers (the operator's choice) export as they read
+    timed = script(
+        step("lawnmower", LAWNMOWER, "at", 5),
+        step("straight", STRAIGHT, "at", round(line.t_start_s, 3)),
+        step("hover", HOVER, "at", round(hov.t_start_s, 3)),
+    )
+    frames = export_onboard(timed, START)["frames"]
     assert [f["t_s"] for f in frames] == [
         pytest.approx(x.t_start_s, abs=1e-3) for x in (mow, line, hov)
     ]
@@ -171,7 +180,9 @@ def first_pose(client: TestClient) -> None:
     wait_until(lambda: client.get("/api/vehicle").json()["pose"], what="a pose")
 
 
-def run_to_the_end(client: TestClient, body: dict[str, Any], timeout_s: float) -> dict[str, Any]:
+def run_to_the_end(
+    client: TestClient, body: dict[str, Any], timeout_s: float, outcome: str = "completed"
+) -> dict[str, Any]:
     r = client.post("/api/scripts/run", json={"script": body, "mode": "auto"}, headers=AUTH)
     assert r.status_code == 200, r.text
     done: dict[str, Any] = wait_until(
@@ -179,7 +190,7 @@ def run_to_the_end(client: TestClient, body: dict[str, Any], timeout_s: float) -
         timeout_s=timeout_s,
         what="the run to finish",
     )
-    assert done["outcome"] == "completed", done["reason"]
+    assert done["outcome"] == outcome, done["reason"]
     return done
 
 
@@ -196,8 +207,9 @@ def test_the_issue_stall_now_sends_the_circle(client: TestClient) -> None:
     )
     pv = client.post("/api/scripts/preview", json=HOVER_THEN_CIRCLE).json()
     assert any("keeps that hover's clock" in w for w in pv["warnings"])
-    done = run_to_the_end(client, HOVER_THEN_CIRCLE, timeout_s=30)
+    done = run_to_the_end(client, HOVER_THEN_CIRCLE, timeout_s=30, outcome="until_retasked")
     assert [s["state"] for s in done["steps"]] == ["acknowledged", "acknowledged"]
+    assert done["summary"] == "every step sent: step 2 (circle) is running until retasked"
     wait_until(
         lambda: (client.get("/api/vehicle").json()["status"] or {}).get("pattern") == "circle",
         what="the vehicle flying the circle",
@@ -219,9 +231,14 @@ def test_timeline_export_and_run_agree(client: TestClient) -> None:
     assert starts[2] > starts[1] + 60.0  # the lawnmower's path
     timeline = {e["step"]: e["t_s"] for e in pv["timeline"] if "retasks" in e["text"]}
     assert [timeline[1], timeline[2]] == pytest.approx(starts[1:])
-    frames = client.post("/api/scripts/export", json=body).json()["frames"]
-    assert [f["t_s"] for f in frames] == pytest.approx(starts, abs=1e-3)
-    done = run_to_the_end(client, body, timeout_s=20 + starts[2] / TIME_SCALE * 3)
+    # the onboard script cannot carry "on completion": refused, naming the step and the time
+    r = client.post("/api/scripts/export", json=body)
+    assert r.status_code == 422, r.text
+    assert r.json()["detail"][0]["loc"] == ["body", "steps", 1, "trigger", "kind"]
+    assert "at 60 s from the run's start" in r.json()["detail"][0]["msg"]
+    done = run_to_the_end(
+        client, body, timeout_s=20 + starts[2] / TIME_SCALE * 3, outcome="until_retasked"
+    )
     sent = [s["sent_s"] for s in done["steps"]]
     assert sent[0] == pytest.approx(0.0, abs=SEND_TOLERANCE_S)
     # the run's own plan (from where the vehicle was when it started) matches the preview's

@@ -4,10 +4,18 @@ operator's go, failures, and completion by the plan (never by waiting on the veh
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 
 import pytest
 
-from backend.scripts.operations import MissionScript, RunMode, ScriptRunError, ScriptRunner, expand
+from backend.scripts.operations import (
+    CompletionBy,
+    MissionScript,
+    RunMode,
+    ScriptRunError,
+    ScriptRunner,
+    expand,
+)
 from tests.backend.scripts.test_scripts import (
     CIRCLE,
     HOVER,
@@ -104,9 +112,16 @@ def test_after_previous_is_due_the_planned_completion_after_the_previous_send() 
     assert r.poll(62.5 + MOW_DONE_S) == [2]
     assert r.poll(62.5 + MOW_DONE_S + 1) == []
     r.mark_acknowledged(2)
+    # every step acknowledged, but the hover flies on: the run waits for it to complete
+    st = r.state()
+    assert st["running"] and st["outcome"] == "running"
+    assert st["waiting_for"] == "completion" and st["step"] is None
+    assert st["due_s"] == 62.5 + MOW_DONE_S + HOVER_DONE_S  # expected, by the plan
+    assert r.poll(62.5 + MOW_DONE_S + HOVER_DONE_S) == []  # completion_by "plan": estimated
     st = r.state()
     assert not st["running"]
     assert st["outcome"] == "completed"
+    assert st["completed_s"] == 62.5 + MOW_DONE_S + HOVER_DONE_S
     assert st["waiting_for"] is None and st["due_s"] is None
     assert st["step"] is None
     assert [x["state"] for x in st["steps"]] == ["acknowledged"] * 3
@@ -214,6 +229,8 @@ def test_step_mode_proposes_each_and_only_go_releases() -> None:
         r.mark_sent(i)
         assert r.state()["steps"][i]["transmitted"]
         r.mark_acknowledged(i)
+    assert r.state()["waiting_for"] == "completion"  # the hover flies on after its ack
+    r.poll(5000.0)
     assert r.state()["outcome"] == "completed"
 
 
@@ -268,6 +285,7 @@ def test_never_sends_a_step_twice() -> None:
             r.mark_acknowledged(i)  # a duplicate acknowledgement changes nothing
     assert sent == [0, 1, 2]
     assert r.state()["outcome"] == "completed"
+    assert r.state()["completed_s"] == 41.0 + 40.0  # the last straight's send + its 40 s
 
 
 def test_marks_for_steps_not_handed_out_are_refused() -> None:
@@ -293,8 +311,185 @@ def test_state_is_json_ready() -> None:
         "index": 0,
         "pattern": "straight",
         "trigger": "at",
+        "t_s": 0.0,
         "state": "sent",
         "transmitted": False,
+        "acknowledged_by_vehicle": False,
         "sent_s": 0.0,
         "completion_s": STRAIGHT_DONE_S,
+        "completed_s": None,
+        "trigger_text": "at 0 s from the run's start",
+        "takes_text": "takes 40 s",
+        "state_text": "sending",
     }
+    assert (
+        st["summary"]
+        == "running (auto): step 1 (straight) is on its way; step 2 (lawnmower) is next"
+    )
+
+
+# --- when the run is over: the last step's pattern completes (issue 20) -----------------
+
+#: The hover as the vehicle decodes it (what its status names as the active command).
+HOVER_ACTIVE: dict[str, object] = {
+    "pattern": "hover",
+    "params": {"duration": 30.0, "depth": 2.0, "heading": 45.0},
+}
+
+
+def status(
+    mode: str, t_s: float, active: dict[str, object] | None = HOVER_ACTIVE
+) -> dict[str, object]:
+    """A vehicle status as the contract has it (only what the verdict reads)."""
+    doc: dict[str, object] = {"t_s": t_s, "mode": mode, "pattern": None}
+    if active is not None:
+        doc["active"] = active
+        doc["pattern"] = active["pattern"]
+    return doc
+
+
+def straight_then_hover(clock: Callable[[], float]) -> ScriptRunner:
+    """A straight, then a hover on completion; the vehicle reports its status."""
+    s = script(step("straight", STRAIGHT, "at", 0), step("hover", HOVER, "after_previous"))
+    completion = [STRAIGHT_DONE_S, HOVER_DONE_S]
+    return ScriptRunner(s, "auto", completion_s=completion, clock=clock, completion_by="vehicle")
+
+
+def to_the_last_ack(r: ScriptRunner, vehicle_t_s: float | None = 500.0) -> None:
+    assert r.poll(0.0) == [0]
+    r.mark_sent(0)
+    r.mark_acknowledged(0, vehicle_t_s=vehicle_t_s)
+    assert r.poll(STRAIGHT_DONE_S) == [1]
+    r.mark_sent(1)
+    r.mark_acknowledged(1, vehicle_t_s=vehicle_t_s)
+
+
+def test_the_run_completes_when_the_vehicle_reports_the_last_pattern_complete() -> None:
+    now = [0.0]
+    r = straight_then_hover(lambda: now[0])
+    to_the_last_ack(r)
+    st = r.state()
+    assert st["running"] and st["waiting_for"] == "completion"
+    assert st["summary"] == (
+        "running (auto): every step sent; waiting for the vehicle to report step 2 (hover) "
+        "complete, expected at 70 s from the run's start by the plan"
+    )
+    # long past the plan's time, the vehicle still runs the hover: the run waits
+    now[0] = 248.0
+    assert r.poll() == []
+    r.observe(status("running", 740.0))
+    assert r.state()["outcome"] == "running"
+    r.observe(None)  # no status at all says nothing either
+    assert r.running
+    now[0] = 249.5
+    r.observe(status("holding", 749.5))
+    st = r.state()
+    assert not st["running"] and st["outcome"] == "completed"
+    assert st["completion_by"] == "vehicle" and st["completed_s"] == 249.5
+    assert st["summary"] == (
+        "completed at 249.5 s from the run's start: the vehicle reported step 2 (hover) complete"
+    )
+    assert st["steps"][1]["state_text"] == (
+        "sent at 40 s from the run's start, acknowledged by the vehicle; completed at 249.5 s "
+        "from the run's start, as the vehicle reported"
+    )
+
+
+def test_a_status_of_another_command_ends_the_wait_only_when_newer_than_the_ack() -> None:
+    r = straight_then_hover(lambda: 50.0)
+    to_the_last_ack(r, vehicle_t_s=540.0)
+    straight: dict[str, object] = {"pattern": "straight", "params": {"speed": 0.4}}
+    r.observe(status("holding", 539.0, straight))  # before the hover was accepted: stale
+    assert r.running
+    r.observe(status("holding", 545.0, straight))  # after it: retasked by someone else
+    st = r.state()
+    assert st["outcome"] == "stopped"
+    assert st["reason"] == (
+        "step 2 (hover) will not complete: the vehicle runs straight (holding), not this "
+        "step's command"
+    )
+
+
+def test_without_active_only_a_newer_status_of_the_pattern_counts() -> None:
+    r = straight_then_hover(lambda: 90.0)
+    to_the_last_ack(r, vehicle_t_s=540.0)
+    hover_only = {"t_s": 540.0, "mode": "holding", "pattern": "hover"}
+    r.observe(hover_only)  # not newer than the acceptance: an older hover may be holding
+    assert r.running
+    r.observe({**hover_only, "t_s": 571.0})
+    assert r.state()["outcome"] == "completed"
+
+
+def test_an_empty_battery_stops_the_wait() -> None:
+    r = straight_then_hover(lambda: 60.0)
+    to_the_last_ack(r)
+    r.observe(status("battery_empty", 560.0))
+    assert r.state()["outcome"] == "stopped"
+    assert "battery is empty" in (r.reason or "")
+
+
+def test_a_link_that_reports_nothing_estimates_completion_by_the_flyable_duration() -> None:
+    s = script(step("straight", STRAIGHT, "at", 0), step("hover", HOVER, "after_previous"))
+    # the hover flies slower than planned (its flyable duration at the vehicle's rates)
+    r = ScriptRunner(
+        s, "auto", completion_s=[STRAIGHT_DONE_S, 30.0], flyable_s=[STRAIGHT_DONE_S, 45.0]
+    )
+    assert r.poll(0.0) == [0]
+    r.mark_acknowledged(0, by_vehicle=False)
+    assert r.poll(STRAIGHT_DONE_S) == [1]  # on completion: timed by the plan, as before
+    r.mark_sent(1)
+    r.mark_acknowledged(1, by_vehicle=False)
+    r.observe(status("holding", 9999.0))  # completion_by "plan": a status decides nothing
+    assert r.running
+    st = r.state()
+    assert st["due_s"] == STRAIGHT_DONE_S + 45.0
+    assert st["summary"] == (
+        "running (auto): every step sent; step 2 (hover) is estimated to complete at 85 s "
+        "from the run's start (the link reports nothing)"
+    )
+    assert r.poll(STRAIGHT_DONE_S + 44.9) == []
+    assert r.poll(STRAIGHT_DONE_S + 60.0) == []
+    st = r.state()
+    assert st["outcome"] == "completed" and st["completion_by"] == "plan"
+    assert st["completed_s"] == STRAIGHT_DONE_S + 45.0  # the estimate, not the poll's time
+    assert st["summary"] == (
+        "completed at 85 s from the run's start (estimated): step 2 (hover) completes then by "
+        "the plan; the link reports nothing to confirm it"
+    )
+    assert st["steps"][1]["state_text"] == (
+        "sent at 40 s from the run's start (this link gives no acknowledgement); completed at "
+        "85 s from the run's start by the plan (estimated: the link reports nothing)"
+    )
+
+
+@pytest.mark.parametrize("completion_by", ["vehicle", "plan"])
+def test_a_repeating_last_step_leaves_the_vehicle_running_until_retasked(
+    completion_by: CompletionBy,
+) -> None:
+    s = script(step("hover", HOVER, "at", 0), step("circle", CIRCLE, "after_previous"))
+    r = ScriptRunner(
+        s,
+        "auto",
+        completion_s=[HOVER_DONE_S, None],
+        completion_by=completion_by,
+    )
+    assert r.poll(0.0) == [0]
+    r.mark_acknowledged(0)
+    assert r.poll(HOVER_DONE_S) == [1]
+    r.mark_acknowledged(1)
+    st = r.state()
+    assert not st["running"] and st["outcome"] == "until_retasked"
+    assert st["completed_s"] is None and st["waiting_for"] is None
+    assert st["summary"] == "every step sent: step 2 (circle) is running until retasked"
+    assert st["steps"][1]["takes_text"] == "repeats until retasked"
+
+
+def test_planned_runner_takes_the_planners_flyable_estimate() -> None:
+    s = script(step("straight", STRAIGHT, "at", 0), step("circle", CIRCLE, "after_previous"))
+    expanded = expand(s, START)
+    # a vehicle slower than the straight's 0.4 m/s takes longer than the plan's own times
+    r = ScriptRunner.planned(s, expanded, top_speed_mps=0.2)
+    assert r.completion_s[0] == pytest.approx(expanded[0].duration_s)
+    slow, planned = r.flyable_s[0], r.completion_s[0]
+    assert slow is not None and planned is not None and slow > planned + 10.0
+    assert r.flyable_s[1] is None  # Estimate.repeats: the circle

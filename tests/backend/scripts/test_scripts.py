@@ -429,7 +429,7 @@ def test_export_frames_match_encoder_and_times() -> None:
         step("square", SQUARE, "at", 0),
         step("circle", CIRCLE, "at", 120),
         step("lawnmower", LAWNMOWER, "operator"),
-        step("surface", {}, "after_previous"),
+        step("surface", {}, "at", 900),
     )
     out = export_onboard(s, START)
     pv = preview(s, START)
@@ -446,7 +446,33 @@ def test_export_frames_match_encoder_and_times() -> None:
     assert [f["t_s"] for f in frames[:2]] == [0.0, 120.0]
     assert "note" not in frames[0]
     assert "operator" in frames[2]["note"]
-    assert "after step 3 completes" in frames[3]["note"]  # numbered as the page
+    assert frames[3]["t_s"] == 900.0 and "note" not in frames[3]
+
+
+@pytest.mark.parametrize("fmt", ["json", "csv"])
+def test_export_refuses_on_completion_naming_the_step_and_the_planned_time(fmt: str) -> None:
+    # issue 20: "on completion" became a fixed t = 20 s without a word; the onboard script
+    # holds only timed frames, so the export refuses it, in JSON and in CSV alike
+    s = script(
+        step("square", SQUARE, "at", 0),
+        step("lawnmower", LAWNMOWER, "at", 120),
+        step("surface", {}, "after_previous"),
+    )
+    mow = expand(s, START)[1]
+    with pytest.raises(ScriptError) as info:
+        export_onboard(s, START) if fmt == "json" else onboard_csv(s, START)
+    err = info.value
+    assert err.loc == ("steps", 2, "trigger", "kind")
+    assert err.errors()[0]["type"] == "onboard_completion_trigger"
+    assert err.message.startswith(
+        "step 3 waits for step 2 (lawnmower) to complete, but an onboard script holds only "
+        "timed frames"
+    )
+    done_s = 120.0 + (mow.completion_s or 0.0)
+    assert err.message.endswith(
+        f"Give step 3 a time ('at'): by the plan step 2 completes at {done_s:.1f} s from the "
+        "run's start"
+    )
 
 
 def test_onboard_csv() -> None:
