@@ -4,14 +4,18 @@
 
 import { api } from "./api.js";
 import { dictionary, paramForm, fillPatternSelect, defaultParams, commandText } from "./form.js";
-import { $, el, summarize, withUnit, download, notify, notifyError, applyAuth, setOff } from "./ui.js";
+import { $, el, download, notify, notifyError, applyAuth, setOff } from "./ui.js";
+import { drawScriptPlan } from "./script_plan.js";
 
 export const SCRIPT_FORMAT = "nemesys-mission-script";
 export const SCRIPT_VERSION = 1;
+/** The triggers in the operator's words (backend/scripts/labels.py's TRIGGER_WORDS;
+ * tests/backend/scripts/test_labels.py checks they agree). Every time of a script counts from
+ * its run's start: a script is written ahead and run at any point of a dive. */
 const TRIGGERS = [
-  ["after_previous", "when the previous pattern completes"],
-  ["at", "at time into the dive"],
-  ["operator", "on operator go"],
+  ["after_previous", "after the previous step completes"],
+  ["at", "at a time from the run's start"],
+  ["operator", "on the operator's go"],
 ];
 
 /** Patterns that repeat until retasked, so never complete: the planner's REPEATING_PATTERNS
@@ -70,6 +74,7 @@ function clearScript() {
   steps = [];
   renderSteps();
   $("script-timeline").replaceChildren();
+  $("script-plan").hidden = true;
   notify(`script cleared (${n} step${n === 1 ? "" : "s"})`);
 }
 
@@ -145,11 +150,12 @@ function stepRow(step, i) {
   trigger.value = step.trigger.kind;
   const time = el("input", {
     id: `${prefix}t`, testid: `${prefix}t`, type: "number", min: 0, step: "any", inputmode: "decimal",
-    "aria-label": `step ${i + 1} time into the dive (s)`, hidden: step.trigger.kind !== "at",
+    "aria-label": `step ${i + 1} time from the run's start (s)`, hidden: step.trigger.kind !== "at",
   });
   time.value = step.trigger.t_s ?? 0;
-  const unit = el("span", { class: "unit", hidden: step.trigger.kind !== "at" }, "s");
+  const unit = el("span", { class: "unit", hidden: step.trigger.kind !== "at" }, "s from the run's start");
   const check = el("p", { class: "step-check", testid: `${prefix}check`, hidden: true });
+  const timing = el("p", { class: "step-timing hint", testid: `${prefix}timing`, hidden: true });
   const refusal = completionRefusal(steps, i);
   if (refusal) showCheck(check, "error", refusal);
   trigger.addEventListener("change", () => {
@@ -180,6 +186,7 @@ function stepRow(step, i) {
         el("button", { type: "button", class: "small down", testid: `${prefix}down`, disabled: i === steps.length - 1, "aria-label": `move step ${i + 1} down`, onclick: () => move(i, 1) }, "↓"),
         el("button", { type: "button", class: "small", testid: `${prefix}remove`, "aria-label": `remove step ${i + 1}`, onclick: () => remove(i) }, "Remove"))),
     el("details", {}, summary, formBox),
+    timing,
     check);
 }
 
@@ -216,14 +223,22 @@ function clearStepChecks() {
   });
 }
 
-/** A preview timeline event ({t_s, step, text}) or a run step ({index, pattern, state, ...}). */
+/** A preview timeline event, as the API labels it ("at 30 s from the run's start: ..."). */
 function timelineText(e) {
   if (!e || typeof e !== "object") return String(e ?? "");
-  if (typeof e.text === "string") return `${withUnit(e.t_s, "s", 1)}: ${e.text}`;
-  const rest = summarize(e, ["pattern", "params", "state", "index"]);
-  const head = e.pattern ? commandText(e) : "";
-  const state = e.state ? ` [${e.state}]` : "";
-  return [head, rest].filter((t) => t && t !== "–").join(" · ") + state;
+  return typeof e.label === "string" ? e.label : String(e.text ?? "");
+}
+
+/** A run step in words: "2. hover · after the previous step completes · takes 30 s · sent
+ * at 40 s from the run's start, acknowledged by the vehicle" (the API's texts). */
+function runStepText(s, i) {
+  if (!s || typeof s !== "object") return `${i + 1}. –`;
+  const name = String(s.pattern || "").replace(/_/g, " ");
+  return [`${i + 1}. ${name}`, s.trigger_text, s.takes_text, s.state_text].filter(Boolean).join(" · ");
+}
+
+function show3dView() {
+  $("viewer-box")?.scrollIntoView({ block: "nearest" });
 }
 
 async function previewScript() {
@@ -237,8 +252,16 @@ async function previewScript() {
         dataset: e && e.step != null ? { step: String(e.step) } : {},
       }, timelineText(e)))
       : [el("li", { class: "hint" }, "empty timeline")]));
-    (Array.isArray(r && r.steps) ? r.steps : []).forEach((s, i) => {
-      const box = $("script-step-" + i)?.querySelector(".step-check");
+    const previewed = Array.isArray(r && r.steps) ? r.steps : [];
+    drawScriptPlan($("script-plan"), r && r.path, previewed, show3dView);
+    previewed.forEach((s, i) => {
+      const row = $("script-step-" + i);
+      const timing = row?.querySelector(".step-timing");
+      if (timing && s && s.timing_text) {
+        timing.hidden = false;
+        timing.textContent = s.timing_text;
+      }
+      const box = row?.querySelector(".step-check");
       const v = s && Array.isArray(s.violations) ? s.violations : [];
       if (box && v.length) {
         box.hidden = false;
@@ -246,7 +269,7 @@ async function previewScript() {
         box.textContent = v.map((x) => `${x.param}: ${x.message}`).join("; ");
       }
     });
-    notify("script preview drawn in the 3D view");
+    notify("script preview drawn above the steps and in the 3D view");
   } catch (err) {
     if (err.status === 422) showStepErrors(err);
     notifyError("script preview", err);
@@ -342,25 +365,20 @@ export async function pollRun() {
   }
 }
 
+/** A trigger in the operator's words ("at 60 s from the run's start"). */
 function triggerText(t) {
   if (!t || typeof t !== "object") return "";
-  if (t.kind === "at") return `at ${t.t_s ?? 0} s into the dive`;
-  return t.kind === "operator" ? "on operator go" : "when the previous pattern completes";
-}
-
-/** How a finished run ended: "completed", "stopped: reason", "failed: reason". */
-function outcomeText(run) {
-  const outcome = run.outcome && run.outcome !== "running" ? run.outcome : "finished or stopped";
-  return run.reason ? `${outcome}: ${run.reason}` : outcome;
+  if (t.kind === "at") return `at ${Number(t.t_s ?? 0)} s from the run's start`;
+  const known = TRIGGERS.find(([k]) => k === t.kind);
+  return known ? known[1] : "";
 }
 
 function renderRun(run) {
   const running = Boolean(run && run.running);
   const total = run && Array.isArray(run.steps) ? run.steps.length : 0;
-  const stepNo = run && run.step != null ? Number(run.step) + 1 : null;
-  $("script-run-state").textContent = running
-    ? `running (${run.mode})${stepNo ? `, step ${stepNo}${total ? ` of ${total}` : ""}` : ""}${run.waiting_for ? `, waiting for ${run.waiting_for}${run.due_s != null && run.waiting_for !== "operator" ? ` (due at ${withUnit(run.due_s, "s", 1)} into the run)` : ""}` : ""}`
-    : run && total ? outcomeText(run) : "not running";
+  const state = $("script-run-state");
+  state.textContent = run && typeof run.summary === "string" && (running || total) ? run.summary : "not running";
+  state.dataset.outcome = (run && run.outcome) || "";
   const next = running && run.next ? run.next : null;
   const proposal = $("script-next-proposal");
   proposal.hidden = !next;
@@ -370,7 +388,7 @@ function renderRun(run) {
   setOff($("script-run"), running);
   $("script-run-steps").replaceChildren(...(running || total ? (run.steps || []).map((s, i) =>
     el("li", { testid: `script-run-step-${i}`, class: s && s.state ? `st-${s.state}` : "" },
-      `${i + 1}. ${timelineText(s)}`)) : []));
+      runStepText(s, i))) : []));
   clearTimeout(pollTimer);
   pollTimer = running ? setTimeout(pollRun, 1000) : null;
 }
