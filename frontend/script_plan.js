@@ -55,7 +55,8 @@ export function drawScriptPlan(box, path, steps, onShow3d) {
     svg.append(mark);
   });
   const finite = depth.filter(Number.isFinite);
-  const depths = finite.length ? `depth ${metres(Math.min(...finite))} to ${metres(Math.max(...finite))}` : "";
+  const [shallow, deep] = finite.length ? [metres(Math.min(...finite)), metres(Math.max(...finite))] : [];
+  const depths = !finite.length ? "" : shallow === deep ? `depth ${deep}` : `depth ${shallow} to ${deep}`;
   const show3d = document.createElement("button");
   show3d.type = "button";
   show3d.className = "link-button";

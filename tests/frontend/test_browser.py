@@ -256,16 +256,26 @@ def test_mission_script_with_two_commands_runs_to_completion(
     # one entry per command sent (a circle repeats, so a note that one lap is shown follows)
     sends = timeline.filter(has_text=re.compile(r"starts \(|retasks the vehicle \("))
     expect(sends).to_have_count(2)
-    expect(sends.nth(0)).to_have_text("0 s: square starts (at 0 s)")
-    expect(sends.nth(1)).to_have_text("15 s: circle retasks the vehicle (at 15 s)")
+    expect(sends.nth(0)).to_have_text(
+        "at 0 s from the run's start: square starts (at its set time)"
+    )
+    expect(sends.nth(1)).to_have_text(
+        "at 15 s from the run's start: circle retasks the vehicle (at its set time)"
+    )
     assert commands(console) == [], "a preview must not transmit anything"
 
     # run it in auto mode
     expect(page.get_by_test_id("script-step-mode")).not_to_be_checked()
     page.get_by_test_id("script-run").click()
-    wait_text(page, "script-run-state", "completed", 20_000)
+    # the last step is a circle: it repeats, so the run leaves it running until retasked
+    wait_text(
+        page,
+        "script-run-state",
+        "every step sent: step 2 (circle) is running until retasked",
+        20_000,
+    )
     run = console.get("/api/scripts/run")
-    assert run["outcome"] == "completed" and not run["running"], run
+    assert run["outcome"] == "until_retasked" and not run["running"], run
     ids = [run["commands"][k] for k in sorted(run["commands"], key=int)]
     assert len(ids) == 2
     for command_id, pattern in zip(ids, ("square", "circle"), strict=True):

@@ -63,9 +63,14 @@ def test_steps_survive_a_reload_and_clear_empties_them(console: Console, watched
     page.get_by_test_id("script-preview").click()
     timeline = page.locator("#script-timeline > li")
     expect(
-        timeline.filter(has_text="300 s: lawnmower retasks the vehicle (at 300 s)")
+        timeline.filter(
+            has_text="at 300 s from the run's start: lawnmower retasks the vehicle "
+            "(at its set time)"
+        )
     ).to_have_count(1)
-    expect(timeline.filter(has_text="200 s: hover completes")).to_have_count(1)
+    expect(
+        timeline.filter(has_text="at 200 s from the run's start: hover completes")
+    ).to_have_count(1)
 
     page.get_by_test_id("script-clear").click()
     expect(page.locator("#script-steps > li")).to_have_count(0)
@@ -111,7 +116,7 @@ def test_the_page_refuses_on_completion_after_a_circle(console: Console, watched
     expect(
         page.get_by_test_id("message").filter(has_text="repeats until retasked")
     ).not_to_have_count(0)
-    # choosing "when the previous pattern completes" is refused with the reason
+    # choosing "after the previous step completes" is refused with the reason
     page.get_by_test_id("script-step-3-trigger").select_option("after_previous")
     expect(page.get_by_test_id("script-step-3-trigger")).to_have_value("operator")
     check = page.get_by_test_id("script-step-3-check")
