@@ -85,7 +85,7 @@ def every_state_of_a_run() -> list[dict[str, Any]]:
             step("hover", HOVER, "after_previous"),
             step("lawnmower", LAWNMOWER, "operator"),
         )
-        r = ScriptRunner(s, "auto", completion_s=[40.0, 30.0, 150.0], completion_by=by)  # type: ignore[arg-type]
+        r = ScriptRunner(s, "auto", completion_s=[40.0, 30.0, 150.0], completion_by=by)
         states.append(r.state())
         assert r.poll(0.0) == [0]
         states.append(r.state())
