@@ -231,8 +231,16 @@ def log_likelihood(
             if counts.sync_censored:
                 out += counts.sync_censored * np.log(sync_cdf)
             if counts.not_decoded:
-                # 1 - F_sync F_cw = tail_sync + F_sync tail_cw
-                out += counts.not_decoded * np.log(sync_tail + sync_cdf * cw_tail)
+                # 1 - F_sync F_cw: summed from the tails where the product is near 1 (no
+                # cancellation at small p), log1p of the product where it is small (the
+                # likelihood keeps rising to p = 0.5, not flat in rounding)
+                decodes = sync_cdf * cw_cdf
+                refused = np.where(
+                    decodes < 0.5,
+                    np.log1p(-np.minimum(decodes, 0.5)),
+                    np.log(sync_tail + sync_cdf * cw_tail),
+                )
+                out += counts.not_decoded * refused
     return out
 
 
