@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import random
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -54,7 +55,7 @@ def oracle_log_likelihood(c: ChannelCounts, p: float) -> float:
     return ll + c.not_decoded * math.log(1.0 - f_sync * f_cw)
 
 
-def golden_max(f: Any, a: float, b: float) -> float:
+def golden_max(f: Callable[[float], float], a: float, b: float) -> float:
     g = (math.sqrt(5) - 1) / 2
     for _ in range(200):
         c, d = b - g * (b - a), a + g * (b - a)
@@ -65,7 +66,7 @@ def golden_max(f: Any, a: float, b: float) -> float:
     return (a + b) / 2
 
 
-def root(f: Any, a: float, b: float) -> float:
+def root(f: Callable[[float], float], a: float, b: float) -> float:
     """Bisection: f(a) and f(b) of opposite signs."""
     fa = f(a)
     for _ in range(200):
@@ -90,8 +91,10 @@ def test_uncensored_counts_give_the_binomial_estimate_and_its_likelihood_ratio_i
     p_hat = errors / bits
     assert est.ber == pytest.approx(p_hat, rel=1e-4)
 
+    def ll(q: float) -> float:
+        return errors * math.log(q) + (bits - errors) * math.log1p(-q)
+
     def drop(p: float) -> float:  # 2 (l(p_hat) - l(p)) - chi2: zero at the interval's ends
-        ll = lambda q: errors * math.log(q) + (bits - errors) * math.log1p(-q)  # noqa: E731
         return 2 * (ll(p_hat) - ll(p)) - CHI2_95
 
     assert est.low == pytest.approx(root(drop, 1e-12, p_hat), rel=1e-3)
