@@ -311,8 +311,13 @@ def estimate_ber(
 
 
 class ChannelEstimator:
-    """The dive's frames so far and their estimate (computed when asked, then kept until the
-    next frame). No I/O: the command manager feeds it every acknowledgement."""
+    """The dive's frames so far and their estimate (computed when asked, kept for the counts
+    it was computed from). No I/O: the command manager feeds it every acknowledgement.
+
+    Frames are taken on one thread (the console's event loop); the estimate may be asked from
+    others (the API's worker threads): the counts are immutable and replaced whole, and the
+    kept estimate is paired with the counts it belongs to.
+    """
 
     def __init__(self, *, min_frames: int = MIN_FRAMES, layout: FrameLayout = LAYOUT) -> None:
         self.min_frames = min_frames
@@ -324,8 +329,7 @@ class ChannelEstimator:
         self.counts = ChannelCounts()
         #: Acknowledgements that said nothing of the channel (see :func:`evidence_of`).
         self.ignored = 0
-        self._estimate: BerEstimate | None = None
-        self._stale = False
+        self._kept: tuple[ChannelCounts, BerEstimate | None] | None = None
 
     def observe(self, ack: Mapping[str, Any]) -> FrameEvidence | None:
         """Take one acknowledgement; returns its evidence (``None``: ignored)."""
@@ -334,14 +338,14 @@ class ChannelEstimator:
             self.ignored += 1
             return None
         self.counts = self.counts.plus(evidence, self.layout)
-        self._stale = True
         return evidence
 
     def estimate(self) -> BerEstimate | None:
         """The estimate, or ``None`` below :attr:`min_frames` frames."""
-        if self.counts.frames < max(1, self.min_frames):
+        counts = self.counts
+        if counts.frames < max(1, self.min_frames):
             return None
-        if self._stale or self._estimate is None:
-            self._estimate = estimate_ber(self.counts, layout=self.layout)
-            self._stale = False
-        return self._estimate
+        kept = self._kept
+        if kept is None or kept[0] != counts:
+            kept = self._kept = (counts, estimate_ber(counts, layout=self.layout))
+        return kept[1]
