@@ -52,8 +52,8 @@ def test_in_training_the_estimate_shows_beside_the_emulated_ber(
     # the page follows the link messages (every second): the same figures, as it writes them
     shown = console.get("/api/vehicle")["link"]["channel"]
     expect(estimate).to_have_text(
-        f"estimated: BER ≈ {rate(shown['ber'])} (95 % {rate(shown['low'])}–"
-        f"{rate(shown['high'])}, {shown['frames']} frames)"
+        f"estimated: BER \u2248 {rate(shown['ber'])} (95 % {rate(shown['low'])}"
+        f"\u2013{rate(shown['high'])}, {shown['frames']} frames)"
     )
     expect(link).to_contain_text("BER 2e-2 (emulated channel)")  # the copies still follow it
     # the choice is the emulated channel's in training
