@@ -31,8 +31,10 @@ log-likelihood of the dive's frames is::
 
 The estimate is its maximum over [0, 0.5] and the 95 % interval the likelihood-ratio set
 ``2 (l(p_hat) - l(p)) <= chi2_1(0.95)`` (one parameter, so the profile is l itself). Every
-piece is log-concave in ``p`` but the last, and ``l`` is unimodal over the range: the interval
-is found by bisection from the estimate outwards.
+piece is log-concave in ``p`` but the last, which rises with ``p``; ``l`` is taken to be
+unimodal over the range (the tests compare it with an independent search): ``l`` on a
+log-spaced grid of [0, 0.5], a fine grid around its best point, and each end of the interval
+where ``l`` crosses the level between the estimate and the nearest grid point below it.
 
 **Lost frames (no acknowledgement) are left out.** The agent acknowledges every frame it
 receives, a failed sync included, so under the model a frame that bit errors spoil still
