@@ -26,6 +26,8 @@ from backend.chart.tiles import TileSource, open_tiles
 from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.checks import SendViolation
 from backend.commands.health import LinkHealth, link_health_of
+from backend.commands.link_ber import BerChoice, CopiesFrom
+from backend.commands.link_settings import ber_now, change_link
 from backend.commands.manager import CommandManager
 from backend.commands.service import Assessment, CommandService
 from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMessage, VehicleView
@@ -96,8 +98,8 @@ class Console:
         self._health_task: asyncio.Task[None] | None = None
         self._last_track_s = -1.0
         self._echo_flagged = False  # an echo mismatch is logged once each time it begins
-        #: The bit-error rate assumed of a real link (``link_ber``; the operator may change it).
-        self.assumed_ber = settings.link_ber
+        #: The BER assumed of a real link (``link_ber``) and what the copies follow there.
+        self.ber_choice = BerChoice(settings.link_ber)
 
     # --- lifecycle -----------------------------------------------------------------------
 
@@ -266,11 +268,9 @@ class Console:
 
     def link_ber(self) -> tuple[float, float]:
         """(bit-error rate, whole-frame loss) the copies are chosen from: the emulated
-        channel's in training, the ``link_ber`` setting on a real link."""
-        if self.sim is None:
-            return self.assumed_ber, 0.0
-        config = self.sim.channel.config
-        return float(config.ber), float(config.loss)
+        channel's in training, else the operator's choice (:mod:`backend.commands.link_ber`)."""
+        now = ber_now(self)
+        return now.ber, now.loss
 
     def _link_delay_s(self) -> float:
         if self.sim is None:
@@ -317,27 +317,24 @@ class Console:
         """What the station knows of its link to the vehicle (not the page's websocket)."""
         assert self.link is not None and self.commands is not None
         return link_health_of(
-            self.link, self.commands, self.hub, self.settings.target, self.link_ber()[0]
+            self.link,
+            self.commands,
+            self.hub,
+            self.settings.target,
+            ber_now(self),
+            self.ber_choice.copies_from,
         )
 
-    def set_link(self, link_ber: float | None, delivery_target: float | None) -> LinkHealth:
-        """Change what the station assumes of its link (None: unchanged); later commands'
-        copies follow.
-
-        Raises:
-            ValueError: ``link_ber`` in training (the emulated channel's BER is used).
-        """
-        assert self.commands is not None
-        if link_ber is not None:
-            if self.sim is not None:
-                raise ValueError(
-                    "in training the copies follow the emulated channel's BER: set it with "
-                    "PUT /api/training/channel"
-                )
-            self.assumed_ber = link_ber
-        if delivery_target is not None:
-            self.commands.delivery_target = delivery_target
-        return self.link_health()
+    def set_link(
+        self,
+        operator: str,
+        link_ber: float | None,
+        delivery_target: float | None,
+        copies_from: CopiesFrom | None = None,
+    ) -> LinkHealth:
+        """Change what the station assumes of its link (:func:`backend.commands.link_settings.
+        change_link`: ValueError in training for ``link_ber`` or the estimate)."""
+        return change_link(self, operator, link_ber, delivery_target, copies_from)
 
     async def _push_health(self) -> None:
         while True:

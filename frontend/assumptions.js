@@ -1,7 +1,8 @@
 // The link assumptions form in the status panel: the bit-error rate the station assumes of a
-// real link and the delivery probability the copies aim for (PUT /api/link). Values outside
-// their interval are refused in the page, naming the field and the interval, and never
-// clamped; the backend's own 422 / 409 message is shown next to its field.
+// real link, the delivery probability the copies aim for, and what the copies follow there
+// (the assumed BER or the upper end of the estimate from the acknowledgements) (PUT /api/link).
+// Values outside their interval are refused in the page, naming the field and the interval,
+// and never clamped; the backend's own 422 / 409 message is shown next to its field.
 
 import { api } from "./api.js";
 import { berText } from "./delivery.js";
@@ -22,8 +23,12 @@ const FIELDS = {
   },
 };
 
+// what the copies follow: sent only when the operator picked another than the console's
+const COPIES_FROM = { input: "copies-from-input", error: "copies-from-error", label: "copies follow" };
+
 let training = false;
 let busy = false;
+let copiesPicked = false; // the operator changed the choice since the console last said
 
 export function initAssumptions() {
   $("link-form").addEventListener("submit", (e) => {
@@ -34,8 +39,24 @@ export function initAssumptions() {
     $(FIELDS[name].input).addEventListener("input", () => showError(name, ""));
   }
   $("delivery-target-input").placeholder = DEFAULT_TARGET;
+  $(COPIES_FROM.input).addEventListener("change", () => {
+    copiesPicked = true;
+    showCopiesError("");
+  });
   onLinkChange(updateBerPlaceholder);
   updateBerPlaceholder();
+}
+
+/** The console's choice (what the copies follow on a real link), "assumed" until it says. */
+function consoleCopiesFrom() {
+  const link = currentLink();
+  return link && typeof link.copies_from === "string" ? link.copies_from : "assumed";
+}
+
+function showCopiesError(text) {
+  const node = $(COPIES_FROM.error);
+  node.textContent = text;
+  node.hidden = !text;
 }
 
 /** The session's mode: in training the copies follow the emulated channel's BER. */
@@ -54,6 +75,13 @@ export function setAssumptionsMode(mode) {
   input.title = training ? "in training the emulated channel's bit-error rate is used (Training panel)" : "";
   $("link-ber-note").hidden = !training;
   if (training) showError("link_ber", "");
+  const copies = $(COPIES_FROM.input);
+  copies.disabled = training;
+  $("copies-from-note").hidden = !training;
+  if (training) {
+    copiesPicked = false;
+    showCopiesError("");
+  }
   updateBerPlaceholder();
 }
 
@@ -67,6 +95,7 @@ function updateBerPlaceholder() {
     $("delivery-target-input").placeholder = String(link.delivery_target); // as set, never rounded
   }
   if (!training) input.title = ber === null ? "" : `assumed now: BER ${berText(ber)}; empty: unchanged`;
+  if (!copiesPicked) $(COPIES_FROM.input).value = training ? "assumed" : consoleCopiesFrom();
 }
 
 function showError(name, text) {
@@ -111,8 +140,10 @@ function readBody() {
     else if (value !== null) body[name] = value;
   }
   if (bad) return null; // the last result still holds: nothing was sent
+  const copiesFrom = $(COPIES_FROM.input).value;
+  if (!training && copiesFrom !== consoleCopiesFrom()) body.copies_from = copiesFrom;
   if (!Object.keys(body).length) {
-    showResult(training ? "enter a delivery target" : "enter an assumed bit-error rate or a delivery target", true);
+    showResult(training ? "enter a delivery target" : "enter an assumed bit-error rate, a delivery target or what the copies follow", true);
     return null;
   }
   return body;
@@ -133,6 +164,11 @@ function showRefusal(err) {
   const items = err && typeof err.status === "number" && (err.status === 422 || err.status === 409) ? err.items : [];
   let placed = false;
   for (const { param, msg } of items) {
+    if (param === "copies_from") {
+      showCopiesError(`${COPIES_FROM.label}: ${stripPrefix(msg)}`);
+      placed = true;
+      continue;
+    }
     const name = Object.hasOwn(FIELDS, param) ? param : err.status === 409 ? "link_ber" : null;
     if (!name) continue;
     showError(name, `${FIELDS[name].label}: ${stripPrefix(msg)}`);
@@ -154,6 +190,7 @@ async function apply() {
   try {
     const link = await api("/api/link", { method: "PUT", body });
     if ("delivery_target" in body) $("delivery-target-input").placeholder = String(body.delivery_target); // as set, never rounded
+    if ("copies_from" in body) copiesPicked = false; // the console's answer says it from now on
     if (link && typeof link === "object") renderLink(link);
     showResult(copiesLine(link));
   } catch (err) {

@@ -160,7 +160,7 @@ function renderRow() {
     if (recent) facts.push(`recent frames: ${recent}`);
     if (l.acknowledges && l.last_ack_age_s !== undefined) facts.push(`last ack ${age(l.last_ack_age_s)}`);
     if (l.telemetry && l.last_telemetry_age_s !== undefined) facts.push(`telemetry ${age(l.last_telemetry_age_s)}`);
-    if (l.ber != null) facts.push(`BER ${berText(l.ber)}`);
+    if (l.ber != null) facts.push(`BER ${berText(l.ber)}${berSourceText(l)}`);
     if (Number.isFinite(l.copies)) facts.push(`${l.copies} cop${l.copies === 1 ? "y" : "ies"} per command`);
     if (l.unknown_values) facts.push(`${l.unknown_values} unknown telemetry values`);
   }
@@ -169,7 +169,48 @@ function renderRow() {
   const level = l ? levelOf(l) : "unknown";
   const bad = level === "red" || level === "amber" || (radio && radio.in_range === false);
   node.className = bad ? "warn-text" : "";
+  const estimate = l ? estimateNode(l) : null;
   node.replaceChildren(
     el("span", { class: "link-facts" }, facts.join(" · ") || "–"),
+    estimate,
     ...problems.map((p) => el("span", { class: "link-problem", testid: "link-problem" }, p)));
+}
+
+/** Where the BER the copies follow comes from (the console's ber_source and copies_from). */
+function berSourceText(l) {
+  if (l.ber_source === "emulated") return " (emulated channel)";
+  if (l.ber_source === "estimate_upper") return " (upper end of the estimate)";
+  if (l.ber_source !== "assumed") return "";
+  if (l.copies_from === "estimate_upper") return " (assumed: no estimate yet for the chosen upper end)";
+  return " (assumed)";
+}
+
+/** A rate to two significant digits, as typed: 0.0093, 0.013, 0. */
+function rate(x) {
+  return x === 0 ? "0" : String(Number(x.toPrecision(2)));
+}
+
+/** "BER ≈ 0.009 (95 % 0.006–0.013, 214 frames)", "no estimate yet (3 frames)", or "". */
+export function estimateText(c, acknowledges = true) {
+  if (!c || typeof c !== "object" || !Number.isFinite(c.frames)) return "";
+  const frames = `${c.frames} frame${c.frames === 1 ? "" : "s"}`;
+  if ([c.ber, c.low, c.high].every(Number.isFinite)) {
+    const pct = Math.round(100 * (Number.isFinite(c.confidence) ? c.confidence : 0.95));
+    return `BER ≈ ${rate(c.ber)} (${pct} % ${rate(c.low)}–${rate(c.high)}, ${frames})`;
+  }
+  if (!c.frames && !acknowledges) return "none (no acknowledgements on this link)";
+  return `no estimate yet (${frames})`;
+}
+
+/** The estimate from the acknowledgements, on a line of its own (null: an older console). */
+function estimateNode(l) {
+  const text = estimateText(l.channel, l.acknowledges !== false);
+  if (!text) return null;
+  const c = l.channel;
+  const refused = c.not_decoded ? `, ${c.not_decoded} of them refused by the decoder` : "";
+  const title = "estimated from the dive's acknowledgements: the corrected bits and sync errors " +
+    `of each decoded frame${refused}; frames with no acknowledgement are not counted; ` +
+    `independent bit errors assumed${c.ber == null ? `; an estimate from ${c.min_frames} frames` : ""}`;
+  return el("span", { class: "link-estimate", testid: "link-ber-estimate", title },
+    `estimated: ${text}`);
 }

@@ -256,15 +256,21 @@ def vehicle(console: ConsoleDep) -> VehicleView:
     "/link",
     response_model=LinkHealth,
     responses=errors(
-        (*OPERATOR, 409, 413, 422),
-        why={409: "link_ber in training (the emulated channel's BER is used)"},
+        (*OPERATOR, 409, 413, 422, 503),
+        why={
+            409: 'link_ber or copies_from "estimate_upper" in training (the emulated '
+            "channel's BER is used)"
+        },
     ),
 )
-def set_link(body: LinkIn, console: ConsoleDep, _op: OperatorDep) -> LinkHealth:
+def set_link(body: LinkIn, console: ConsoleDep, operator: OperatorDep) -> LinkHealth:
     """What the station assumes of its link: ``link_ber`` (a real link's bit-error rate,
-    [0, 0.5); 409 in training, where the emulated channel's is used) and ``delivery_target``
-    ((0, 1)). Later commands' copies follow; returns the link's health."""
+    [0, 0.5)), ``delivery_target`` ((0, 1)) and ``copies_from`` (``assumed``, or
+    ``estimate_upper``: the upper end of the acknowledgements' BER estimate; a change is
+    logged, naming the operator). 409 for ``link_ber`` or ``estimate_upper`` in training, where
+    the emulated channel's BER is used. Later commands' copies follow; returns the link's
+    health."""
     try:
-        return console.set_link(body.link_ber, body.delivery_target)
+        return console.set_link(operator, body.link_ber, body.delivery_target, body.copies_from)
     except ValueError as err:
         raise HTTPException(409, str(err)) from None

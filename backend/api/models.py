@@ -20,6 +20,7 @@ from pydantic import (
 )
 
 from backend.api.deps import SQLITE_INT_MAX, SQLITE_INT_MIN
+from backend.commands.link_ber import COPIES_FROM, CopiesFrom
 from backend.settings import DeliveryTargetIn, LinkBerIn
 from codec import MAX_COPIES
 
@@ -132,6 +133,17 @@ class TimeScaleIn(Strict):
     time_scale: Annotated[float, Field(ge=0, le=50)]
 
 
+def check_copies_from(value: object) -> object:
+    """One of :data:`COPIES_FROM`; the message names the field and what is allowed."""
+    if not isinstance(value, str) or value not in COPIES_FROM:
+        allowed = " or ".join(f'"{c}"' for c in COPIES_FROM)
+        raise ValueError(f"copies_from must be {allowed}, got {value!r:.40}")
+    return value
+
+
+CopiesFromIn = Annotated[CopiesFrom, BeforeValidator(check_copies_from)]
+
+
 class LinkIn(Strict):
     """What the station assumes of its link; a field left out keeps its value."""
 
@@ -139,3 +151,7 @@ class LinkIn(Strict):
     link_ber: LinkBerIn | None = None
     #: Delivery probability the number of copies is chosen to reach, (0, 1).
     delivery_target: DeliveryTargetIn | None = None
+    #: What the copies follow on a real link: the assumed BER, or the upper end of the 95 %
+    #: interval of the BER estimated from the acknowledgements (the assumed BER until there
+    #: is one). Logged, naming the operator.
+    copies_from: CopiesFromIn | None = None

@@ -15,6 +15,13 @@ from typing import Final, Literal
 from pydantic import BaseModel
 
 from backend.commands.ledger import WINDOW, FrameCounts, FrameLedger, FrameTotals, Outcome
+from backend.commands.link_ber import (
+    BerNow,
+    BerSource,
+    ChannelEstimateView,
+    CopiesFrom,
+    estimate_view,
+)
 from station.link import Capability
 
 TYPE_CHECKING = False
@@ -64,6 +71,13 @@ class LinkHealth(BaseModel):
     unknown_values: int
     #: Bit-error rate the number of copies is chosen from.
     ber: float
+    #: Where ``ber`` comes from: the emulated channel (training), the assumed BER, or the upper
+    #: end of the estimate's interval (``copies_from``; the assumed BER until there is one).
+    ber_source: BerSource
+    #: The operator's choice of what the copies follow on a real link (``PUT /api/link``).
+    copies_from: CopiesFrom
+    #: The bit-error rate estimated from the dive's acknowledgements.
+    channel: ChannelEstimateView
     #: Delivery probability the number of copies is chosen to reach.
     delivery_target: float
     #: Copies a command gets now (chosen from ``ber`` and the delivery target).
@@ -118,7 +132,12 @@ def assess(
 
 
 def link_health_of(
-    link: Link, cm: CommandManager, hub: TelemetryHub, target: str, ber: float
+    link: Link,
+    cm: CommandManager,
+    hub: TelemetryHub,
+    target: str,
+    ber: BerNow,
+    copies_from: CopiesFrom,
 ) -> LinkHealth:
     """What the station knows of its link to the vehicle (not the page's websocket): the
     link's own facts, the command ledger's and the telemetry's ages, and the assessment."""
@@ -146,7 +165,10 @@ def link_health_of(
         last_telemetry_age_s=telemetry_age_s,
         frames=totals,
         unknown_values=hub.unknown_values,
-        ber=ber,
+        ber=ber.ber,
+        ber_source=ber.source,
+        copies_from=copies_from,
+        channel=estimate_view(cm.ledger.channel),
         delivery_target=cm.delivery_target,
         copies=cm.copies_now(),
         surface_copies=cm.surface_copies_now(),

@@ -1,5 +1,6 @@
 """The frames' ledger: every frame that left the station and what became of it, over the last
-:data:`WINDOW` frames and since the dive began.
+:data:`WINDOW` frames and since the dive began, and what the dive's acknowledgements say of
+the channel (its bit-error rate estimate: :mod:`station.channel_estimate`).
 
 The command records (:mod:`backend.commands.records`) write it as frames leave and answers
 come; the link's health (:mod:`backend.commands.health`) reads its totals.
@@ -12,6 +13,8 @@ from dataclasses import dataclass
 from typing import Final, Literal
 
 from pydantic import BaseModel
+
+from station.channel_estimate import ChannelEstimator
 
 #: Frames in the "recent" window.
 WINDOW: Final = 20
@@ -59,6 +62,8 @@ class FrameLedger:
         self._recent: deque[_Slot] = deque(maxlen=WINDOW)
         self._dive = _counts()
         self._awaiting: dict[int, int] = {}  # command id -> its frames awaiting an answer
+        #: Every acknowledgement of the dive, as evidence of the channel's bit-error rate.
+        self.channel = ChannelEstimator()
 
     def frame_out(self, command_id: int, *, answer_expected: bool) -> None:
         self._dive.frames += 1

@@ -367,6 +367,7 @@ class CommandManager(CommandRecords):
     def on_mission(self, ack: dict[str, Any]) -> None:
         """An acknowledgement from the vehicle: settle the command it answers."""
         self.last_ack_s = self.clock.monotonic()
+        self.ledger.channel.observe(ack)  # every acknowledgement is a frame the vehicle heard
         command_id = best_match(self._awaiting, ack)
         record = None
         if command_id is not None:

@@ -143,12 +143,13 @@ def command_record(row: Mapping[str, Any]) -> CommandRecord:
 
 class LogEvent(BaseModel):
     """Something the vehicle or the operator did that the mission log keeps beside the
-    commands: an echo mismatch (another station retasked the vehicle?), a new datum."""
+    commands: an echo mismatch (another station retasked the vehicle?), a new datum, the
+    operator's choice of the BER the copies follow."""
 
     id: int
     dive: int
     at: str = Field(description="ISO 8601, UTC")
-    kind: str = Field(description="echo_mismatch, datum")
+    kind: str = Field(description="echo_mismatch, datum, copies_from")
     detail: str = Field(description="what happened, in words")
     data: dict[str, JsonValue] | None = Field(description="the kind's figures (null: none)")
 
