@@ -53,7 +53,7 @@ class Host:
         self.hub = TelemetryHub()
 
 
-def test_a_step_of_the_run_goes_on_another_command_stops_it_and_a_late_step_is_refused() -> None:
+def test_another_command_stops_the_run_and_a_late_step_is_refused() -> None:
     run = runner(start_s=0.0)
     guard = RunGuard(Host(run))
     assert run.poll(0.0) == [0]
