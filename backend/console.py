@@ -34,6 +34,7 @@ from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMe
 from backend.mission_log.opening import open_checked
 from backend.mission_log.records import log_event
 from backend.mission_log.store import LogWriteError, MissionLog
+from backend.scripts.guard import RunGuard
 from backend.settings import Settings
 from backend.telemetry import TelemetryHub
 from backend.viewer.draw_queue import PreviewDrawer
@@ -93,6 +94,8 @@ class Console:
         self.runner: ScriptRunner | None = None  # the latest mission script run (None: none yet)
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
+        #: Ends the run when any other command is sent (every path: the service tells it).
+        self.script_guard = RunGuard(self)
         self.drawer = PreviewDrawer(PREVIEW_DRAW_INTERVAL_S)
         self._drawer: asyncio.Task[None] | None = None
         self._health_task: asyncio.Task[None] | None = None
@@ -157,6 +160,7 @@ class Console:
             clock=self.clock,
         )
         self.service = CommandService(self.commands, self.assess, s.operator)
+        self.service.watch(self.script_guard)
         link.on_mission = self._on_mission
         self.commands.vehicle.on_plan = self._show_active
         await link.start()

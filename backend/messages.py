@@ -162,7 +162,8 @@ class LinkMessage(Message):
 
 
 class EventMessage(Message):
-    """An event the mission log kept (an echo mismatch, a new datum)."""
+    """An event the mission log kept (an echo mismatch, a new datum, a script run the
+    operator's command stopped)."""
 
     type: Literal["event"] = "event"
     event: LogEvent = Field(description="the event as the mission log wrote it")

@@ -193,6 +193,7 @@ async function main() {
       emit("vehicle", { msg: m });
     },
     link: (m) => renderLink(m.link),
+    event: (m) => emit("log_event", m.event), // a mission log event (script.js: a run stopped)
     auth_ok: tokenAccepted,
     auth_refused: tokenRefused,
     active_path: (m) => emit("active_path", { path: m.active_path }),

@@ -4,8 +4,9 @@
 
 import { api } from "./api.js";
 import { dictionary, paramForm, fillPatternSelect, defaultParams, commandText } from "./form.js";
-import { $, el, download, notify, notifyError, applyAuth, setOff } from "./ui.js";
+import { $, el, download, notify, notifyError, applyAuth, setOff, on } from "./ui.js";
 import { drawScriptPlan } from "./script_plan.js";
+import { runStepText, timelineText } from "./script_text.js";
 
 export const SCRIPT_FORMAT = "nemesys-mission-script";
 export const SCRIPT_VERSION = 1;
@@ -223,20 +224,6 @@ function clearStepChecks() {
   });
 }
 
-/** A preview timeline event, as the API labels it ("at 30 s from the run's start: ..."). */
-function timelineText(e) {
-  if (!e || typeof e !== "object") return String(e ?? "");
-  return typeof e.label === "string" ? e.label : String(e.text ?? "");
-}
-
-/** A run step in words: "2. hover · after the previous step completes · takes 30 s · sent
- * at 40 s from the run's start, acknowledged by the vehicle" (the API's texts). */
-function runStepText(s, i) {
-  if (!s || typeof s !== "object") return `${i + 1}. –`;
-  const name = String(s.pattern || "").replace(/_/g, " ");
-  return [`${i + 1}. ${name}`, s.trigger_text, s.takes_text, s.state_text].filter(Boolean).join(" · ");
-}
-
 function show3dView() {
   $("viewer-box")?.scrollIntoView({ block: "nearest" });
 }
@@ -409,5 +396,7 @@ export function initScript() {
   $("script-next").addEventListener("click", () => control("/api/scripts/run/next", "send next"));
   $("script-stop").addEventListener("click", () => control("/api/scripts/run/stop", "stop"));
   applyAuth(undefined, $("script-panel"));
+  // the operator's command ended the run (backend/scripts/guard.py): its state, at once
+  on("log_event", (e) => e && e.kind === "script_stopped" && pollRun());
   pollRun();
 }

@@ -26,6 +26,7 @@ from backend.commands.service import SendRequest
 from backend.console import Console
 from backend.mission_log.store import FINAL_STATES
 from backend.scripts.checks import refuse_unsafe, step_violations
+from backend.scripts.guard import RunOver
 from backend.scripts.operations import (
     CompletionBy,
     MissionScript,
@@ -239,7 +240,11 @@ async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
         step.pattern, step.params, "script", override=step.override, kind="script"
     )
     try:  # checked again now: the vehicle may have moved since the script was authored
-        record = (await console.service.send(request)).record
+        with console.script_guard.step(request, runner):  # a step: it does not stop the run
+            record = (await console.service.send(request)).record
+    except RunOver:  # the operator sent something else first: the run is over, this unsent
+        runner.withdraw(index)
+        return
     except Exception as err:  # refused, rate limit, log, link: the run stops with the reason
         runner.mark_failed(index, f"not sent: {err}")
         return

@@ -19,10 +19,20 @@ shortcut, the API or ``/ws``, a retry, a mission script's step, a training scena
   (``retry_of``), checked as any other send from where the vehicle is now.
 
 Surface is never refused by the checks: it is the way out.
+
+**Watchers** (:class:`SendWatcher`, :meth:`CommandService.watch`) are told of every command
+the service hands to the manager, whatever the path: ``admit`` just before the record is
+written (it may refuse), ``sent`` once it is written and its delivery begun, before its first
+copy can leave (the manager starts the delivery as a task, which runs only once the caller
+yields; :meth:`CommandService.send` calls the watchers before it does). The console's
+mission script run watches: any command that is not a step of the running script ends the
+run, so a newer command or Surface is never undone by a later step
+(:mod:`backend.scripts.guard`; this package does not know it).
 """
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
@@ -32,6 +42,8 @@ from backend.commands.lifecycle import RETRYABLE
 from backend.commands.manager import CommandManager
 from backend.mission_log.records import CommandRecord, command_record
 from codec import Encoded, encode_frame
+
+logger = logging.getLogger("backend.commands.service")
 
 #: The ways a frame can leave the console, as the record's ``origin`` names them.
 Origin = Literal["api", "ws", "surface", "retry", "script", "scenario", "cli"]
@@ -152,6 +164,19 @@ class Assessor(Protocol):
     def __call__(self, pattern: str, params: Mapping[str, Any]) -> Assessment: ...
 
 
+class SendWatcher(Protocol):
+    """Told of every command the service hands to the manager (see the module's docstring).
+    Both calls run on the event loop, with no wait between them and the record's writing."""
+
+    def admit(self, request: SendRequest) -> None:
+        """Just before the record is written, after the checks: raise a
+        :class:`SendRefused` to refuse the send (nothing is written or transmitted)."""
+
+    def sent(self, request: SendRequest, outcome: SendOutcome) -> None:
+        """The record is written (or a Surface joined the one on its way) and its delivery
+        begun; no copy of it has left yet."""
+
+
 class CommandService:
     """The one checked path to the vehicle (see the module's docstring)."""
 
@@ -159,6 +184,11 @@ class CommandService:
         self.manager = manager
         self.assess = assess
         self.operator = operator
+        self._watchers: list[SendWatcher] = []
+
+    def watch(self, watcher: SendWatcher) -> None:
+        """Tell ``watcher`` of every command from now on (in the order they were added)."""
+        self._watchers.append(watcher)
 
     async def send(self, request: SendRequest) -> SendOutcome:
         """Check ``request`` and hand it to the manager (written first, then transmitted).
@@ -170,25 +200,47 @@ class CommandService:
             LogWriteError: the mission log cannot be written; nothing was transmitted.
         """
         if request.pattern == "surface":
-            return await self.surface(request.origin, retry_of=request.retry_of)
+            return await self._surface(request)
         assessment = self.assess(request.pattern, dict(request.params))
         overridden = decide(assessment, request.override)
-        record = await self.manager.submit(
-            assessment.enc,
-            kind=request.kind,
-            copies=request.copies,
-            origin=request.origin,
-            retry_of=request.retry_of,
-            overrides=self._overrides(overridden),
-        )
-        return SendOutcome(command_record(record), overridden)
+        return await self._submit(request, assessment.enc, request.kind, request.copies, overridden)
 
     async def surface(self, origin: Origin = "surface", retry_of: int | None = None) -> SendOutcome:
         """Surface: never refused by the checks (pressed while another Surface is on its way,
         it joins that one)."""
-        enc = encode_frame("surface", {})
-        record = await self.manager.submit(enc, kind="surface", origin=origin, retry_of=retry_of)
-        return SendOutcome(command_record(record))
+        return await self._surface(SendRequest("surface", {}, origin, retry_of=retry_of))
+
+    async def _surface(self, request: SendRequest) -> SendOutcome:
+        return await self._submit(request, encode_frame("surface", {}), "surface", None, ())
+
+    async def _submit(
+        self,
+        request: SendRequest,
+        enc: Encoded,
+        kind: str,
+        copies: int | None,
+        overridden: Sequence[SendViolation],
+    ) -> SendOutcome:
+        """The watchers' ``admit``, the manager's record and delivery, the watchers' ``sent``:
+        no ``await`` that yields between them (the manager's ``submit`` does not), so the
+        watchers hear of the command before its first copy can leave."""
+        for watcher in self._watchers:
+            watcher.admit(request)
+        record = await self.manager.submit(
+            enc,
+            kind=kind,
+            copies=copies,
+            origin=request.origin,
+            retry_of=request.retry_of,
+            overrides=self._overrides(overridden),
+        )
+        outcome = SendOutcome(command_record(record), tuple(overridden))
+        for watcher in self._watchers:
+            try:
+                watcher.sent(request, outcome)
+            except Exception:  # the command is on its way: its sender gets its record
+                logger.exception("a watcher failed on command %s", outcome.record.id)
+        return outcome
 
     async def retry(
         self, command_id: int, *, override: bool = False, copies: int | None = None
@@ -244,6 +296,7 @@ __all__ = [
     "SendOutcome",
     "SendRefused",
     "SendRequest",
+    "SendWatcher",
     "UnknownCommand",
     "decide",
     "refusal_detail",

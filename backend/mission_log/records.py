@@ -144,12 +144,13 @@ def command_record(row: Mapping[str, Any]) -> CommandRecord:
 class LogEvent(BaseModel):
     """Something the vehicle or the operator did that the mission log keeps beside the
     commands: an echo mismatch (another station retasked the vehicle?), a new datum, the
-    operator's choice of the BER the copies follow."""
+    operator's choice of the BER the copies follow, a mission script run stopped by the
+    operator's command."""
 
     id: int
     dive: int
     at: str = Field(description="ISO 8601, UTC")
-    kind: str = Field(description="echo_mismatch, datum, copies_from")
+    kind: str = Field(description="echo_mismatch, datum, copies_from, script_stopped")
     detail: str = Field(description="what happened, in words")
     data: dict[str, JsonValue] | None = Field(description="the kind's figures (null: none)")
 

@@ -390,6 +390,12 @@ class ScriptRunner:
             self.outcome = "failed"
             self.reason = f"step {i + 1} ({self.script.steps[i].pattern}) failed: {reason}"
 
+    def withdraw(self, i: int) -> None:
+        """Step ``i`` was handed out but the run ended before it was sent: not sent."""
+        self._check_handed_out(i, "withdraw")
+        if self._states[i] == "sent" and not self._transmitted[i]:
+            self._states[i], self._handed_at[i], self._next = "pending", None, min(self._next, i)
+
     def stop(self, reason: str = "stopped by the operator") -> None:
         """End the run; nothing more is handed out."""
         if self.running:

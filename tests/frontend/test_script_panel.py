@@ -2,11 +2,13 @@
 in sight when it is drawn (the panel is below the fold, the 3D view above it), and the panel
 speaks the operator's words: triggers "after the previous step completes", times "at 20 s from
 the run's start", durations "takes 20 s", steps "not sent yet" / "sent"; a run is completed
-when its last step's pattern completes, as the vehicle reports it."""
+when its last step's pattern completes, as the vehicle reports it; a Surface during a run
+stops it, and the panel says why."""
 
 from __future__ import annotations
 
 import re
+import time
 from typing import Any
 
 from playwright.sync_api import Browser, Page, expect
@@ -117,4 +119,48 @@ def test_the_preview_is_in_sight_and_the_panel_speaks_words_at_1280x800(
         assert run["completed_s"] >= hover["sent_s"] + HOVER["duration"] - 1e-6, run
         panel = page.get_by_test_id("script-panel").inner_text()
         assert not IDENTIFIERS.search(panel), IDENTIFIERS.search(panel)
+        w.assert_clean()
+
+
+def test_surface_during_a_run_stops_it_and_the_panel_says_why_at_once(
+    console: Console, browser: Browser
+) -> None:
+    """The page is open, idle (not polling a run), when a run starts from the API; the
+    operator presses Surface: the run is stopped (backend/scripts/guard.py) and the panel shows
+    why, told by the mission log's event on /ws, and the later step as never sent."""
+    script = {
+        "format": "nemesys-mission-script",
+        "version": 1,
+        "name": "pod patrol",
+        "steps": [
+            {"pattern": "hover", "params": HOVER, "trigger": {"kind": "at", "t_s": 0}},
+            {"pattern": "straight", "params": STRAIGHT, "trigger": {"kind": "at", "t_s": 900}},
+        ],
+    }
+    with sized_page(browser, 1280, 800) as w:
+        page = open_sized(w, console)
+        state = page.get_by_test_id("script-run-state")
+        expect(state).to_have_text("not running")
+        expect(page.locator("#conn-state")).to_have_text("connected")
+        console.post("/api/scripts/run", {"script": script, "mode": "auto"}, token=True)
+        deadline = time.monotonic() + 20.0
+        while console.get("/api/scripts/run")["waiting_for"] != "time":
+            assert time.monotonic() < deadline, console.get("/api/scripts/run")
+            time.sleep(0.05)
+        page.get_by_test_id("surface-button").click()
+        expect(state).to_have_attribute("data-outcome", "stopped")
+        expect(state).to_have_text(
+            re.compile(r"^stopped: the operator sent Surface \(command \d+\)$")
+        )
+        run_steps = page.locator("#script-run-steps > li")
+        expect(run_steps.nth(1)).to_have_text(
+            re.compile(
+                r"^2\. straight · at 900 s from the run's start · takes [0-9.]+ s · not sent yet$"
+            )
+        )
+        expect(page.get_by_test_id("script-run")).to_be_enabled()
+        run = console.get("/api/scripts/run")
+        surface = max(console.get("/api/commands"), key=lambda c: c["id"])
+        assert surface["pattern"] == "surface", surface
+        assert run["reason"] == f"the operator sent Surface (command {surface['id']})", run
         w.assert_clean()

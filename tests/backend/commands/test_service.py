@@ -1,5 +1,6 @@
 """The command service on an in-memory link: the policy (hard refused, soft needs the
-override, the override recorded), retry as a new command, and wire order."""
+override, the override recorded), retry as a new command, wire order, and its watchers (told
+of every command before its first copy leaves; one may refuse)."""
 
 from __future__ import annotations
 
@@ -16,6 +17,8 @@ from backend.commands.service import (
     LimitRefused,
     NotRetryableCommand,
     OverrideNeeded,
+    SendOutcome,
+    SendRefused,
     SendRequest,
     UnknownCommand,
     decide,
@@ -184,5 +187,70 @@ def test_wire_order_circle_surface_retry(tmp_path: Path) -> None:
         oldest_first = [r["id"] for r in rig.log.commands(oldest_first=True)]
         assert oldest_first == [circle.id, surface.id, retried.id]
         assert rig.log.last_sent() == rig.cm.last_sent
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+class Recorder:
+    """A watcher that notes what it hears and what the wire held when it heard it."""
+
+    def __init__(self, rig: Rig, refuse: str | None = None) -> None:
+        self.rig = rig
+        self.refuse = refuse
+        self.admitted: list[SendRequest] = []
+        #: (origin, pattern, record id, its copies sent, frames on the wire) at ``sent``.
+        self.heard: list[tuple[str, str, int, int, int]] = []
+
+    def admit(self, request: SendRequest) -> None:
+        self.admitted.append(request)
+        if request.pattern == self.refuse:
+            raise SendRefused(f"no {self.refuse} now")
+
+    def sent(self, request: SendRequest, outcome: SendOutcome) -> None:
+        rec = outcome.record
+        wire = len(self.rig.link.frames)
+        self.heard.append((request.origin, rec.pattern, rec.id, rec.copies_sent, wire))
+
+
+def test_watchers_hear_of_every_path_before_its_first_copy_leaves(tmp_path: Path) -> None:
+    """Send, Surface, retry, a scenario's and a script's sends: each is heard once, with its
+    record written and no copy of it out yet (what lets a script run stop before it)."""
+
+    async def scenario(rig: Rig) -> None:
+        service = service_of(rig)
+        seen = Recorder(rig)
+        service.watch(seen)
+        circle = (await service.send(SendRequest("circle", CIRCLE_PARAMS, "api", copies=1))).record
+        await rig.until_state(circle.id, "sent")
+        rig.log.update_command(circle.id, state="interrupted", reason="made so by the test")
+        retried = (await service.retry(circle.id, copies=1)).record
+        await rig.until_state(retried.id, "sent")
+        hover = SendRequest("hover", HOVER_PARAMS, "scenario", copies=1)
+        await rig.until_state((await service.send(hover)).record.id, "sent")
+        step = SendRequest("hover", HOVER_PARAMS, "script", copies=1, kind="script")
+        await rig.until_state((await service.send(step)).record.id, "sent")
+        surface = (await service.surface()).record
+        assert [(o, p) for o, p, *_ in seen.heard] == [
+            ("api", "circle"),
+            ("retry", "circle"),
+            ("scenario", "hover"),
+            ("script", "hover"),
+            ("surface", "surface"),
+        ]
+        assert len(seen.admitted) == 5 and seen.heard[-1][2] == surface.id
+        for n, (*_, copies_sent, wire) in enumerate(seen.heard):
+            assert copies_sent == 0 and wire == n  # one frame out per earlier command, not its own
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_a_watcher_refuses_before_anything_is_written(tmp_path: Path) -> None:
+    async def scenario(rig: Rig) -> None:
+        service = service_of(rig)
+        seen = Recorder(rig, refuse="hover")
+        service.watch(seen)
+        with pytest.raises(SendRefused, match="no hover now"):
+            await service.send(SendRequest("hover", HOVER_PARAMS, "script", kind="script"))
+        assert rig.log.commands() == [] and rig.link.frames == [] and seen.heard == []
 
     run(tmp_path, ONE_WAY, scenario)
