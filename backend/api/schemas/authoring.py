@@ -189,8 +189,7 @@ class PlanEstimate(BaseModel):
         "depth, a repeating one the join and one lap"
     )
     planned_duration_s: float = Field(
-        description="duration by the plan's own clock (s): the path's times, at the commanded "
-        "speed"
+        description="duration by the plan's own clock (s): the path's times, at the commanded speed"
     )
     planned_speed_mps: float | None = Field(
         description="the speed the plan asks for (m/s); null: it does not move horizontally"

@@ -58,7 +58,7 @@ REPORTED = {"speed": 0.18, "depth": 12.5, "duration": 75, "heading": 0}
 def _three(client: TestClient, pattern: str, params: dict[str, Any]) -> tuple[float, float, Any]:
     """(estimate, prediction, run) durations (s) of one command from the paused vehicle."""
     console = console_of(client)
-    assert client.portal is not None
+    assert client.portal is not None and console.sim is not None
     reference: Simulation = client.portal.call(copy.deepcopy, console.sim)
     body = {"pattern": pattern, "params": params}
     preview = client.post("/api/preview", json=body)
@@ -76,9 +76,7 @@ def _three(client: TestClient, pattern: str, params: dict[str, Any]) -> tuple[fl
 
 @pytest.mark.training
 @pytest.mark.parametrize("pattern", list(RETASKS))
-def test_estimate_prediction_and_the_simulators_run_agree(
-    client: TestClient, pattern: str
-) -> None:
+def test_estimate_prediction_and_the_simulators_run_agree(client: TestClient, pattern: str) -> None:
     """The run is the training simulator itself (a deep copy of the paused one, its random
     generators included), sent the frame and timed by the bench's rule, which reads only
     guidance's mode, its segment and the true depth (not the simulator's completion record
