@@ -83,13 +83,13 @@ def estimate_notes(
     if abs(dz) > 1e-3 and plan.pattern != "hover":
         rate = _rate(profile, dz)
         way = "down" if dz > 0 else "up"
-        pace = f"at its {rate:.3f} m/s" if rate is not None else "at the planner's rate"
+        pace = f"at {rate:.3f} m/s" if rate is not None else "at the planner's rate"
         causes.append(
             (
                 abs(flight.depth_wait_s - planned_wait),
-                f"the last {abs(dz):.1f} m {way} are flown in place once the path ends, {pace} "
-                f"({flight.depth_wait_s:.0f} s), where the plan ramps them at "
-                f"{DEPTH_RATE_MPS:g} m/s as it goes ({planned_wait:.0f} s)",
+                f"the last {abs(dz):.1f} m {way} are flown in place at the end, {pace} "
+                f"({flight.depth_wait_s:.0f} s; the plan's {DEPTH_RATE_MPS:g} m/s ramp: "
+                f"{planned_wait:.0f} s)",
             )
         )
     if horizontal > 0 and flight.length_m < horizontal:
@@ -98,9 +98,8 @@ def estimate_notes(
         causes.append(
             (
                 (horizontal - flight.length_m) / cruise,
-                f"guidance cuts corners and tight turns (it steers {look:g} m ahead on the "
-                f"path): the vehicle flies {flight.length_m:.0f} m of the path's "
-                f"{horizontal:.0f} m",
+                f"guidance cuts corners and tight turns (it steers {look:g} m ahead): "
+                f"{flight.length_m:.0f} m flown of the path's {horizontal:.0f} m",
             )
         )
     if flight.turning_s > 0:

@@ -158,7 +158,7 @@ def test_a_small_square_is_flown_inside_its_corners_and_the_note_says_so() -> No
     est, flight = flown(p, TWIN)
     assert est.duration_s < est.planned_duration_s / (1 + DIFFER)
     (note, *_) = estimate_notes(p, est, flight, TWIN)
-    assert note.startswith("guidance cuts corners and tight turns (it steers 1.5 m ahead")
+    assert note.startswith("guidance cuts corners and tight turns (it steers 1.5 m ahead): ")
 
 
 def test_an_ascent_left_for_the_end_is_timed_at_the_ascent_rate() -> None:
@@ -172,7 +172,9 @@ def test_an_ascent_left_for_the_end_is_timed_at_the_ascent_rate() -> None:
     in_place = 10.0 - 30 * 0.05  # the plan ramps 1.5 m as it goes, the rest at the end
     assert flight.depth_wait_s == pytest.approx(in_place / TWIN.ascent_rate_mps, abs=2.0)
     notes = estimate_notes(p, est, flight, TWIN)
-    assert any(n.startswith("the last 8.5 m up are flown in place") for n in notes)
+    assert any(
+        n.startswith("the last 8.5 m up are flown in place at the end, at 0.11") for n in notes
+    )
 
 
 def test_an_unknown_profile_flies_as_planned() -> None:
