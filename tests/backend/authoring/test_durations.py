@@ -69,9 +69,7 @@ def _three(client: TestClient, pattern: str, params: dict[str, Any]) -> tuple[fl
     assert doc["outcome"] == "accepted" and doc["completes"] is True, doc
     est = preview.json()["estimate"]["duration_s"]
     assert doc["estimate_duration_s"] == pytest.approx(est)  # the same estimate in both
-    out = est, doc["duration_s"], run_s(reference, pattern, params)
-    print("\nDUR", pattern, params, out)
-    return out
+    return est, doc["duration_s"], run_s(reference, pattern, params)
 
 
 @pytest.mark.training
@@ -129,7 +127,7 @@ def test_the_reported_straight_now_tells_one_story(client: TestClient) -> None:
         assert est == pytest.approx(predicted, rel=DIFFER)
         preview = client.post("/api/preview", json={"pattern": "straight", "params": params})
         notes = preview.json()["estimate"]["duration_notes"]
-        assert any("in place once the path ends" in n for n in notes)
+        assert any("flown in place at the end" in n for n in notes)
         if speed == 0.5:
             assert notes[0] == (
                 f"the vehicle cannot hold 0.5 m/s: its top speed is {TWIN.top_speed_mps:.2f} m/s"
