@@ -8,11 +8,9 @@ through the onboard decode, checks and replan), faster than real time over a bou
 :data:`COMPLETION_MARGIN_S`). It shows what the plan's clock does not: the vehicle's top
 speed, its turns and depth transients, the current, the battery.
 
-Its duration is timed by the twin's own completion rule (:mod:`sim.completion`, the one the
-estimate's kinematic twin and the simulated vehicle share): a finite pattern is done at the
-path's end *and* its depth (a depth change the path leaves for the end is flown in place
-after guidance holds), a repeating one after the join and one lap. Beside it, the estimate
-(:mod:`backend.authoring.durations`) and, where the two differ by more than 20 %, why.
+Its duration is timed by the twin's completion rule (:mod:`sim.completion`: at the path's end
+*and* depth; a repeating pattern after the join and one lap), the estimate's too; beside it the
+estimate (:mod:`backend.authoring.durations`) and, where they differ by more than 20 %, why.
 
 The twin starts where the console last saw the vehicle: position, depth, heading, speed
 through the water (taken along the heading), the mission clock and the plan it runs (the
@@ -397,35 +395,18 @@ def predict(
 
 
 def _base_config(console: Any) -> tuple[SimConfig, Current | None, list[str]]:
-    """The twin's configuration, the water current's process it runs (None: the config's)
-    and what the prediction assumes.
-
-    In training, the simulator's settings *now*: the training controls change its channel and
-    current (``sim.channel.config``, ``sim.current``), not the config it started with; the
-    current runs on from its present state, drift and generator included, as the simulated
-    vehicle's will (it is a copy: the simulator's own is untouched)."""
+    """The twin's configuration, the water current's process to run (None: the config's) and
+    what the prediction assumes. In training, the simulator's channel and current *now* (the
+    training controls set ``sim.channel`` and ``sim.current``, not its config): a copy of the
+    current, which drifts on from its state, generator included, as the simulator's will."""
     sim = console.sim
     if sim is None:
-        return (
-            SimConfig(limits=console.limits),
-            None,
-            [
-                "no simulator: the training twin's dynamics from the last reported pose",
-                "no water current",
-            ],
-        )
-    cfg: SimConfig = sim.config
-    channel = replace(sim.channel.config, ber=0.0, loss=0.0, burst_rate=0.0)
+        no_sim = "no simulator: the training twin's dynamics from the last reported pose"
+        return SimConfig(limits=console.limits), None, [no_sim, "no water current"]
     current: Current = copy.deepcopy(sim.current)
-    base = replace(cfg, channel=channel, current=current.config)
+    channel = replace(sim.channel.config, ber=0.0, loss=0.0, burst_rate=0.0)
+    base = replace(sim.config, channel=channel, current=current.config)
     north, east = current.velocity
-    drift = " (and drifts as it does there)" if current.config.drift else ""
-    return (
-        base,
-        current,
-        [
-            f"the water current runs on from its present {north:.3f} m/s north, "
-            f"{east:.3f} m/s east{drift}",
-            "the frame arrives intact (no bit errors or loss)",
-        ],
-    )
+    drifts = " (and drifts as it does there)" if current.config.drift else ""
+    water = f"the water current runs on from its present {north:.3f} m/s north, {east:.3f} m/s east"
+    return base, current, [water + drifts, "the frame arrives intact (no bit errors or loss)"]
