@@ -18,7 +18,7 @@ from codec import decode_frame, encode_frame
 from planner import Plan, VehicleState, plan
 from sim.simulation import Simulation
 from tests.backend.authoring.test_predict import _paused_mid_circle
-from tests.backend.conftest import AUTH, console_of
+from tests.backend.conftest import AUTH, console_of, wait_until
 
 TWIN = twin_profile(100.0)
 #: In-profile: below the twin's 0.19 m/s top speed.
@@ -80,10 +80,11 @@ def test_estimate_prediction_and_the_simulators_run_agree(client: TestClient, pa
     guidance's mode, its segment and the true depth (not the simulator's completion record
     the prediction uses)."""
     _paused_mid_circle(client)
-    est, predicted, run = _three(client, pattern, RETASKS[pattern])
-    assert run is not None
-    assert predicted == pytest.approx(run, rel=0.05)
-    assert est == pytest.approx(predicted, rel=DIFFER)
+    three = _three(client, pattern, RETASKS[pattern])
+    est, predicted, run = three
+    assert run is not None, three
+    assert predicted == pytest.approx(run, rel=0.05), three
+    assert est == pytest.approx(predicted, rel=DIFFER), three
 
 
 @pytest.mark.training
@@ -117,14 +118,22 @@ def test_the_reported_straight_now_tells_one_story(client: TestClient) -> None:
     20 % of each other and the prediction within 5 % of the run; the plan's clock is 20 %
     away and the preview says why."""
     console = console_of(client)
+    sim = console.sim
+    assert sim is not None
     r = client.put("/api/training/time_scale", json={"time_scale": 0}, headers=AUTH)
     assert r.status_code == 200
-    assert console.sim is not None
+
+    def paused_state_shown() -> bool:  # the console's telemetry is the paused vehicle's
+        times = ((console.hub.pose or {}).get("t_s"), (console.hub.status or {}).get("t_s"))
+        return all(isinstance(t, float) and abs(t - sim.t_s) < 1e-6 for t in times)
+
+    wait_until(paused_state_shown, what="telemetry of the paused vehicle")
     for speed in (0.18, 0.5):
         params = {**REPORTED, "speed": speed}
-        est, predicted, run = _three(client, "straight", params)
-        assert run is not None and predicted == pytest.approx(run, rel=0.05)
-        assert est == pytest.approx(predicted, rel=DIFFER)
+        three = _three(client, "straight", params)
+        est, predicted, run = three
+        assert run is not None and predicted == pytest.approx(run, rel=0.05), three
+        assert est == pytest.approx(predicted, rel=DIFFER), three
         preview = client.post("/api/preview", json={"pattern": "straight", "params": params})
         notes = preview.json()["estimate"]["duration_notes"]
         assert any("flown in place at the end" in n for n in notes)
