@@ -36,14 +36,19 @@ from sim.completion import AT_DEPTH_M, Completion
 from sim.control import AutopilotGains, wrap_rad
 from vehicle_contract.codes import Mode
 
-#: Horizontal distance per step, as a fraction of guidance's lookahead.
+#: Horizontal distance per step, as a fraction of guidance's lookahead; for a long path, at
+#: most about :data:`PATH_STEPS` steps (up to a whole lookahead each: the curvature of a path
+#: that long is gentle).
 STEP_LOOKAHEADS = 0.25
-#: Shortest and longest step (s) while moving; longest while holding still.
+PATH_STEPS = 3000
+#: Shortest and longest step (s) while moving (longer for a path whose plan takes more than
+#: :data:`PATH_STEPS` of them); longest while holding still.
 MIN_STEP_S = 0.1
 MAX_STEP_S = 2.0
 MAX_HOLD_STEP_S = 60.0
-#: Most steps flown before giving up (a path the vehicle cannot finish): ~1 s of one core.
-MAX_STEPS = 100_000
+#: Most steps flown before giving up (a path the vehicle cannot follow, its turns too tight for
+#: its speed): ~0.1 s of one core. A pattern takes a few hundred.
+MAX_STEPS = 10_000
 #: A flight longer than this many times the plan's own duration (and an hour) is given up.
 MAX_STRETCH = 20.0
 _EPS = 1e-9
@@ -145,7 +150,9 @@ class _Vehicle:
         self.r_max = math.radians(rates.yaw_rate_dps)
         self.k = rates.heading_gain_per_s
         self.look = lookahead_m
-        self.step_m = STEP_LOOKAHEADS * lookahead_m
+        horizontal = sum(_horizontal_m(path, i) for i in range(len(path) - 1))
+        self.step_m = min(lookahead_m, max(STEP_LOOKAHEADS * lookahead_m, horizontal / PATH_STEPS))
+        self.max_step_s = max(MAX_STEP_S, path.duration_s / PATH_STEPS)
         self.x, self.y, self.z = path.xs[0], path.ys[0], path.zs[0]
         heading = heading_deg if heading_deg is not None else path.course_deg(0)
         self.psi = math.radians(heading)
@@ -173,7 +180,7 @@ class _Vehicle:
         running = g.mode is Mode.RUNNING
         target = ref.depth_m
         if speed > _EPS:
-            dt = min(MAX_STEP_S, max(MIN_STEP_S, self.step_m / speed))
+            dt = min(self.max_step_s, max(MIN_STEP_S, self.step_m / speed))
             dt = max(dt, self._straight_run_s(g, ref.course_rad, speed))
             if running and not self.hover:
                 if g.segment + 1 >= self.end:  # no further than the path's (or the lap's) end
@@ -226,9 +233,14 @@ class _Vehicle:
         return ahead / speed if ahead > 2 * self.step_m else 0.0
 
 
+def _horizontal_m(path: Path, i: int) -> float:
+    """Horizontal length of segment ``i`` (m)."""
+    return math.hypot(path.xs[i + 1] - path.xs[i], path.ys[i + 1] - path.ys[i])
+
+
 def _level(path: Path, i: int) -> bool:
     """Segment ``i`` has no horizontal extent (a depth change in place)."""
-    return math.hypot(path.xs[i + 1] - path.xs[i], path.ys[i + 1] - path.ys[i]) < 1e-6
+    return _horizontal_m(path, i) < 1e-6
 
 
 def _heading_error_after(err: float, dt: float, k: float, r_max: float) -> float:

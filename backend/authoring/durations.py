@@ -64,8 +64,13 @@ def estimate_notes(
 ) -> list[str]:
     """Why the estimate is more than :data:`DIFFER` away from the plan's own duration (its
     ``planned_duration_s``): the causes that account for a visible share, largest first;
-    empty when they agree."""
+    empty when they agree. A flight the model could not finish says so instead."""
     planned, estimated = est.planned_duration_s, est.duration_s
+    if flight.done_s is None:  # the estimate fell back to the plan's clock (see flown)
+        return [
+            "guidance on the vehicle's profile does not finish this path (its turns may be too "
+            "tight for the speed): the estimate is the plan's clock at the vehicle's top speed"
+        ]
     if not _apart(planned, estimated):
         return []
     path = plan.path

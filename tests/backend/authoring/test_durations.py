@@ -200,3 +200,18 @@ def test_prediction_notes_name_the_current_or_the_model() -> None:
     assert water.startswith("the water current (0.10 m/s towards 270 deg)")
     (model,) = prediction_notes(200.0, 100.0, (0.0, 0.0))
     assert "200 s" in model and "100 s" in model
+
+
+def test_a_path_the_model_cannot_finish_falls_back_to_the_plans_clock_and_says_so() -> None:
+    """2 m/s on a 1 m circle, for a vehicle of unknown figures, from 20 m deep (the plan flies
+    laps until its depth ramp ends): it cannot turn that tightly (at most 20 deg/s: a 5.7 m
+    radius), guidance never wraps into the lap; the estimate is the plan's own, and the note
+    says why."""
+    unknown = VehicleProfile(None, None, None, 100.0, None, "settings")
+    params = {"speed": 2.0, "depth": 2, "radius": 1, "direction": "cw"}
+    p = _plan("circle", params, VehicleState(-30.0, 20.0, 20.0, 200.0))
+    est, flight = flown(p, unknown)
+    assert flight.done_s is None
+    assert est.duration_s == est.planned_duration_s
+    (note,) = estimate_notes(p, est, flight, unknown)
+    assert note.startswith("guidance on the vehicle's profile does not finish this path")
