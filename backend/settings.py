@@ -151,8 +151,10 @@ class Settings(BaseSettings):
     # --- vehicle profile (backend/authoring/profile.py); unset: the twin's figures in training --
     #: Top speed through the water (m/s).
     top_speed_mps: Annotated[float, Field(gt=0, le=5)] | None = None
-    #: Largest vertical speed (m/s).
+    #: Largest vertical speed (m/s): the descent's.
     heave_rate_mps: Annotated[float, Field(gt=0, le=5)] | None = None
+    #: Largest ascent rate (m/s); unset: the heave rate's (or the twin's in training).
+    ascent_rate_mps: Annotated[float, Field(gt=0, le=5)] | None = None
     #: Largest turn rate (deg/s).
     yaw_rate_dps: Annotated[float, Field(gt=0, le=360)] | None = None
     #: Time on a full battery at cruise (s).

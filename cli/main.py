@@ -167,7 +167,16 @@ def cmd_decode(args: argparse.Namespace, out: TextIO) -> int:
 
 
 #: The benchmarks: each is ``bench.<name>`` with ``run(out, quick=...)``, imported on use.
-BENCHMARKS = ("codec", "planner", "sim", "console", "reconfig", "recovery", "channel_estimate")
+BENCHMARKS = (
+    "codec",
+    "planner",
+    "sim",
+    "console",
+    "reconfig",
+    "recovery",
+    "channel_estimate",
+    "durations",
+)
 
 
 def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:

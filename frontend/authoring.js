@@ -7,6 +7,7 @@ import { initCopies, readCopies, copiesLine } from "./copies.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
 import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite, emit, latLon } from "./ui.js";
 import { confirmChecks, isHard, kindText, skippedTitle, withinLimits } from "./checks.js";
+import { duration } from "./prediction.js";
 
 const state = {
   form: null,
@@ -159,17 +160,36 @@ function violationItem(v) {
 
 /** A repeating pattern has no end, so no total duration: its one lap instead. */
 function durationText(e) {
-  if (!e.repeats) return withUnit(e.duration_s, "s", 1);
+  if (!e.repeats) return duration(e.duration_s);
   const lap = Number(e.lap_duration_s);
   return `repeats until retasked (one lap ${Number.isFinite(lap) ? Math.round(lap).toLocaleString("en-US") : "unknown"} s)`;
 }
 
 /** One estimate row; for a repeating pattern the duration spans the row, and the length and
- *  battery use say on hover that they are the join and one lap. */
+ *  battery use say on hover that they are the join and one lap. The duration is labelled as
+ *  what it is: estimated (as the vehicle's profile flies the plan). */
 function estimateRow(e, key, value) {
   const lap = e.repeats && (key === "length" || key === "battery use");
-  return el("div", { dataset: { key }, class: e.repeats && key === "duration" ? "wide" : null, title: lap ? "the join and one lap" : null },
-    el("dt", {}, key), el("dd", {}, value));
+  const wide = e.repeats && key === "duration";
+  const label = key === "duration" ? "estimated duration" : key;
+  return el("div", { dataset: { key }, class: wide ? "wide" : null, title: lap ? "the join and one lap" : null },
+    el("dt", {}, label), el("dd", {}, value));
+}
+
+/** The estimate's rows, and right after its duration why it and the plan's own clock differ
+ *  (by more than 20 %), when they do. */
+function estimateRows(e, rows) {
+  const out = [];
+  for (const [key, value] of rows) {
+    out.push(estimateRow(e, key, value));
+    const notes = Array.isArray(e.duration_notes) ? e.duration_notes : [];
+    if (key === "duration" && notes.length) {
+      const title = `the plan's own clock says ${duration(e.planned_duration_s)}`;
+      out.push(el("div", { dataset: { key: "why" }, class: "wide", title, testid: "estimate-notes" },
+        el("dt", {}, "why"), el("dd", {}, notes.join("; "))));
+    }
+  }
+  return out;
 }
 
 function renderChecks(items, okText, okTitle) {
@@ -193,9 +213,9 @@ function renderEstimates(e) {
     ["duration", durationText(e)],
     ["battery use", withUnit(e.battery_pct, "%", 2)],
     ["depth range", depth],
-    ["join", `${withUnit(e.join_length_m, "m", 1)}, ${withUnit(e.join_duration_s, "s", 1)}`],
+    ["join", `${withUnit(e.join_length_m, "m", 1)}, ${duration(e.join_duration_s)}`],
   ];
-  box.replaceChildren(...rows.map(([k, v]) => estimateRow(e, k, v)));
+  box.replaceChildren(...estimateRows(e, rows));
 }
 
 // ---- the confirm step ----
@@ -309,7 +329,7 @@ function confirmEstimates(preview) {
   ];
   // the copies and p(delivered): the line below (copies.js copiesLine), once
   return el("dl", { class: "kv estimates confirm-estimates", testid: "confirm-estimates" },
-    ...rows.map(([k, v]) => estimateRow(e, k, v)));
+    ...estimateRows(e, rows));
 }
 
 function changeText(c, pattern) {

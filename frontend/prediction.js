@@ -1,8 +1,10 @@
 // The predicted track: after each successful preview, POST /api/predict (the same body) runs
 // the twin from the vehicle's current state, faster than real time. It takes hundreds of ms,
 // so it is debounced, the previous request is aborted, and a busy console (503) is asked once
-// more. The chart draws the track; #prediction shows planned against predicted duration and
-// the largest deviation from the planned path, or why there is no prediction.
+// more. The chart draws the track; #prediction shows the command's three durations side by
+// side (planned: the plan's clock; estimated: as the vehicle's profile flies it; predicted:
+// the twin's run), why they differ where they differ by more than 20 %, and the largest
+// deviation from the planned path, or why there is no prediction.
 
 import { api } from "./api.js";
 import { showPredicted, latLngs } from "./chart.js";
@@ -13,17 +15,16 @@ const BUSY_RETRY_MS = 1500;
 
 const state = { timer: null, controller: null, seq: 0 };
 
-/** "138 s" below ten minutes, "12 min 5 s" above. */
+/** A duration, always in seconds ("138 s", "2431 s"; "7.5 s" below ten): every duration on
+ *  the page (estimates, join, prediction) reads the same way. */
 export function duration(s) {
   if (s === null || s === undefined || !Number.isFinite(Number(s))) return "–";
   const v = Number(s);
-  if (v < 600) return `${num(v, v < 10 ? 1 : 0)} s`;
-  const m = Math.floor(v / 60);
-  return `${m} min ${Math.round(v - m * 60)} s`;
+  return `${num(v, v < 10 ? 1 : 0)} s`;
 }
 
-function row(label, value, testid, title) {
-  return el("div", { title }, el("dt", {}, label), el("dd", { testid }, value));
+function row(label, value, testid, title, wide = false) {
+  return el("div", { title, class: wide ? "wide" : null }, el("dt", {}, label), el("dd", { testid }, value));
 }
 
 function show(rows, status = "") {
@@ -44,18 +45,27 @@ const OUTCOMES = {
 };
 
 function render(p) {
-  const planned = p.planned_duration_s;
+  const estimate = p.estimate_duration_s;
   const predicted = p.duration_s;
-  const repeats = planned === null || planned === undefined;
+  // a repeating pattern never ends: its durations are the join and one lap, all three alike
+  const span = p.repeats ? " (join + 1 lap)" : "";
   const rows = [
-    row("planned", repeats ? "repeats (no end)" : duration(planned), "prediction-planned", "the path's own duration, at the commanded speed"),
+    row(`planned duration${span}`, duration(p.planned_duration_s), "prediction-planned",
+      "by the plan's own clock: the path's times, at the commanded speed"),
+    row(`estimated duration${span}`, duration(estimate), "prediction-estimate",
+      "as the vehicle's profile flies the plan (the preview's estimate)"),
   ];
   if (predicted === null || predicted === undefined || p.completes === false) {
-    const text = repeats ? `repeats: ${duration(p.horizon_s)} predicted` : `not done within ${duration(p.horizon_s)}`;
-    rows.push(row("predicted", text, "prediction-predicted", "the twin's run of the command from the vehicle's state now, over a bounded horizon"));
+    rows.push(row(`predicted duration${span}`, `not done within ${duration(p.horizon_s)}`, "prediction-predicted",
+      "the twin's run of the command from the vehicle's state now, over a bounded horizon"));
   } else {
-    const ratio = planned > 0 ? ` (${num(predicted / planned, 2)}x)` : "";
-    rows.push(row("predicted", `${duration(predicted)}${ratio}`, "prediction-predicted", "the twin's run of the command from the vehicle's state now"));
+    const ratio = estimate > 0 ? ` (${num(predicted / estimate, 2)}x the estimate)` : "";
+    rows.push(row(`predicted duration${span}`, `${duration(predicted)}${ratio}`, "prediction-predicted",
+      "the twin's run of the command from the vehicle's state now"));
+  }
+  const notes = Array.isArray(p.duration_notes) ? p.duration_notes : [];
+  if (notes.length) {
+    rows.push(row("why", notes.join("; "), "prediction-notes", "why the prediction and the estimate differ by more than 20 %", true));
   }
   rows.push(
     row(

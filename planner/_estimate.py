@@ -1,9 +1,14 @@
 """Estimates for the console's confirm step: what a plan costs and what a retask changes.
 
-Durations are at the speed the vehicle can fly: given its top speed through the water (and
-its heave rate), a segment the path asks to fly faster takes as long as the vehicle needs
-(:func:`flyable_times`); the path's own times stay in ``planned_duration_s``. The path itself
-(shared with the vehicle) is never changed: guidance follows its geometry, not its clock.
+Durations are as the vehicle flies the path. The console gives them: the arrival ``times``
+of its motion model (``sim.kinematic``: the onboard guidance on a vehicle reduced to its
+profile's top speed, heave and yaw rates, which cuts corners, flies depth steps at the
+vehicle's heave rate and is done when the vehicle is at its end and depth), the model the
+prediction's full twin shares. Without them (the planner alone), at the speed the vehicle can
+fly: given its top speed through the water (and its heave rate), a segment the path asks to
+fly faster takes as long as the vehicle needs (:func:`flyable_times`). The path's own times
+stay in ``planned_duration_s``. The path itself (shared with the vehicle) is never changed:
+guidance follows its geometry, not its clock.
 """
 
 from __future__ import annotations
@@ -14,6 +19,8 @@ from codec._record import Record, init
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
+    from collections.abc import Sequence
+
     from codec import ParamValue
     from planner._path import Path
     from planner._plan import Plan
@@ -74,13 +81,14 @@ def planned_speed_mps(plan: Plan) -> float | None:
 class Estimate(Record):
     """Size and cost of a plan, all from its waypoints.
 
-    Durations are at the speed the vehicle can fly (see the module doc); with no top speed
-    or heave rate given they are the path's own.
+    Durations are as the vehicle flies the path: from the motion model's ``times`` when
+    given, else at the speed the vehicle can fly (see the module doc); with neither a top
+    speed nor a heave rate they are the path's own.
 
     Attributes:
         waypoints: number of waypoints.
         length_m: 3D path length (for a repeating pattern: the join and one lap).
-        duration_s: time to fly it (same convention), at the flyable speed.
+        duration_s: time to fly it (same convention), as the vehicle flies it.
         planned_duration_s: the same at the planned (commanded) speed: the path's own times.
         planned_speed_mps: the cruise speed the plan asks for (``None``: it does not move).
         flyable_speed_mps: the speed the vehicle will fly it at, ``min(planned, top)``.
@@ -126,10 +134,17 @@ class Estimate(Record):
     y_max_m: float
 
     def __init__(
-        self, plan: Plan, top_speed_mps: float | None = None, heave_rate_mps: float | None = None
+        self,
+        plan: Plan,
+        top_speed_mps: float | None = None,
+        heave_rate_mps: float | None = None,
+        times: Sequence[float] | None = None,
     ) -> None:
         path = plan.path
-        times = flyable_times(path, top_speed_mps, heave_rate_mps)
+        if times is None:
+            times = flyable_times(path, top_speed_mps, heave_rate_mps)
+        elif len(times) != len(path):
+            raise ValueError(f"times has {len(times)} values for a path of {len(path)} waypoints")
         speed = planned_speed_mps(plan)
         flyable = speed
         if speed is not None and top_speed_mps is not None:
@@ -159,11 +174,15 @@ class Estimate(Record):
 
 
 def estimate(
-    plan: Plan, top_speed_mps: float | None = None, heave_rate_mps: float | None = None
+    plan: Plan,
+    top_speed_mps: float | None = None,
+    heave_rate_mps: float | None = None,
+    times: Sequence[float] | None = None,
 ) -> Estimate:
-    """Length, duration (at the speed a vehicle of ``top_speed_mps`` and ``heave_rate_mps``
-    can fly; unknown: as planned), depth range and bounding box of ``plan``."""
-    return Estimate(plan, top_speed_mps, heave_rate_mps)
+    """Length, duration (the motion model's ``times`` when given, else at the speed a vehicle
+    of ``top_speed_mps`` and ``heave_rate_mps`` can fly; unknown: as planned), depth range and
+    bounding box of ``plan``."""
+    return Estimate(plan, top_speed_mps, heave_rate_mps, times)
 
 
 class ParamChange(Record):
@@ -192,8 +211,8 @@ class PlanDiff(Record):
         new_pattern: the commanded one.
         changes: parameters whose value differs (snapped, as decoded), across patterns
             too: a parameter equal in both is not a change; one only one side has is.
-        old, new: estimates of both plans (``old`` is ``None`` with no running plan), at
-            the flyable speed when a top speed is given.
+        old, new: estimates of both plans (``old`` is ``None`` with no running plan): the
+            given ``estimates``, else at the flyable speed when a top speed is given.
         anchor_moved_m: how far the mission anchor moves (m).
     """
 
@@ -211,6 +230,7 @@ class PlanDiff(Record):
         new: Plan,
         top_speed_mps: float | None = None,
         heave_rate_mps: float | None = None,
+        estimates: tuple[Estimate | None, Estimate] | None = None,
     ) -> None:
         init(self, "old_pattern", None if current is None else current.pattern)
         init(self, "new_pattern", new.pattern)
@@ -226,9 +246,13 @@ class PlanDiff(Record):
             if old_params.get(name) != new_params.get(name)
         ]
         init(self, "changes", tuple(changes))
-        rates = (top_speed_mps, heave_rate_mps)
-        init(self, "old", None if current is None else Estimate(current, *rates))
-        init(self, "new", Estimate(new, *rates))
+        if estimates is not None:
+            init(self, "old", None if current is None else estimates[0])
+            init(self, "new", estimates[1])
+        else:
+            rates = (top_speed_mps, heave_rate_mps)
+            init(self, "old", None if current is None else Estimate(current, *rates))
+            init(self, "new", Estimate(new, *rates))
         moved = 0.0 if current is None else math.dist(current.anchor, new.anchor)
         init(self, "anchor_moved_m", moved)
 
@@ -251,7 +275,8 @@ def compare(
     new: Plan,
     top_speed_mps: float | None = None,
     heave_rate_mps: float | None = None,
+    estimates: tuple[Estimate | None, Estimate] | None = None,
 ) -> PlanDiff:
-    """What replacing ``current`` by ``new`` changes (parameters, estimates at the flyable
-    speed, anchor)."""
-    return PlanDiff(current, new, top_speed_mps, heave_rate_mps)
+    """What replacing ``current`` by ``new`` changes (parameters, estimates: the given
+    ``(old, new)`` ones, else at the flyable speed; anchor)."""
+    return PlanDiff(current, new, top_speed_mps, heave_rate_mps, estimates)

@@ -24,6 +24,7 @@ from onboard.agent import OnboardAgent, command_json
 from onboard.guidance import Guidance, GuidanceConfig, Reference
 from planner import Limits, VehicleState
 from sim.channel import ChannelConfig, Delivery, MEChannel
+from sim.completion import Completion
 from sim.control import Autopilot, AutopilotGains
 from sim.environment import (
     Battery,
@@ -115,6 +116,8 @@ class Simulation:
         self.guidance = Guidance(cfg.guidance)
         self.guidance.hold_here(cfg.start_x_m, cfg.start_y_m, cfg.start_z_m, cfg.start_heading_deg)
         self.agent = OnboardAgent(self.guidance, cfg.limits)
+        #: When the pattern guidance flies was done (:mod:`sim.completion`'s rule).
+        self.completion = Completion()
         self.channel = MEChannel(cfg.channel, seed=seed)
         self.current = Current(cfg.current, seed=seed + 1)
         self.sensor = DepthSensor(cfg.depth_sensor, seed=seed + 2)
@@ -283,6 +286,7 @@ class Simulation:
         self.depth_m = self.sensor.read(v.z, self.t_s)
         ref = self._deliver(self.t_s) or self.guidance.update(v.x, v.y, self.depth_m, self.t_s)
         self.ref = ref
+        self.completion.update(self.guidance, self.depth_m, self.t_s)
         heave = self.autopilot.depth_force(ref.depth_m, self.depth_m, dt) if ref.vertical else 0.0
         self._heave_n = heave
         self._apply(ref, heave)

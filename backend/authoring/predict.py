@@ -8,11 +8,16 @@ through the onboard decode, checks and replan), faster than real time over a bou
 :data:`COMPLETION_MARGIN_S`). It shows what the plan's clock does not: the vehicle's top
 speed, its turns and depth transients, the current, the battery.
 
+Its duration is timed by the twin's completion rule (:mod:`sim.completion`: at the path's end
+*and* depth; a repeating pattern after the join and one lap), the estimate's too; beside it the
+estimate (:mod:`backend.authoring.durations`) and, where they differ by more than 20 %, why.
+
 The twin starts where the console last saw the vehicle: position, depth, heading, speed
 through the water (taken along the heading), the mission clock and the plan it runs (the
 console's mirror, so the retask join and anchor are the vehicle's), its battery's charge. In
-training it gets the simulator's vehicle, gains, limits and the water current now (held
-constant); the frame arrives intact (the channel's delay and range kept, no errors or loss).
+training it gets the simulator's vehicle, gains, limits, its channel and its water current
+as they are now (the current drifting on from its present state, as it does there); the
+frame arrives intact (the channel's delay and range kept, no errors or loss).
 For a real vehicle there is no simulator: the twin's own dynamics, from the last pose, with
 no current; ``assumptions`` says so.
 
@@ -26,6 +31,7 @@ uses the machine's other core. Should the worker die, the next prediction starts
 from __future__ import annotations
 
 import contextlib
+import copy
 import math
 import multiprocessing
 import multiprocessing.connection
@@ -37,15 +43,17 @@ from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
 
+from backend.authoring.durations import flown, prediction_notes
 from backend.authoring.profile import hours_run
 from backend.chart.geo import Datum, ned_to_geodetic
 from codec import decode_frame, encode_frame
 from planner import Plan, VehicleState, plan
-from sim.environment import CurrentConfig
+from sim.environment import Current
 from sim.simulation import SimConfig, Simulation
 from vehicle_contract.codes import Mode
 
@@ -131,7 +139,8 @@ class Track:
     #: The onboard agent's answer: accepted, duplicate, rejected (its sentence), or lost.
     outcome: str
     reason: str | None
-    #: Simulated seconds from the frame's arrival to the pattern's completion (None: not).
+    #: Simulated seconds from the frame's arrival to the pattern's completion (a repeating
+    #: one: the join and one lap; :mod:`sim.completion`), None: not within the horizon.
     duration_s: float | None
     horizon_s: float
 
@@ -165,10 +174,12 @@ def run_twin(
     horizon_s: float,
     *,
     finite: bool,
+    current: Current | None = None,
 ) -> Track:
     """Run a fresh twin configured like ``base`` from ``start``, submit ``frame`` at once and
     follow it for ``horizon_s`` simulated seconds (less once a ``finite`` pattern completes:
-    the margin after it)."""
+    the margin after it). ``current``: the water current's process to run (its drift and
+    its generator's state, the training simulator's), instead of ``base``'s."""
     st = start.state
     soc_h = 0.0 if start.soc_pct is None else hours_run(start.soc_pct)
     cfg = replace(
@@ -181,6 +192,8 @@ def run_twin(
         record_hz=0.0,
     )
     sim = Simulation(cfg)
+    if current is not None:
+        sim.current = current
     _place(sim, start)
     t0 = sim.t_s
     veh = sim.vehicle
@@ -207,11 +220,11 @@ def run_twin(
             completed is None
             and arrived is not None
             and outcome in ("accepted", "duplicate")
-            and finite
-            and sim.mode in (Mode.HOLDING, Mode.SURFACED)
+            and sim.completion.done_s is not None
         ):
-            completed = sim.t_s
-            end = min(end, completed + COMPLETION_MARGIN_S)
+            completed = max(arrived, sim.completion.done_s)
+            if finite:
+                end = min(end, completed + COMPLETION_MARGIN_S)
         if k % every == 0 or sim.t_s + half_step > end or completed == sim.t_s:
             ts.append(sim.t_s - t0)
             xs.append(veh.x)
@@ -270,15 +283,21 @@ class TwinWorker:
             return self._pool
 
     def run(
-        self, base: SimConfig, start: Start, frame: bytes, horizon_s: float, *, finite: bool
+        self,
+        base: SimConfig,
+        start: Start,
+        frame: bytes,
+        horizon_s: float,
+        *,
+        finite: bool,
+        current: Current | None = None,
     ) -> Track:
         """:func:`run_twin` in the worker process; a new worker if the last one died."""
+        job = partial(run_twin, base, start, frame, horizon_s, finite=finite, current=current)
         try:
-            job = self._get().submit(run_twin, base, start, frame, horizon_s, finite=finite)
-            return job.result()
+            return self._get().submit(job).result()
         except BrokenProcessPool:
-            pool = self._get(fresh=True)
-            return pool.submit(run_twin, base, start, frame, horizon_s, finite=finite).result()
+            return self._get(fresh=True).submit(job).result()
 
     def close(self) -> None:
         """Stop the worker process (a prediction still running is abandoned)."""
@@ -334,13 +353,17 @@ def predict(
     soc = status.get("battery_pct")
     soc_pct = float(soc) if isinstance(soc, int | float) and math.isfinite(soc) else None
     mode = status.get("mode") if isinstance(status.get("mode"), str) else None
-    base, assumptions = _base_config(console)
+    base, current, assumptions = _base_config(console)
     if soc_pct is None:
         assumptions.append("battery charge unknown: a full battery")
     start = Start(state, mode, mirror, soc_pct)
     repeats = planned.path.loop_start is not None
     worker: TwinWorker = console.twin_worker
-    track = worker.run(base, start, enc.frame.to_bytes(), horizon_s, finite=not repeats)
+    track = worker.run(
+        base, start, enc.frame.to_bytes(), horizon_s, finite=not repeats, current=current
+    )
+    est = flown(planned, console.profile)[0]
+    water = current.velocity if current is not None else (0.0, 0.0)
     keep = decimate(len(track.t_s))
     xs = [track.x_m[i] for i in keep]
     ys = [track.y_m[i] for i in keep]
@@ -358,7 +381,10 @@ def predict(
         "lat_deg": lat,
         "lon_deg": lon,
         "duration_s": track.duration_s,
-        "planned_duration_s": None if repeats else planned.path.duration_s,
+        "planned_duration_s": planned.path.duration_s,
+        "estimate_duration_s": est.duration_s,
+        "repeats": repeats,
+        "duration_notes": prediction_notes(track.duration_s, est.duration_s, water),
         "max_deviation_m": max_deviation_m(planned, track.x_m, track.y_m, track.z_m),
         "horizon_s": track.horizon_s,
         "completes": track.duration_s is not None,
@@ -368,19 +394,19 @@ def predict(
     }
 
 
-def _base_config(console: Any) -> tuple[SimConfig, list[str]]:
-    """The twin's configuration and what the prediction assumes."""
+def _base_config(console: Any) -> tuple[SimConfig, Current | None, list[str]]:
+    """The twin's configuration, the water current's process to run (None: the config's) and
+    what the prediction assumes. In training, the simulator's channel and current *now* (the
+    training controls set ``sim.channel`` and ``sim.current``, not its config): a copy of the
+    current, which drifts on from its state, generator included, as the simulator's will."""
     sim = console.sim
     if sim is None:
-        return SimConfig(limits=console.limits), [
-            "no simulator: the training twin's dynamics from the last reported pose",
-            "no water current",
-        ]
-    cfg: SimConfig = sim.config
-    north, east = float(sim.vehicle.current_n), float(sim.vehicle.current_e)
-    channel = replace(cfg.channel, ber=0.0, loss=0.0, burst_rate=0.0)
-    base = replace(cfg, channel=channel, current=CurrentConfig(north_mps=north, east_mps=east))
-    return base, [
-        f"the water current stays at its present {north:.3f} m/s north, {east:.3f} m/s east",
-        "the frame arrives intact (no bit errors or loss)",
-    ]
+        no_sim = "no simulator: the training twin's dynamics from the last reported pose"
+        return SimConfig(limits=console.limits), None, [no_sim, "no water current"]
+    current: Current = copy.deepcopy(sim.current)
+    channel = replace(sim.channel.config, ber=0.0, loss=0.0, burst_rate=0.0)
+    base = replace(sim.config, channel=channel, current=current.config)
+    north, east = current.velocity
+    drifts = " (and drifts as it does there)" if current.config.drift else ""
+    water = f"the water current runs on from its present {north:.3f} m/s north, {east:.3f} m/s east"
+    return base, current, [water + drifts, "the frame arrives intact (no bit errors or loss)"]

@@ -7,12 +7,13 @@ from __future__ import annotations
 
 from typing import Any
 
+from backend.authoring.durations import estimate_notes, flown
 from backend.authoring.profile import VehicleProfile, battery_use_pct
 from backend.chart.gps import Station
 from backend.commands.checks import check_plan
 from codec import FRAME_BITS, Encoded, airtime_s, sections
 from onboard.agent import command_json
-from planner import Limits, Plan, compare, estimate
+from planner import Limits, Plan, compare
 
 
 def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
@@ -63,15 +64,15 @@ def plan_doc(
     """The plan: path (NED, m; arrival times, s), estimates, the checks (every check's line
     and every violation, :func:`backend.commands.checks.check_plan`), diff from ``current``.
 
-    With the vehicle's ``profile``, durations are at the speed it can fly (the planned ones
-    beside them), a speed above its top speed and a path longer than the battery lasts from
-    ``soc_pct`` (None: full) are violations, and the checks its unknown figures prevent are
-    listed; the battery use starts from ``soc_pct``. With the ME transmitter's ``station``
-    and the link's ``range_m``, a path leaving the range is a violation.
+    With the vehicle's ``profile``, durations are as it flies the path (the kinematic twin,
+    :mod:`backend.authoring.durations`; the planned ones beside them, and why they differ
+    where they differ by more than 20 %), a speed above its top speed and a path longer
+    than the battery lasts from ``soc_pct`` (None: full) are violations, and the checks its
+    unknown figures prevent are listed; the battery use starts from ``soc_pct``. With the ME
+    transmitter's ``station`` and the link's ``range_m``, a path leaving the range is a
+    violation.
     """
-    top = profile.top_speed_mps if profile is not None else None
-    heave = profile.heave_rate_mps if profile is not None else None
-    est = estimate(new, top, heave)
+    est, flight = flown(new, profile)
     path = new.path
     report = check_plan(
         new,
@@ -84,7 +85,7 @@ def plan_doc(
     )
     diff = None
     if current is not None:
-        d = compare(current, new, top, heave)
+        d = compare(current, new, estimates=(flown(current, profile)[0], est))
         diff = {
             "active": current.pattern,
             "changes": [
@@ -113,6 +114,7 @@ def plan_doc(
             "repeats": est.repeats,
             # the whole battery fit, from the charge now, over the flyable duration
             "battery_pct": battery_use_pct(est.duration_s, soc_pct),
+            "duration_notes": estimate_notes(new, est, flight, profile),
         },
         "violations": [v.as_json() for v in report.violations],
         "checks": [

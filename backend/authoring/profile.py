@@ -1,15 +1,19 @@
 """The vehicle profile: what the vehicle can do, for every estimate and check.
 
-Top speed through the water (m/s), heave rate (m/s), yaw rate (deg/s), maximum depth (m) and
-endurance (s). A real vehicle's come from the settings (``NEMESYS_TOP_SPEED_MPS``...): an
-unset figure is unknown (``None``) and the checks that need it are skipped, saying so. In
-training they come from the twin (``sim``), once per parameter set (cached):
+Top speed through the water (m/s), heave (descent) and ascent rates (m/s), yaw rate (deg/s),
+maximum depth (m) and endurance (s). A real vehicle's come from the settings
+(``NEMESYS_TOP_SPEED_MPS``...): an unset figure is unknown (``None``) and the checks that need
+it are skipped, saying so. In training they come from the twin (``sim``), once per parameter
+set (cached):
 
 * top speed: the steady surge with both horizontal thrusters at their (calibrated) limit,
   ``2 T = (Xu + Xuu u) u``, solved for ``u``: about 0.19 m/s;
 * heave and yaw rates: the paper's own full-thrust manoeuvres run in the model
   (:func:`sim.model.heave_test`, :func:`sim.model.yaw_test`): 73.1 mm/s and
   30.3 deg/s, what the model is calibrated to;
+* ascent rate: the heave test reversed (:func:`sim.model.ascent_test`), about 0.11 m/s: the
+  buoyancy helps the thrusters up (unknown on a real vehicle without its setting: ascents are
+  then timed at the heave rate);
 * endurance: the battery fit run to the empty cut-off at cruise load (hotel power, both
   horizontal thrusters at their limit, the vertical pair holding the buoyancy), ~7.2 h.
 
@@ -37,7 +41,7 @@ from sim.environment import (
     paper_soc_pct,
     thrust_power_w,
 )
-from sim.model import VehicleParams, heave_test, yaw_test
+from sim.model import VehicleParams, ascent_test, heave_test, yaw_test
 
 #: Longest dive the battery fit is searched over (h): beyond the fit's reach in any case.
 _MAX_HOURS = 100.0
@@ -49,7 +53,7 @@ class VehicleProfile:
 
     #: Top speed through the water (m/s).
     top_speed_mps: float | None
-    #: Largest vertical speed (m/s).
+    #: Largest vertical speed (m/s): the descent's, as the paper measured it.
     heave_rate_mps: float | None
     #: Largest turn rate (deg/s).
     yaw_rate_dps: float | None
@@ -59,6 +63,8 @@ class VehicleProfile:
     endurance_s: float | None
     #: Where the figures come from: the training twin, or the settings (a real vehicle).
     source: Literal["twin", "settings"]
+    #: Largest ascent rate (m/s); None: the heave rate (for a vehicle without the figure).
+    ascent_rate_mps: float | None = None
 
     def skipped_checks(self) -> list[str]:
         """What cannot be checked or estimated for lack of a figure, in words."""
@@ -127,13 +133,15 @@ def endurance_s(battery: BatteryConfig, thrust_w: float) -> float:
 @lru_cache(maxsize=8)
 def _twin_figures(
     params: VehicleParams, battery: BatteryConfig
-) -> tuple[float, float, float, float]:
-    """(top speed m/s, heave m/s, yaw deg/s, endurance s) of the twin; ~60 ms, once each."""
+) -> tuple[float, float, float, float, float]:
+    """(top speed m/s, heave m/s, yaw deg/s, endurance s, ascent m/s) of the twin; ~70 ms,
+    once each."""
     return (
         top_speed_mps(params),
         heave_test(params),
         yaw_test(params),
         endurance_s(battery, cruise_thrust_power_w(params)),
+        ascent_test(params),
     )
 
 
@@ -143,10 +151,10 @@ def twin_profile(
     battery: BatteryConfig | None = None,
 ) -> VehicleProfile:
     """The training twin's profile (its default parameters unless given)."""
-    top, heave, yaw, endurance = _twin_figures(
+    top, heave, yaw, endurance, ascent = _twin_figures(
         params or VehicleParams(), battery or BatteryConfig()
     )
-    return VehicleProfile(top, heave, yaw, max_depth_m, endurance, "twin")
+    return VehicleProfile(top, heave, yaw, max_depth_m, endurance, "twin", ascent)
 
 
 def profile_for(settings: Settings) -> VehicleProfile:
@@ -160,8 +168,11 @@ def profile_for(settings: Settings) -> VehicleProfile:
             s.max_depth_m,
             s.endurance_s,
             "settings",
+            s.ascent_rate_mps,
         )
     twin = twin_profile(s.max_depth_m)
+    # the twin's ascent goes with its heave rate: a heave setting alone times ascents at it
+    ascent = twin.ascent_rate_mps if s.heave_rate_mps is None else None
     return VehicleProfile(
         s.top_speed_mps if s.top_speed_mps is not None else twin.top_speed_mps,
         s.heave_rate_mps if s.heave_rate_mps is not None else twin.heave_rate_mps,
@@ -169,6 +180,7 @@ def profile_for(settings: Settings) -> VehicleProfile:
         s.max_depth_m,
         s.endurance_s if s.endurance_s is not None else twin.endurance_s,
         "twin",
+        s.ascent_rate_mps if s.ascent_rate_mps is not None else ascent,
     )
 
 

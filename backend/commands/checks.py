@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from typing import Final
 
+from backend.authoring.durations import flown
 from backend.authoring.profile import UNKNOWN, VehicleProfile, endurance_left_s
 from backend.chart.gps import Station
 from backend.chart.reach import distances_m, out_of_range_message
@@ -47,7 +48,6 @@ from backend.commands.report import (
     ViolationKind,
 )
 from planner import RATED_DEPTH_M, Estimate, Limits, Plan, Violation, turn_radius_m, validate
-from planner import estimate as plan_estimate
 from planner._checks import top_speed
 from planner._fence import EXTENT_PARAMS, fence_violations
 
@@ -91,11 +91,10 @@ def check_plan(
             full battery, saying so).
         station: the ME transmitter; None or not placed in NED: the reach is skipped.
         range_m: the ME link's range (m); None: the reach is skipped.
-        estimate: the plan's estimate at the profile's rates, when the caller has it.
+        estimate: the plan's estimate as the vehicle of ``profile`` flies it
+            (:func:`backend.authoring.durations.flown`), when the caller has it.
     """
-    top = profile.top_speed_mps if profile is not None else None
-    heave = profile.heave_rate_mps if profile is not None else None
-    est = estimate if estimate is not None else plan_estimate(plan, top, heave)
+    est = estimate if estimate is not None else flown(plan, profile)[0]
     # the geofence apart (its own check, named), the rest of the onboard limits at once
     found = plan_limits(plan, limits)
     results: list[_Result] = [

@@ -93,3 +93,27 @@ def test_delta_is_none_for_a_lap_figure_missing_on_one_side() -> None:
     d = compare(default_plan("circle"), default_plan("helix", START, default_plan("circle")))
     assert d.delta("lap_length_m") is None
     assert d.delta("waypoints") == d.new.waypoints - (d.old.waypoints if d.old else 0)
+
+
+def test_a_motion_models_times_give_the_durations() -> None:
+    """The console times a path by its motion model (the kinematic twin): the estimate's
+    durations are those times, the planned one stays the path's own."""
+    p = default_plan("circle")
+    path = p.path
+    times = [1.5 * t for t in path.times]
+    e = estimate(p, times=times)
+    assert e.duration_s == pytest.approx(times[-1])
+    assert e.transit_duration_s == pytest.approx(times[path.body_start])
+    assert path.loop_start is not None and e.lap_duration_s is not None
+    assert e.lap_duration_s == pytest.approx(times[-1] - times[path.loop_start])
+    assert e.planned_duration_s == path.duration_s
+    with pytest.raises(ValueError, match="times has 2 values for a path of"):
+        estimate(p, times=[0.0, 1.0])
+
+
+def test_the_diff_takes_given_estimates() -> None:
+    running, new = default_plan("circle"), default_plan("helix", START, default_plan("circle"))
+    old_e, new_e = estimate(running, times=[2 * t for t in running.path.times]), estimate(new)
+    d = compare(running, new, estimates=(old_e, new_e))
+    assert d.old is old_e and d.new is new_e
+    assert d.delta("duration_s") == pytest.approx(new_e.duration_s - old_e.duration_s)

@@ -45,6 +45,9 @@ class VehicleProfileDoc(BaseModel):
     max_depth_m: float = Field(description="deepest allowed depth (m)")
     endurance_s: float | None = Field(description="time on a full battery at cruise (s)")
     source: Literal["twin", "settings"]
+    ascent_rate_mps: float | None = Field(
+        default=None, description="largest ascent rate (m/s); null: the heave rate's"
+    )
 
 
 class Session(BaseModel):
@@ -171,15 +174,23 @@ class PlannedPath(BaseModel):
 
 
 class PlanEstimate(BaseModel):
-    """Size and cost of the path (a repeating pattern: the join and one lap). Durations
-    (``duration_s``, ``transit_duration_s``/``join_duration_s``, ``lap_duration_s``) and
-    ``battery_pct`` are at the speed the vehicle can fly (its profile's top speed);
-    ``planned_duration_s`` is the path's own, at the commanded speed."""
+    """Size and cost of the path (a repeating pattern: the join and one lap). Durations (s:
+    ``duration_s``, ``transit_duration_s``/``join_duration_s``, ``lap_duration_s``) and
+    ``battery_pct`` are as the vehicle flies the path: the onboard guidance on a vehicle of
+    its profile (top speed, heave, ascent and yaw rates), the motion model the prediction's
+    twin shares; ``planned_duration_s`` is the path's own clock, at the commanded speed and
+    the planner's depth ramps; ``duration_notes`` says why the two differ where they differ
+    by more than 20 %."""
 
     waypoints: int
     length_m: float
-    duration_s: float = Field(description="at the flyable speed (s)")
-    planned_duration_s: float = Field(description="at the commanded speed: the path's times (s)")
+    duration_s: float = Field(
+        description="duration as the vehicle flies it (s): a finite pattern to its end and "
+        "depth, a repeating one the join and one lap"
+    )
+    planned_duration_s: float = Field(
+        description="duration by the plan's own clock (s): the path's times, at the commanded speed"
+    )
     planned_speed_mps: float | None = Field(
         description="the speed the plan asks for (m/s); null: it does not move horizontally"
     )
@@ -204,6 +215,10 @@ class PlanEstimate(BaseModel):
     )
     battery_pct: float = Field(
         description="charge used (percentage points): the whole battery fit from the charge now"
+    )
+    duration_notes: list[str] = Field(
+        description="why duration_s and planned_duration_s differ, in words, where they differ "
+        "by more than 20 % (empty otherwise)"
     )
 
 

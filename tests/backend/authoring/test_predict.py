@@ -96,9 +96,14 @@ def test_the_prediction_is_a_full_simulation_from_the_same_state(
         assert pred["completes"] is True and done is not None
         assert pred["duration_s"] == pytest.approx(done, abs=0.5)  # from arrival, ~0.1 s later
         assert pred["planned_duration_s"] > pred["duration_s"]  # corners are cut
+        assert pred["repeats"] is False
     else:
-        assert pred["completes"] is False and pred["duration_s"] is None
-        assert pred["planned_duration_s"] is None
+        # a repeating pattern: the join and one lap, by the reference's own completion rule
+        assert pred["repeats"] is True and pred["completes"] is True
+        lap_done = reference.completion.done_s
+        assert lap_done is not None and pred["duration_s"] is not None
+        assert pred["duration_s"] == pytest.approx(lap_done - t0, abs=0.5)
+        assert pred["planned_duration_s"] == pytest.approx(pred["estimate_duration_s"], rel=0.2)
 
 
 @pytest.mark.slow  # a full-horizon twin run, ~1 s

@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
+from backend.authoring.durations import flown
 from backend.authoring.preview import plan_doc
 from backend.authoring.profile import (
     UNKNOWN,
@@ -28,7 +29,6 @@ from planner import (
     Plan,
     VehicleState,
     Violation,
-    estimate,
     plan,
     turn_radius_m,
 )
@@ -119,7 +119,7 @@ def test_the_wide_circle_breaks_the_reach_and_the_endurance_softly() -> None:
     assert status(report)["turn_radius"] == "ok"  # a round pattern: its turn is checked too
 
     endurance, reach = report.violations
-    est = estimate(p, TWIN.top_speed_mps, TWIN.heave_rate_mps)
+    est = flown(p, TWIN)[0]  # the estimate as the vehicle flies it
     assert est.repeats and est.lap_duration_s is not None
     # the first lap ends after the join: one lap alone is within the battery, join and lap not
     assert est.lap_duration_s < 26_110 < est.duration_s
