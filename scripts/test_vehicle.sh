@@ -46,7 +46,7 @@ fi
 version=${1:?usage: $0 VERSION [pytest args], e.g. $0 3.10}
 shift
 venv=.venv-vehicle${version//./}
-# Only what the venv holds: not the console's checkout (a PYTHONPATH), not its bytecode rules.
+# Only what the venv holds (a developer's shell may point PYTHONPATH at a checkout).
 unset PYTHONPATH PYTHONHOME
 root=$PWD
 SECONDS=0
@@ -73,6 +73,7 @@ if [ ! -x "$venv/bin/python" ] || [ vehicle/pyproject.toml -nt "$venv/.installed
 fi
 # The vehicle side itself on every run, as a vehicle installs it (a copy: the checkout's code now).
 "$venv/bin/python" -m pip install --quiet --no-deps --no-build-isolation --force-reinstall ./vehicle
+rm -rf vehicle/build vehicle/*.egg-info  # setuptools' in-tree leftovers: copies of the packages
 
 # Installed, it imports on its own (outside the checkout), the node's core with it, and the
 # console is not there.
@@ -86,6 +87,9 @@ for name in ('rosbridge', 'station', 'sim', 'backend', 'bench', 'analysis', 'cli
     assert importlib.util.find_spec(name) is None, f'{name} is installed on the vehicle side'
 ")
 
+# The tests import the checkout's code, the same as the copy just installed (pytest puts the
+# repository's root first on sys.path, as in the project's suite: tests/ is a package); the
+# check above is what shows the installed distribution complete and alone.
 echo "test-vehicle: Python $("$venv/bin/python" -c 'import platform; print(platform.python_version())') ($python)"
 "$venv/bin/python" -m pytest --vehicle-side -q -p no:cacheprovider "$@"
 echo "test-vehicle: Python $version done in ${SECONDS} s"
