@@ -12,7 +12,7 @@ it, so it lives below both.
 
 from __future__ import annotations
 
-from enum import StrEnum
+from codec.compat import StrEnum
 
 #: ``n_corrected`` returned for a word the decoder cannot correct (galois' convention).
 UNCORRECTABLE = -1

@@ -15,13 +15,19 @@ to every test of those kinds, so a test names only what it is:
 A test outside the slow tier that took more than :data:`FAST_TEST_BUDGET_S` is named at the
 end of the run (a warning, not a failure: a loaded machine slows everything), so the fast tier
 stays fast as tests are added.
+
+``--vehicle-side`` collects only the vehicle side's tests (``tests/vehicle_side.py``), as
+``make test-vehicle`` runs them on Python 3.10 and 3.12.
 """
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from tests.tiers import is_slow_fixture
+from tests.vehicle_side import is_vehicle_side
 
 #: Fixtures that put a test in a marker's kind.
 FIXTURE_MARKERS = {"browser": "browser", "make_client": "console"}
@@ -31,6 +37,21 @@ NOT_FAST = ("browser", "console", "interop", "schemathesis")
 FAST_TEST_BUDGET_S = 1.0
 #: Seconds each fast-tier test took so far (setup + call + teardown), by node id.
 _fast_times: dict[str, float] = {}
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption(
+        "--vehicle-side",
+        action="store_true",
+        help="collect only the vehicle side's tests, as `make test-vehicle` runs them on "
+        "Python 3.10 and 3.12 (tests/vehicle_side.py)",
+    )
+
+
+def pytest_ignore_collect(collection_path: Path, config: pytest.Config) -> bool | None:
+    if config.getoption("vehicle_side") and not is_vehicle_side(collection_path):
+        return True
+    return None  # pytest's own rules (--ignore, norecursedirs) decide
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:

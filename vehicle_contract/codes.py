@@ -9,9 +9,8 @@ is on the onboard path and stays as light as it: ``codec`` (already loaded there
 
 from __future__ import annotations
 
-from enum import StrEnum
-
 from codec import RejectReason
+from codec.compat import StrEnum
 
 #: A frame that decoded but is no flyable plan (the planner refused it).
 INVALID_PLAN = "invalid_plan"

@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import copy
 from dataclasses import dataclass
-from enum import StrEnum
 from typing import Any, Final
 
+from codec.compat import StrEnum
 from vehicle_contract.payloads import SCHEMAS
 
 #: The contract's version (see the module doc for the rule).

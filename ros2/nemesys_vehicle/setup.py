@@ -17,9 +17,11 @@ setup(
         (f"share/{PACKAGE}/config", glob("config/*.yaml")),
     ],
     # ROS convention: dependencies are in package.xml (rosdep: python3-serial); codec, planner,
-    # onboard and vehicle_contract come from the nemesys-console checkout installed alongside
-    # (README.md)
+    # onboard and vehicle_contract come from the nemesys-console checkout's vehicle/
+    # distribution, installed alongside (README.md)
     install_requires=["setuptools"],
+    # Humble's Python (3.10) and later: what CI tests (README.md, "Python versions")
+    python_requires=">=3.10",
     zip_safe=True,
     maintainer="NemeSys Console maintainers",
     maintainer_email="nemesys@example.org",
