@@ -42,9 +42,10 @@ warn of the first case.
 run ends when its **last step's pattern completes**:
 
 * where the vehicle reports its status (two-way and telemetry links), when the status says so
-  (:func:`vehicle_verdict`): the step's command is the active one and guidance holds its end
-  (``holding``; a surface: ``surfaced``), the contract's modes
-  (:class:`vehicle_contract.codes.Mode`);
+  (:func:`vehicle_verdict`): the step's command is the active one and guidance reports it done
+  (``holding``, at the path's end *and* its depth; a surface: ``surfaced``), the contract's
+  modes (:class:`vehicle_contract.codes.Mode`), read as the simulator's own completion reads
+  guidance (:func:`sim.completion.done_mode`);
 * on a link that reports nothing (an ME modem), at the step's send plus its flyable duration
   (:func:`flyable_s`, the planner's estimate at the vehicle's top speed and heave rate), and
   the run says the completion is *estimated*;
@@ -62,6 +63,7 @@ from collections.abc import Mapping
 from typing import Any, Literal
 
 from planner import REPEATING_PATTERNS, Plan, estimate
+from sim.completion import done_mode
 from vehicle_contract.codes import Mode
 from vehicle_contract.messages import number
 
@@ -104,12 +106,6 @@ def flyable_s(
 #: What the vehicle's verdict on a step it was sent is, from one status.
 #: ``ended``: the step will not complete (the vehicle was retasked, or its battery is empty).
 Verdict = Literal["complete", "running", "ended", "unknown"]
-
-
-def done_mode(pattern: str) -> Mode:
-    """The status ``mode`` once a finite ``pattern`` is complete: a surface at the surface,
-    any other pattern holding the end of its path (a hover: after its duration)."""
-    return Mode.SURFACED if pattern == "surface" else Mode.HOLDING
 
 
 def vehicle_verdict(
