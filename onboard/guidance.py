@@ -14,6 +14,13 @@ turns to face the hold point and approaches when more than ``capture_m`` away, a
 heading inside ``settle_m`` (hysteresis). Hover and surfacing give the depth controller the
 target depth as a step, as in the paper's tank test; the controller's thrust limit shapes the
 transient.
+
+The mode is the vehicle's word on its command (the status's ``mode``), so ``holding`` means
+the command is done: guidance finishes a path at its horizontal end (a hover: when its time is
+up), but a depth change the path leaves for the end (its ramp outlasting the horizontal path)
+is still being flown there, in place; the mode stays ``running`` until the vehicle is at the
+held depth, within :data:`AT_DEPTH_M` (issue 20: ``holding`` was reported with the vehicle
+still 7 m above its depth). :attr:`Guidance.at_end` says guidance keeps station meanwhile.
 """
 
 from __future__ import annotations
@@ -75,6 +82,11 @@ class Reference:
         self.vertical = vertical  # False: vertical thrusters off (afloat at the surface)
 
 
+#: The vehicle is at the held depth within this (m): the depth loop holds +-3 cm (the paper's
+#: tank test), the depth sensor adds its noise. A finite pattern is ``holding`` (done) only then.
+AT_DEPTH_M = 0.1
+
+
 class Guidance:
     """Tracks one plan at a time; :meth:`set_plan` switches (the retask)."""
 
@@ -87,6 +99,9 @@ class Guidance:
         self.hold: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)  # x, y, z, hdg rad
         self._approaching = False
         self._started_s = 0.0
+        #: The plan's path is flown to its end (a hover: its time is up) and guidance keeps
+        #: station there; the mode is ``running`` until the vehicle is at the held depth.
+        self.at_end = False
 
     def hold_here(self, x_m: float, y_m: float, z_m: float, heading_deg: float) -> None:
         """Station keeping at a pose (idle, and after a finite pattern)."""
@@ -99,6 +114,7 @@ class Guidance:
         self.segment = 0
         self._started_s = t_s
         self._approaching = False
+        self.at_end = False
         self.cross_track_m = 0.0
         path = plan.path
         name = plan.pattern
@@ -122,20 +138,29 @@ class Guidance:
             return Reference(hdg, 0.0, 0.0, self.mode is Mode.SURFACING)
         if plan is None or self.mode is Mode.HOLDING or self.mode is Mode.IDLE:
             return self._station(x_m, y_m)
-        if plan.pattern == "hover":
-            if t_s - self._started_s >= plan.path.duration_s:
-                self.mode = Mode.HOLDING
+        if plan.pattern == "hover" and t_s - self._started_s >= plan.path.duration_s:
+            self.at_end = True
+        if self.at_end:
+            self._arrive(z_m)
             return self._station(x_m, y_m)
-        return self._follow(plan, x_m, y_m)
+        if plan.pattern == "hover":
+            return self._station(x_m, y_m)
+        return self._follow(plan, x_m, y_m, z_m)
+
+    def _arrive(self, z_m: float) -> None:
+        """At the path's end: the command is done (``holding``) once the vehicle is at the
+        held depth."""
+        if abs(z_m - self.hold[2]) <= AT_DEPTH_M:
+            self.mode = Mode.HOLDING
 
     # --- path following ------------------------------------------------------------------
 
-    def _follow(self, plan: Plan, x: float, y: float) -> Reference:
+    def _follow(self, plan: Plan, x: float, y: float, z: float) -> Reference:
         path = plan.path
         xs, ys, zs = path.xs, path.ys, path.zs
         n = len(xs)
         if n == 1:
-            self._finish(plan)
+            self._finish(plan, z)
             return self._station(x, y)
         look = self.config.lookahead_m
         loop = path.loop_start
@@ -160,7 +185,7 @@ class Guidance:
         self.segment = i
         self.cross_track_m = best_d
         if loop is None and i == n - 2 and f >= 1.0:
-            self._finish(plan)
+            self._finish(plan, z)
             return self._station(x, y)
         # the lookahead point
         px = xs[i] + f * (xs[i + 1] - xs[i])
@@ -187,7 +212,8 @@ class Guidance:
             course = math.atan2(cy - y, cx - x)
         return Reference(course, path.speeds[i], depth)
 
-    def _finish(self, plan: Plan) -> None:
+    def _finish(self, plan: Plan, z: float) -> None:
+        """The path's horizontal end: hold its last waypoint (done at its depth)."""
         path = plan.path
         if path.hold_heading_deg is not None:
             heading = path.hold_heading_deg
@@ -196,7 +222,8 @@ class Guidance:
         else:
             heading = plan.angle_deg
         self.hold_here(path.xs[-1], path.ys[-1], path.zs[-1], heading)
-        self.mode = Mode.HOLDING
+        self.at_end = True
+        self._arrive(z)
 
     # --- station keeping -----------------------------------------------------------------
 

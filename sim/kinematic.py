@@ -7,7 +7,8 @@ What it keeps of the full twin, and why each matters to a duration:
 
 * guidance itself (:class:`onboard.guidance.Guidance`): the line-of-sight lookahead cuts
   corners and flies inside tight circles (a 2 m square is flown ~25 % shorter than its path),
-  a hover ends on its own clock, a path ends at its horizontal end;
+  a hover ends on its own clock, a path ends at its horizontal end, and either is done once
+  the vehicle is at the held depth;
 * the autopilot's laws (:class:`sim.control.AutopilotGains`): the heading turns at
   ``heading_k_per_s`` times its error, at most the yaw rate (the autopilot's limit, at most the
   vehicle's), and the surge slows to ``cos^2`` of the heading error while it turns;
@@ -121,13 +122,13 @@ def fly(
     limit = max(3600.0, MAX_STRETCH * path.duration_s)
     for _ in range(MAX_STEPS):
         ref = g.update(v.x, v.y, v.z, v.t)
-        if done.update(g, v.z, v.t) is not None or v.t > limit:
+        if done.update(g, v.t) is not None or v.t > limit:
             break
         if g.segment > last:
             for i in range(last + 1, g.segment + 1):
                 reached[i] = v.t
             last = g.segment
-        if finished_s is None and g.mode is not Mode.RUNNING:
+        if finished_s is None and (g.at_end or g.mode is not Mode.RUNNING):
             finished_s = v.t
         v.step(g, ref)
     done_s = done.done_s
@@ -177,7 +178,7 @@ class _Vehicle:
         """One step towards guidance's reference ``ref``: as long as a quarter lookahead
         takes (longer along a straight leg it follows, or holding still)."""
         speed = ref.speed_mps if self.top is None else min(ref.speed_mps, self.top)
-        running = g.mode is Mode.RUNNING
+        running = g.mode is Mode.RUNNING and not g.at_end  # following the path (or hovering)
         target = ref.depth_m
         if speed > _EPS:
             dt = min(self.max_step_s, max(MIN_STEP_S, self.step_m / speed))

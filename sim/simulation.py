@@ -286,7 +286,7 @@ class Simulation:
         self.depth_m = self.sensor.read(v.z, self.t_s)
         ref = self._deliver(self.t_s) or self.guidance.update(v.x, v.y, self.depth_m, self.t_s)
         self.ref = ref
-        self.completion.update(self.guidance, self.depth_m, self.t_s)
+        self.completion.update(self.guidance, self.t_s)
         heave = self.autopilot.depth_force(ref.depth_m, self.depth_m, dt) if ref.vertical else 0.0
         self._heave_n = heave
         self._apply(ref, heave)

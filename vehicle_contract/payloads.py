@@ -135,7 +135,12 @@ STATUS_SCHEMA: Final[dict[str, Any]] = {
             "maximum": 100,
             "description": "state of charge (%)",
         },
-        "mode": {"enum": list(MODES), "description": "what guidance is doing"},
+        "mode": {
+            "enum": list(MODES),
+            "description": "what guidance is doing: running while it flies the command (a "
+            "finite path's last depth change included); holding once a finite command is done, "
+            "at its end and its depth (a hover: its time up and at its depth)",
+        },
         "pattern": {
             "enum": [*(p["name"] for p in describe_dictionary()), None],
             "description": "the active command's pattern; null: none",

@@ -37,6 +37,7 @@ from backend.scripts.operations import (
     completion_refusal,
     expand,
     export_onboard,
+    flown_timing,
     onboard_csv,
     preview,
 )
@@ -62,6 +63,7 @@ IDLE: dict[str, Any] = {
     "next": None,
     "waiting_for": None,
     "due_s": None,
+    "expected_s": None,
     "elapsed_s": None,
     "steps": [],
     "completion_by": None,
@@ -87,11 +89,13 @@ def _plan_error(err: ScriptError) -> HTTPException:
 def script_preview(
     script: MissionScript, console: ConsoleDep, x_nemesys_view: ViewHeader = None
 ) -> ScriptPreview:
-    """The whole script as one path (NED) with its timeline, from where the vehicle is now;
-    drawn in the caller's own 3D view (``X-Nemesys-View``)."""
+    """The whole script as one path (NED) with its timeline, from where the vehicle is now,
+    timed as the vehicle's profile flies it (estimated); drawn in the caller's own 3D view
+    (``X-Nemesys-View``)."""
     mirror = console.commands.mirror if console.commands else None
+    timing = flown_timing(console.profile)
     try:
-        doc = preview(script, console.vehicle_state(), mirror, console.plan_violations)
+        doc = preview(script, console.vehicle_state(), mirror, console.plan_violations, timing)
     except ScriptError as err:
         raise _plan_error(err) from None
     if console.viewer is not None:
@@ -133,8 +137,9 @@ def script_export(
     (:mod:`backend.scripts.onboard`)."""
     mirror = console.commands.mirror if console.commands else None
     name = "".join(c if c.isalnum() else "-" for c in script.name)
+    timing = flown_timing(console.profile)
     try:
-        expanded = expand(script, console.vehicle_state(), mirror)
+        expanded = expand(script, console.vehicle_state(), mirror, timing)
         refusal = completion_refusal(expanded)
         if refusal is not None:
             raise refusal
@@ -144,11 +149,11 @@ def script_export(
     try:
         if format == "csv":
             return Response(
-                onboard_csv(script, console.vehicle_state(), mirror),
+                onboard_csv(script, console.vehicle_state(), mirror, timing),
                 media_type="text/csv",
                 headers={"Content-Disposition": f'attachment; filename="{name}-onboard.csv"'},
             )
-        doc = export_onboard(script, console.vehicle_state(), mirror)
+        doc = export_onboard(script, console.vehicle_state(), mirror, timing)
     except ScriptError as err:
         raise _plan_error(err) from None
     return JSONResponse(
@@ -189,22 +194,20 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> RunState:
     if console.runner is not None and console.runner.running:
         raise HTTPException(409, "a script is already running; stop it first")
     mirror = console.commands.mirror if console.commands else None
+    timing = flown_timing(console.profile)
     try:  # timed by the same expansion as the preview and the export
-        expanded = expand(body.script, console.vehicle_state(), mirror)
+        expanded = expand(body.script, console.vehicle_state(), mirror, timing)
     except ScriptError as err:
         raise HTTPException(
             422, [{**e, "loc": ["body", "script", *e["loc"]]} for e in err.errors()]
         ) from None
     refuse_unsafe(body.script, step_violations(expanded, console.plan_violations))
-    profile = console.profile
     console.runner = ScriptRunner.planned(
         body.script,
         expanded,
         body.mode,
         clock=run_clock(console),
-        top_speed_mps=profile.top_speed_mps,
-        heave_rate_mps=profile.heave_rate_mps,
-        completion_by=_completion_by(console, "plan"),
+        completion_by=_completion_by(console, "estimate"),
     )
     console.script_commands = {}
     console.start_script_loop(_loop(console))
@@ -290,14 +293,13 @@ def run_clock(console: Console) -> Callable[[], float]:
 
 
 def _completion_by(console: Console, was: CompletionBy) -> CompletionBy:
-    """How a run knows its last step completed: from the vehicle's status where the link
-    carries it, else by the plan (estimated). A link whose capability is not known (yet, or
-    again while it reconnects) changes nothing: a vehicle that reports is not taken for one
-    that does not."""
+    """How a run knows a step completed: from the vehicle's status where the link carries
+    it, else by the estimate. A link whose capability is not known (yet, or again while it
+    reconnects) changes nothing: a vehicle that reports is not taken for one that does not."""
     link = console.link
     if link is None or link.capability is Capability.UNKNOWN:
         return was
-    return "vehicle" if link.telemetry else "plan"
+    return "vehicle" if link.telemetry else "estimate"
 
 
 async def _sleep(clock: Clock, seconds: float) -> None:
@@ -350,7 +352,8 @@ async def _loop(console: Console) -> None:
                 )
             elif record["state"] in FINAL_STATES:  # rejected, timed_out, failed, ...
                 runner.mark_failed(index, f"{record['state']}: {record['reason']}")
+        # the completion the run waits for, as reported: a step on completion may go at once
+        runner.observe(console.hub.status)
         for index in runner.poll():
             await _send(console, runner, index)
-        runner.observe(console.hub.status)  # the last step's completion, as reported
         await _sleep(console.clock, _sleep_s(console, runner))

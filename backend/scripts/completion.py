@@ -1,55 +1,45 @@
 """When a mission script's step is *complete*: the one rule the editor, the timeline, the
-onboard export and the run all use.
+onboard export and the run all use, and the simulator, the estimate and the vehicle share
+(:mod:`sim.completion`).
 
-The rule (one place, this module):
+The rule:
 
-* a **finite** pattern completes when its planned path ends (:func:`completion_s` is the
-  plan's ``path.duration_s``): straight, lawnmower, spiral, helix, box orbit (its ``laps``),
-  surface (at the surface) and hover;
-* a **hover** is a hold: it completes after its ``duration`` parameter, counted from when it
-  takes effect (the approach to the hold point and depth is inside it; only an approach
-  longer than the duration, or a hover retasking a hover in force, which keeps that hover's
-  clock, makes it differ, and then the plan says so);
+* a **finite** pattern (straight, lawnmower, spiral, helix, box orbit, surface, hover)
+  completes when guidance holds the end of its path *and* the vehicle is at the held depth
+  (a surface: at the surface); a **hover** when its ``duration`` is up (counted from when it
+  takes effect, the approach inside it; a hover retasking a hover in force keeps that hover's
+  clock) and it is at its depth. Onboard guidance reports exactly that as ``holding``
+  (``surfaced``), so the vehicle's status says it;
 * a **repeating** pattern (square, circle: :data:`planner.REPEATING_PATTERNS`, whose paths
   have a ``loop_start``) never completes: it flies until retasked. The editor therefore
   refuses a step "on completion" (``after_previous``) after one (:func:`after_repeating`).
 
-So an ``after_previous`` step takes effect at the previous step's start plus the previous
-step's completion time, in the timeline, in the onboard export and in the run.
+**How long** a step takes is the estimate (:mod:`backend.scripts.timing`: the onboard guidance
+flying the plan on the vehicle's profile, done by the rule above), never the plan's own clock,
+which the vehicle does not keep (issue 20: a straight 210 s by its plan, done at 160 s). So an
+``after_previous`` step takes effect at the previous step's start plus the previous step's
+estimated completion, in the timeline and in the onboard export's refusal.
 
-How the run times a step "on completion": **by the plan, on the run clock** (not by the
-vehicle's status). A step "on completion" is sent :func:`completion_s` of the previous step after
-the previous step was sent. Why:
+**When the run sends a step "on completion"**, and **when the run is over** (its last step's
+pattern complete; issue 20: "completed" at 120 s while the last step flew on to 248 s), follow
+the same reading of the step it waits for:
 
-1. On the ME modem link the station has no telemetry at all (the link is one-way): a run that
-   waits for the vehicle to report completion waits forever there. The old rule (wait until
-   the vehicle was seen running the pattern, then holding) also stalled in training: a hover
-   that retasks a hover in force completes at once, the vehicle never reports it running, and
-   the run waited for ever (issue 14: hover, then a circle on completion).
-2. Every frame takes the link's delivery time to reach the vehicle. Sending the next frame the
-   completion time after the previous one was sent makes it arrive when the previous pattern
-   ends, as the timeline has it. Waiting for a completion report would add a delivery time and
-   a telemetry period per step.
-3. In training the status reaches the console about every 0.4 s of wall time: 20 s of vehicle
-   time at the 50x time scale, too coarse to time a retask by.
-
-The price: a vehicle slower than its plan (a commanded speed above its top speed, a head
-current) is retasked at the planned time, before it has finished; the preview's speed checks
-warn of the first case.
-
-**When the run is over** is another question, with another answer (issue 20: a run said
-"completed" when its last step was acknowledged, while that step flew on for two minutes). The
-run ends when its **last step's pattern completes**:
-
-* where the vehicle reports its status (two-way and telemetry links), when the status says so
-  (:func:`vehicle_verdict`): the step's command is the active one and guidance holds its end
-  (``holding``; a surface: ``surfaced``), the contract's modes
-  (:class:`vehicle_contract.codes.Mode`);
-* on a link that reports nothing (an ME modem), at the step's send plus its flyable duration
-  (:func:`flyable_s`, the planner's estimate at the vehicle's top speed and heave rate), and
-  the run says the completion is *estimated*;
+* where the vehicle reports its status (two-way and telemetry links), when the status says the
+  step is complete (:func:`vehicle_verdict`): the step's command is the active one and the
+  mode is :func:`sim.completion.done_mode` (``holding``; a surface: ``surfaced``), the
+  contract's modes (:class:`vehicle_contract.codes.Mode`). The next frame then costs a
+  telemetry period and a delivery time after the completion, and arrives after it, never
+  before: a vehicle slower than its estimate (a head current) is not retasked early. A status
+  saying the step will not complete (another command newer than its acceptance, an empty
+  battery) stops the run with the reason;
+* on a link that reports nothing (an ME modem), at the step's send plus its estimated
+  completion, and the run says the completion is *estimated*;
 * a last step that repeats (square, circle) never completes: once it is on its way the run
   has nothing left to do, and says the vehicle is "running until retasked".
+
+The old stall (issue 14: a hover retasking a hover in force completes at once, and a run that
+waited to see it running, then holding, waited for ever) cannot recur: the verdict reads the
+active command and its mode from a status newer than the acceptance, not a transition.
 
 The run clock (``backend/api/scripts.py``) counts vehicle seconds from the run's start: the
 simulator's own clock in training (it runs at the time scale, and lags it under load), the
@@ -61,7 +51,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, Literal
 
-from planner import REPEATING_PATTERNS, Plan, estimate
+from planner import REPEATING_PATTERNS
+from sim.completion import done_mode
 from vehicle_contract.codes import Mode
 from vehicle_contract.messages import number
 
@@ -74,13 +65,6 @@ def repeats(pattern: str) -> bool:
     return pattern in REPEATING
 
 
-def completion_s(plan: Plan) -> float | None:
-    """Seconds after ``plan`` takes effect when it is complete; ``None`` for a repeating
-    pattern, which never completes (the plan's path then ends one lap in)."""
-    path = plan.path
-    return None if path.loop_start is not None else path.duration_s
-
-
 def after_repeating(index: int, previous: str) -> str:
     """Why step ``index`` (0-based) may not wait for step ``index - 1``'s ``previous``
     pattern to complete; steps are named as the page numbers them (from 1)."""
@@ -91,25 +75,9 @@ def after_repeating(index: int, previous: str) -> str:
     )
 
 
-def flyable_s(
-    plan: Plan, top_speed_mps: float | None = None, heave_rate_mps: float | None = None
-) -> float | None:
-    """Seconds the vehicle needs to fly ``plan`` at the speed it can fly (the planner's
-    estimate, :func:`planner.estimate`, at its top speed and heave rate; unknown: as planned);
-    ``None`` for a repeating pattern (``Estimate.repeats``), which never completes."""
-    est = estimate(plan, top_speed_mps, heave_rate_mps)
-    return None if est.repeats else est.duration_s
-
-
 #: What the vehicle's verdict on a step it was sent is, from one status.
 #: ``ended``: the step will not complete (the vehicle was retasked, or its battery is empty).
 Verdict = Literal["complete", "running", "ended", "unknown"]
-
-
-def done_mode(pattern: str) -> Mode:
-    """The status ``mode`` once a finite ``pattern`` is complete: a surface at the surface,
-    any other pattern holding the end of its path (a hover: after its duration)."""
-    return Mode.SURFACED if pattern == "surface" else Mode.HOLDING
 
 
 def vehicle_verdict(

@@ -2,10 +2,11 @@
 
 Each step starts where the previous one has taken the vehicle when it triggers. An
 ``after_previous`` step takes effect at the previous step's start plus its completion time
-(:mod:`backend.scripts.completion`); the preview's timeline, the onboard export and the run's
-due times all come from here. Times are seconds from the start of the run; the planner's
-states use the vehicle's mission clock (``start.t_s`` + script time). Steps are named in
-messages as the page numbers them (from 1).
+(:mod:`backend.scripts.completion`), as the vehicle is estimated to fly it
+(:mod:`backend.scripts.timing`: the one duration story, not the plan's own clock); the
+preview's timeline, the onboard export and the run's due times all come from here. Times are
+seconds from the start of the run; the planner's states use the vehicle's mission clock
+(``start.t_s`` + script time). Steps are named in messages as the page numbers them (from 1).
 """
 
 from __future__ import annotations
@@ -14,8 +15,8 @@ import math
 from bisect import bisect_right
 from dataclasses import dataclass, replace
 
-from backend.scripts.completion import completion_s
 from backend.scripts.model import Loc, MissionScript, ScriptError, ScriptStep, Trigger
+from backend.scripts.timing import StepTiming, Timing, flown_timing
 from codec import DecodeError, Encoded, decode_frame, encode_frame
 from planner import Path, Plan, PlanError, VehicleState, plan
 
@@ -32,9 +33,12 @@ class ExpandedStep:
             (or the ``current`` plan for step 0) in force.
         state: the vehicle's state when the step takes effect (mission clock ``t_s``).
         t_start_s: when it takes effect (s from the start of the run).
-        t_end_s: when the next step takes over, or for the last step when its plan ends
-            (one lap for a repeating pattern).
+        t_end_s: when the next step takes over, or for the last step when it is estimated
+            done (one lap for a repeating pattern).
         warnings: what the operator should know about this step's timing.
+        timing: when the vehicle is estimated to fly the plan (:mod:`backend.scripts.timing`).
+        start_estimated: ``t_start_s`` rests on an estimate (a completion, or the operator's
+            go assumed then), not on a time the script sets.
     """
 
     index: int
@@ -45,6 +49,8 @@ class ExpandedStep:
     t_start_s: float
     t_end_s: float
     warnings: tuple[str, ...]
+    timing: StepTiming
+    start_estimated: bool = False
 
     @property
     def repeats(self) -> bool:
@@ -52,14 +58,14 @@ class ExpandedStep:
 
     @property
     def duration_s(self) -> float:
-        """The plan's own duration: join and pattern (one lap for a repeating pattern)."""
-        return self.plan.path.duration_s
+        """The estimated duration: join and pattern (one lap for a repeating pattern)."""
+        return self.timing.duration_s
 
     @property
     def completion_s(self) -> float | None:
-        """Seconds after it takes effect when the step is complete (``None``: it repeats
-        until retasked); see :func:`backend.scripts.completion.completion_s`."""
-        return completion_s(self.plan)
+        """Seconds after it takes effect when the step is estimated complete (``None``: it
+        repeats until retasked); the rule: :mod:`backend.scripts.completion`."""
+        return self.timing.completion_s
 
 
 def _segment_at(path: Path, t_rel_s: float) -> int | None:
@@ -76,10 +82,11 @@ def _segment_at(path: Path, t_rel_s: float) -> int | None:
     return min(max(bisect_right(times, t) - 1, 0), n - 2)
 
 
-def _state_at(p: Plan, t_rel_s: float, t_abs_s: float) -> VehicleState:
-    """Where ``p`` has the vehicle ``t_rel_s`` after it took effect, at mission time
-    ``t_abs_s``."""
+def _state_at(p: Plan, timing: StepTiming, t_rel_s: float, t_abs_s: float) -> VehicleState:
+    """Where the vehicle flying ``p`` (as ``timing`` estimates it) is ``t_rel_s`` after ``p``
+    took effect, at mission time ``t_abs_s``."""
     path = p.path
+    t_rel_s = timing.to_plan_s(t_rel_s)
     sp = path.sample(t_rel_s)
     heading = sp.course_deg
     if sp.speed_mps == 0.0 and path.hold_heading_deg is not None:
@@ -100,10 +107,10 @@ def describe_trigger(trigger: Trigger, index: int) -> str:
     return "on the operator's go"
 
 
-def _continued(p: Plan, in_force: Plan | None, index: int) -> str | None:
+def _continued(p: Plan, done: float | None, in_force: Plan | None, index: int) -> str | None:
     """A warning when step ``index`` retasks the same finite pattern the vehicle is flying,
-    which keeps its progress (the planner's rule), so it completes sooner than it reads."""
-    done = completion_s(p)
+    which keeps its progress (the planner's rule), so it completes (``done``, s) sooner than
+    it reads."""
     if in_force is None or in_force.pattern != p.pattern or done is None:
         return None
     if p.pattern == "hover":
@@ -112,8 +119,8 @@ def _continued(p: Plan, in_force: Plan | None, index: int) -> str | None:
             return None
         return (
             f"the vehicle is already hovering: a hover retask keeps that hover's clock, so "
-            f"step {index + 1} completes {done:.1f} s after it takes effect, not {wanted:g} s "
-            "(give a longer duration to hover longer)"
+            f"step {index + 1} completes about {done:.1f} s after it takes effect (estimated), "
+            f"not {wanted:g} s (give a longer duration to hover longer)"
         )
     if done <= 1e-6:
         return (
@@ -124,11 +131,13 @@ def _continued(p: Plan, in_force: Plan | None, index: int) -> str | None:
     return None
 
 
-def _first_start(t_start: float, start: VehicleState, current: Plan | None) -> VehicleState:
+def _first_start(
+    t_start: float, start: VehicleState, current: Plan | None, timing: Timing
+) -> VehicleState:
     """The vehicle when step 0 takes effect, ``t_start`` s after the run's start."""
     if current is not None:
         t_abs = start.t_s + t_start
-        return _state_at(current, t_abs - current.t0_s, t_abs)
+        return _state_at(current, timing(current), t_abs - current.t0_s, t_abs)
     if t_start > 0.0:
         return VehicleState(
             start.x_m, start.y_m, start.z_m, start.heading_deg, 0.0, start.t_s + t_start
@@ -138,26 +147,28 @@ def _first_start(t_start: float, start: VehicleState, current: Plan | None) -> V
 
 def _after(
     prev: ExpandedStep, trigger: Trigger, i: int, warnings: list[str]
-) -> tuple[float, float]:
-    """(start time from the run's start, time into ``prev``'s plan) of step ``i``, which
-    follows ``prev``; appends the timing warnings."""
+) -> tuple[float, float, bool]:
+    """(start time from the run's start, time into ``prev``'s flight, whether the start is
+    estimated) of step ``i``, which follows ``prev``; appends the timing warnings."""
     done = prev.completion_s
     name = prev.step.pattern.replace("_", " ")
+    estimated = True
     if trigger.kind == "at" and trigger.t_s is not None:
-        t_start = trigger.t_s
+        t_start, estimated = trigger.t_s, False
         if t_start < prev.t_start_s:
             warnings.append(
                 f"at {t_start:g} s is before step {i} is expected to start "
                 f"({prev.t_start_s:.1f} s): it is sent as soon as step {i} is acknowledged"
             )
-            t_start = prev.t_start_s
+            t_start, estimated = prev.t_start_s, prev.start_estimated
         t_rel = t_start - prev.t_start_s
     elif done is None:  # operator (after_previous is refused after a repeating pattern)
         t_rel = prev.duration_s
         t_start = prev.t_start_s + t_rel
         warnings.append(
             f"step {i} ({name}) repeats until retasked, so this step has no completion to "
-            f"wait for: the preview assumes the operator's go after one lap ({t_rel:.1f} s)"
+            "wait for: the preview assumes the operator's go after one lap (estimated "
+            f"{t_rel:.1f} s)"
         )
     else:
         t_rel = done
@@ -165,15 +176,18 @@ def _after(
         if trigger.kind == "operator":
             warnings.append(
                 "waits for the operator's go: the time is unknown; the preview assumes "
-                f"step {i} completes first ({t_start:.1f} s)"
+                f"step {i} completes first (estimated {t_start:.1f} s)"
             )
     if t_start == prev.t_start_s:
         warnings.append(f"takes effect at the same time as step {i}, which is replaced at once")
-    return t_start, t_rel
+    return t_start, t_rel, estimated
 
 
 def expand(
-    script: MissionScript, start: VehicleState, current: Plan | None = None
+    script: MissionScript,
+    start: VehicleState,
+    current: Plan | None = None,
+    timing: Timing | None = None,
 ) -> list[ExpandedStep]:
     """Plan every step of ``script`` in order, as the vehicle would fly them.
 
@@ -182,6 +196,8 @@ def expand(
         start: the vehicle when the run starts (its ``t_s`` is the mission clock then).
         current: the plan the vehicle is running at the start, if any: it keeps the mission
             anchor (orbits stay around the same point) and is flown until step 0 triggers.
+        timing: how the vehicle flies a plan (:func:`backend.scripts.timing.flown_timing` of
+            its profile); default: a vehicle of unknown figures (flown at the plans' speeds).
 
     Raises:
         ScriptError: the planner cannot expand a step (e.g. more waypoints than the vehicle
@@ -190,6 +206,7 @@ def expand(
     """
     out: list[ExpandedStep] = []
     in_force = current
+    timing = timing if timing is not None else flown_timing(None)
     for i, step in enumerate(script.steps):
         encoded = encode_frame(step.pattern, step.params)
         try:
@@ -203,23 +220,26 @@ def expand(
             if trigger.kind == "operator":
                 warnings.append("waits for the operator's go: assumed at the start of the run")
             t_start = trigger.t_s if trigger.kind == "at" and trigger.t_s is not None else 0.0
-            state = _first_start(t_start, start, current)
+            state = _first_start(t_start, start, current, timing)
+            estimated = False
         else:
-            t_start, t_rel = _after(prev, trigger, i, warnings)
-            state = _state_at(prev.plan, t_rel, start.t_s + t_start)
+            t_start, t_rel, estimated = _after(prev, trigger, i, warnings)
+            state = _state_at(prev.plan, prev.timing, t_rel, start.t_s + t_start)
         try:
             p = plan(command, state, in_force)
         except PlanError as e:
             loc: Loc = ("steps", i, "params", e.field) if e.field else ("steps", i)
             raise ScriptError(str(e), loc) from e
-        note = _continued(p, in_force, i)
+        flies = timing(p)
+        note = _continued(p, flies.completion_s, in_force, i)
         if note is not None:
             warnings.append(note)
         if prev is not None:
             out[-1] = replace(prev, t_end_s=t_start)
+        end = t_start + flies.duration_s
         out.append(
             ExpandedStep(
-                i, step, encoded, p, state, t_start, t_start + p.path.duration_s, tuple(warnings)
+                i, step, encoded, p, state, t_start, end, tuple(warnings), flies, estimated
             )
         )
         in_force = p

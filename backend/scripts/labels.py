@@ -4,9 +4,11 @@ Issue 20: the page said "completion 127.778 s" (a duration that read like a time
 the dive" (for a time counted from the run's start) and "trigger after_previous, transmitted
 yes". The rules here, in one place:
 
-* a **duration** reads "takes 127.8 s"; a **time** reads "at 20 s from the run's start" (every
-  time of a script counts from its run's start: a script is written ahead and run at any point
-  of a dive, and the onboard export's times count from its start too);
+* a **duration** reads "takes 127.8 s", and "takes 160 s (estimated)" when it is the estimate
+  of how the vehicle flies the step (:mod:`backend.scripts.timing`), as every step's is; a
+  **time** reads "at 20 s from the run's start" (every time of a script counts from its run's
+  start: a script is written ahead and run at any point of a dive, and the onboard export's
+  times count from its start too);
 * triggers and states are in the operator's words (:data:`TRIGGER_WORDS`, "sent", "not sent
   yet"), never the identifiers of the JSON.
 
@@ -38,9 +40,20 @@ def at_time(t_s: float) -> str:
     return f"at {seconds(t_s)} from the run's start"
 
 
-def takes(completion_s: float | None) -> str:
-    """A step's duration: ``takes 127.8 s``, or ``repeats until retasked``."""
-    return "repeats until retasked" if completion_s is None else f"takes {seconds(completion_s)}"
+def takes(
+    completion_s: float | None, estimated: bool = False, planned_s: float | None = None
+) -> str:
+    """A step's duration: ``takes 127.8 s``, ``takes 160 s (estimated)``, with the plan's own
+    clock where it reads differently (``takes 160 s (estimated; 210 s by the plan's own
+    clock)``), or ``repeats until retasked``."""
+    if completion_s is None:
+        return "repeats until retasked"
+    text = f"takes {seconds(completion_s)}"
+    if not estimated:
+        return text
+    if planned_s is not None and seconds(planned_s) != seconds(completion_s):
+        return f"{text} (estimated; {seconds(planned_s)} by the plan's own clock)"
+    return f"{text} (estimated)"
 
 
 def trigger_text(kind: str, t_s: float | None) -> str:
@@ -82,7 +95,7 @@ def state_text(step: Mapping[str, Any]) -> str:
         text += (
             f"; completed {at_time(done)}, as the vehicle reported"
             if how == "vehicle"
-            else f"; completed {at_time(done)} by the plan (estimated: the link reports nothing)"
+            else f"; completed {at_time(done)} by the estimate (the link reports nothing)"
         )
     return text
 
@@ -91,7 +104,7 @@ def describe_steps(steps: list[dict[str, Any]], completion_by: str) -> None:
     """Add each run step's ``trigger_text``, ``takes_text`` and ``state_text`` (in place)."""
     for s in steps:
         s["trigger_text"] = trigger_text(s["trigger"], s.get("t_s"))
-        s["takes_text"] = takes(s.get("completion_s"))
+        s["takes_text"] = takes(s.get("completion_s"), estimated=True)
         s["state_text"] = state_text({**s, "completion_by": completion_by})
 
 
@@ -107,7 +120,7 @@ def run_summary(run: Mapping[str, Any]) -> str:
             return f"completed{when}: the vehicle reported {_step_name(steps, last)} complete"
         return (
             f"completed{when} (estimated): {_step_name(steps, last)} completes then by the "
-            "plan; the link reports nothing to confirm it"
+            "estimate; the link reports nothing to confirm it"
         )
     if outcome == "until_retasked":
         return f"every step sent: {_step_name(steps, last)} is running until retasked"
@@ -117,25 +130,33 @@ def run_summary(run: Mapping[str, Any]) -> str:
         return "not running"
     head = "running (step mode)" if run["mode"] == "step" else "running (auto)"
     waiting, due, i = run["waiting_for"], run.get("due_s"), run.get("step")
-    expected = "" if due is None else f", expected {at_time(due)} by the plan"
+    soon = run.get("expected_s")
+    expected = "" if soon is None else f", expected {at_time(soon)} by the estimate"
+    by_vehicle = run.get("completion_by") == "vehicle"
     if i is None:  # every step handed out
         if waiting == "acknowledgement":
             return f"{head}: every step sent; {_step_name(steps, last)} is on its way"
-        if run.get("completion_by") == "vehicle":
+        if by_vehicle:
             return (
                 f"{head}: every step sent; waiting for the vehicle to report "
                 f"{_step_name(steps, last)} complete{expected}"
             )
-        when = "" if due is None else f" {at_time(due)}"
+        when = "" if soon is None else f" {at_time(soon)}"
         return (
             f"{head}: every step sent; {_step_name(steps, last)} is estimated to complete"
             f"{when} (the link reports nothing)"
         )
-    name = _step_name(steps, i)
+    name, previous = _step_name(steps, i), _step_name(steps, i - 1) if i > 0 else ""
     if waiting == "acknowledgement":
-        return f"{head}: {_step_name(steps, i - 1)} is on its way; {name} is next"
+        return f"{head}: {previous} is on its way; {name} is next"
     if waiting == "operator":
         return f"{head}: {name} awaits the operator's go"
     if waiting == "time":
         return f"{head}: {name} goes {at_time(due or 0.0)}"
-    return f"{head}: {name} goes when {_step_name(steps, i - 1)} completes{expected}"
+    if by_vehicle:
+        return f"{head}: {name} goes when the vehicle reports {previous} complete{expected}"
+    when = "" if due is None else f" {at_time(due)}"
+    return (
+        f"{head}: {name} goes when {previous} is estimated to complete{when} (the link "
+        "reports nothing)"
+    )

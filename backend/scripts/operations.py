@@ -17,8 +17,9 @@ Triggers:
   start", never "into the dive": a script is run at any point of a dive). ``at`` times never
   decrease along the script.
 * ``after_previous``: when the previous step completes (:mod:`backend.scripts.completion`
-  defines it: a finite pattern at the end of its path, a hover after its duration). A
-  repeating pattern (square, circle) never completes, so a step "on completion" after one is
+  defines it: a finite pattern at the end of its path and its depth, a hover after its
+  duration; the vehicle's status says it, else the estimate of :mod:`backend.scripts.timing`).
+  A repeating pattern (square, circle) never completes, so a step "on completion" after one is
   refused.
 * ``operator``: when the operator says go.
 
@@ -31,6 +32,8 @@ from here:
 
 * :mod:`backend.scripts.model`: :class:`MissionScript` (pydantic v2 models) validates the JSON;
 * :mod:`backend.scripts.completion`: the completion rule, in one place;
+* :mod:`backend.scripts.timing`: how long each step takes as the vehicle flies it (the
+  estimate; the caller passes the vehicle's profile in as a :data:`Timing`);
 * :mod:`backend.scripts.expand`: :func:`expand` plans the steps in order, as the vehicle would
   fly them, each from where the previous one has taken the vehicle when it triggers;
 * :mod:`backend.scripts.preview`: :func:`preview`, one path and a timeline;
@@ -47,7 +50,7 @@ the planner's states use the vehicle's mission clock (``start.t_s`` + script tim
 
 from __future__ import annotations
 
-from backend.scripts.completion import REPEATING, after_repeating, completion_s, repeats
+from backend.scripts.completion import REPEATING, after_repeating, repeats
 from backend.scripts.expand import ExpandedStep, describe_trigger, expand
 from backend.scripts.labels import TRIGGER_WORDS
 from backend.scripts.model import (
@@ -81,8 +84,10 @@ from backend.scripts.preview import (
     preview,
 )
 from backend.scripts.runner import CompletionBy, Outcome, ScriptRunError, ScriptRunner
+from backend.scripts.timing import ESTIMATED_TEXT, StepTiming, Timing, flown_timing
 
 __all__ = [
+    "ESTIMATED_TEXT",
     "MAX_SCRIPT_TIME_S",
     "ONBOARD_FORMAT",
     "PREVIEW_MAX_POINTS",
@@ -106,16 +111,18 @@ __all__ = [
     "StartPose",
     "StepPreview",
     "StepState",
+    "StepTiming",
     "TimelineEvent",
+    "Timing",
     "Trigger",
     "TriggerKind",
     "WaitingFor",
     "after_repeating",
     "completion_refusal",
-    "completion_s",
     "describe_trigger",
     "expand",
     "export_onboard",
+    "flown_timing",
     "onboard_csv",
     "preview",
     "repeats",

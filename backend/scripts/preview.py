@@ -4,7 +4,8 @@
 plans into one path, each step's portion up to when the next step takes over (a repeating
 pattern's lap unrolled until then), thinned to :data:`PREVIEW_MAX_POINTS`. The timeline lists
 when each step takes effect and when a finite one completes (the completion rule of
-:mod:`backend.scripts.completion`).
+:mod:`backend.scripts.completion`). Times and durations are as the vehicle is estimated to fly
+the plans (:mod:`backend.scripts.timing`), and every one that rests on that estimate says so.
 """
 
 from __future__ import annotations
@@ -18,8 +19,9 @@ from pydantic import BaseModel, Field
 from backend.commands.checks import SendViolation
 from backend.scripts.checks import PlanCheck, step_violations, step_warning
 from backend.scripts.expand import ExpandedStep, describe_trigger, expand
-from backend.scripts.labels import at_time, takes
+from backend.scripts.labels import at_time, seconds, takes
 from backend.scripts.model import MissionScript, Trigger
+from backend.scripts.timing import ESTIMATED_TEXT, StepTiming, Timing, flown_timing
 from planner import Path, Plan, VehicleState
 
 #: Most points of the preview's combined path (the plans' waypoints are thinned beyond it).
@@ -70,13 +72,20 @@ class StepPreview(BaseModel):
     snaps: list[SnapOut]
     hex: str
     bits: str
-    t_start_s: float
-    t_end_s: float
-    duration_s: float
-    completion_s: float | None = Field(
-        description="s after the step takes effect when it is complete (the end of its "
-        "path; a hover: its duration); null: it repeats until retasked"
+    t_start_s: float = Field(description="when it takes effect, s from the run's start")
+    start_estimated: bool = Field(
+        description="t_start_s follows from an estimated completion (or the operator's go "
+        "assumed then); false: the time the script sets"
     )
+    t_end_s: float
+    duration_s: float = Field(description="estimated: join and pattern (one lap if it repeats)")
+    planned_duration_s: float = Field(description="the same by the plan's own clock")
+    completion_s: float | None = Field(
+        description="estimated: s after the step takes effect when it is complete (at its "
+        "path's end and depth; a hover: its time up, at its depth); null: it repeats"
+    )
+    planned_completion_s: float | None = Field(description="the same by the plan's own clock")
+    duration_notes: list[str] = Field(description="why the estimate and the plan's clock differ")
     repeats: bool
     waypoints: int
     start: StartPose
@@ -107,6 +116,7 @@ class TimelineEvent(BaseModel):
     t_s: float = Field(description="a time: s from the run's start")
     step: int | None
     text: str
+    estimated: bool = Field(description="the time follows from an estimated duration")
     label: str = Field(description="the event as the page shows it: its time, then the text")
 
 
@@ -114,7 +124,10 @@ class ScriptPreview(BaseModel):
     name: str
     steps: list[StepPreview]
     path: PreviewPath
-    duration_s: float
+    duration_s: float = Field(
+        description="estimated: to the last step's end (one lap if it repeats)"
+    )
+    durations_text: str = Field(description="which durations are estimated, and how, in words")
     timeline: list[TimelineEvent]
     warnings: list[str]
 
@@ -183,8 +196,22 @@ def _window(
     return pts, stride > 1
 
 
+def _flown_window(
+    path: Path, timing: StepTiming, a_s: float, b_s: float, max_points: int
+) -> tuple[list[tuple[float, float, float, float]], bool]:
+    """:func:`_window` on the estimate's clock: the points of ``path`` the vehicle is
+    estimated to fly from ``a_s`` to ``b_s`` (s after the plan took effect), timed as it flies
+    them (a finite path's end held until ``b_s``)."""
+    pts, cut = _window(path, timing.to_plan_s(a_s), timing.to_plan_s(b_s), max_points)
+    inner = [(timing.from_plan_s(t), x, y, z) for t, x, y, z in pts[1:-1]]
+    out = [(a_s, *pts[0][1:]), *(p for p in inner if a_s < p[0] < b_s)]
+    if b_s > a_s:
+        out.append((b_s, *pts[-1][1:]))
+    return out, cut
+
+
 def _combined_path(
-    expanded: list[ExpandedStep], start: VehicleState, current: Plan | None
+    expanded: list[ExpandedStep], start: VehicleState, current: Plan | None, timing: Timing
 ) -> PreviewPath:
     windows = len(expanded) + 1
     per = max(PREVIEW_MIN_POINTS_PER_STEP, PREVIEW_MAX_POINTS // windows)
@@ -214,13 +241,13 @@ def _combined_path(
     t_first = expanded[0].t_start_s
     if current is not None:
         a = start.t_s - current.t0_s
-        pts, cut = _window(current.path, a, a + t_first, per)
+        pts, cut = _flown_window(current.path, timing(current), a, a + t_first, per)
         thinned |= cut
         add(pts, -a)
     else:
         add([(0.0, start.x_m, start.y_m, start.z_m)], 0.0)
     for s in expanded:
-        pts, cut = _window(s.plan.path, 0.0, s.t_end_s - s.t_start_s, per)
+        pts, cut = _flown_window(s.plan.path, s.timing, 0.0, s.t_end_s - s.t_start_s, per)
         thinned |= cut
         before = len(ts)
         step_start.append(before - 1 if add(pts, s.t_start_s) else before)
@@ -235,9 +262,11 @@ def _combined_path(
     )
 
 
-def _event(*, t_s: float, step: int, text: str) -> TimelineEvent:
+def _event(*, t_s: float, step: int, text: str, estimated: bool) -> TimelineEvent:
     """A timeline event, labelled with its time from the run's start."""
-    return TimelineEvent(t_s=t_s, step=step, text=text, label=f"{at_time(t_s)}: {text}")
+    return TimelineEvent(
+        t_s=t_s, step=step, text=text, estimated=estimated, label=f"{at_time(t_s)}: {text}"
+    )
 
 
 def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
@@ -246,7 +275,9 @@ def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
         pattern = s.step.pattern
         how = describe_trigger(s.step.trigger, s.index)
         verb = "starts" if k == 0 else "retasks the vehicle"
-        events.append(_event(t_s=s.t_start_s, step=s.index, text=f"{pattern} {verb} ({how})"))
+        guess = s.start_estimated
+        text = f"{pattern} {verb} ({how}{', estimated' if guess else ''})"
+        events.append(_event(t_s=s.t_start_s, step=s.index, text=text, estimated=guess))
         done = s.completion_s
         last = k == len(expanded) - 1
         if done is None:
@@ -255,7 +286,8 @@ def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
                     _event(
                         t_s=s.t_start_s + s.duration_s,
                         step=s.index,
-                        text=f"{pattern}: one lap shown; it repeats until retasked",
+                        text=f"{pattern}: one lap shown (estimated); it repeats until retasked",
+                        estimated=True,
                     )
                 )
         elif last or s.t_start_s + done <= expanded[k + 1].t_start_s + 1e-6:
@@ -267,7 +299,14 @@ def _timeline(expanded: list[ExpandedStep]) -> list[TimelineEvent]:
                 if pattern == "surface"
                 else f"{pattern} completes: the vehicle holds at {where}, {end.zs[-1]:.1f} m depth"
             )
-            events.append(_event(t_s=t_done, step=s.index, text=text))
+            planned = s.timing.planned_completion_s
+            clock = (
+                f", {seconds(planned)} by the plan's own clock"
+                if planned is not None and seconds(planned) != seconds(done)
+                else ""
+            )
+            text += f" (estimated: it takes {seconds(done)}{clock})"
+            events.append(_event(t_s=t_done, step=s.index, text=text, estimated=True))
     events.sort(key=lambda e: (e.t_s, -1 if e.step is None else e.step))
     return events
 
@@ -291,9 +330,13 @@ def _step_preview(
         hex=enc.frame.hex,
         bits=enc.frame.bits,
         t_start_s=s.t_start_s,
+        start_estimated=s.start_estimated,
         t_end_s=s.t_end_s,
         duration_s=s.duration_s,
+        planned_duration_s=s.timing.planned_duration_s,
         completion_s=s.completion_s,
+        planned_completion_s=s.timing.planned_completion_s,
+        duration_notes=list(s.timing.notes),
         repeats=s.repeats,
         waypoints=len(s.plan.path),
         start=StartPose.model_validate({**s.state.as_dict(), "t_s": s.state.t_s - t0_abs_s}),
@@ -302,8 +345,15 @@ def _step_preview(
             StepViolation.model_validate(v.as_json()) for v in violations if v.step == s.index
         ],
         override=s.step.override,
-        timing_text=f"starts {at_time(s.t_start_s)}, {takes(s.completion_s)}",
+        timing_text=_timing_text(s),
     )
+
+
+def _timing_text(s: ExpandedStep) -> str:
+    """``starts at 30 s from the run's start (estimated), takes 160 s (estimated; 210 s by
+    the plan's own clock)``."""
+    start = at_time(s.t_start_s) + (" (estimated)" if s.start_estimated else "")
+    return f"starts {start}, {takes(s.completion_s, True, s.timing.planned_completion_s)}"
 
 
 def preview(
@@ -311,18 +361,22 @@ def preview(
     start: VehicleState,
     current: Plan | None = None,
     check: PlanCheck | None = None,
+    timing: Timing | None = None,
 ) -> ScriptPreview:
     """Expand ``script`` from ``start`` (see :func:`expand`) into the operator's preview.
 
     Each step's values are the decoded frame's (snapped); its path starts where the previous
     step has the vehicle when it triggers. ``duration_s`` runs to the end of the last plan
     (one lap when it repeats, ``path.repeats``). With ``check`` (the send policy's checks),
-    every step lists its violations, and the warnings name them.
+    every step lists its violations, and the warnings name them. ``timing``: how the vehicle
+    flies a plan (:func:`backend.scripts.timing.flown_timing` of its profile; default: of
+    unknown figures); every duration and the times that follow from one are estimated.
 
     Raises:
         ScriptError: the planner cannot expand a step.
     """
-    expanded = expand(script, start, current)
+    timing = timing if timing is not None else flown_timing(None)
+    expanded = expand(script, start, current, timing)
     last = expanded[-1]
     warnings = [f"step {s.index + 1}: {w}" for s in expanded for w in s.warnings]
     found = step_violations(expanded, check) if check is not None else []
@@ -330,8 +384,9 @@ def preview(
     return ScriptPreview(
         name=script.name,
         steps=[_step_preview(s, start.t_s, found) for s in expanded],
-        path=_combined_path(expanded, start, current),
+        path=_combined_path(expanded, start, current, timing),
         duration_s=last.t_start_s + last.duration_s,
+        durations_text=ESTIMATED_TEXT,
         timeline=_timeline(expanded),
         warnings=warnings,
     )

@@ -1,10 +1,9 @@
 """Mission scripts, run: the state machine the console drives while a script runs.
 
-A step "on completion" is timed by the plan, on the run clock (why:
-:mod:`backend.scripts.completion`): it is due the previous step's planned completion time after
-the previous step was handed out for sending, so the run sends at the times the timeline shows.
-The run itself is over when its last step's pattern completes, as the vehicle reports it, or
-where the link reports nothing, by the plan (estimated); a repeating last step leaves the
+A step "on completion" goes when the previous step completes, and the run is over when its
+last step completes, read the same way (:mod:`backend.scripts.completion`): as the vehicle
+reports it where its status reaches the console, else by the estimate (the step's estimated
+completion after it was handed out, said to be estimated). A repeating last step leaves the
 vehicle "running until retasked".
 """
 
@@ -13,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, Literal
 
-from backend.scripts.completion import after_repeating, flyable_s, vehicle_verdict
+from backend.scripts.completion import after_repeating, vehicle_verdict
 from backend.scripts.expand import ExpandedStep, expand
 from backend.scripts.labels import describe_steps, run_summary
 from backend.scripts.model import MissionScript, RunMode, StepState, WaitingFor
@@ -21,8 +20,9 @@ from codec import decode_frame, encode_frame
 from planner import VehicleState
 
 Outcome = Literal["running", "completed", "until_retasked", "stopped", "failed"]
-#: How the run knows its last step completed: the vehicle's status, or the plan (estimated).
-CompletionBy = Literal["vehicle", "plan"]
+#: How the run knows a step completed: the vehicle's status, or the estimate (a link that
+#: reports nothing).
+CompletionBy = Literal["vehicle", "estimate"]
 
 #: Tolerance of the due-time comparisons (s).
 EPS_S = 1e-9
@@ -45,33 +45,27 @@ class ScriptRunner:
     * a step is due only after the previous one is acknowledged, and is handed out once
       (by :meth:`poll` or :meth:`go`), never twice;
     * ``mode="auto"``: ``at`` steps are due when ``now_s - start_s >= t_s`` (``start_s``:
-      the constructor's, else the first poll's ``now_s``); ``after_previous`` steps
-      ``completion_s[i - 1]`` after step ``i - 1`` was handed out (its planned completion:
-      the end of its path, a hover's duration); ``operator`` steps are proposed and wait for
-      :meth:`go`;
+      the constructor's, else the first poll's ``now_s``); ``after_previous`` steps when step
+      ``i - 1`` completes (below); ``operator`` steps are proposed and wait for :meth:`go`;
     * ``mode="step"``: every step is proposed and waits for :meth:`go`;
     * :meth:`mark_failed` and :meth:`stop` end the run;
-    * once every step is acknowledged the run ends when the last step's pattern completes:
-      with ``completion_by="vehicle"`` when a status fed to :meth:`observe` says so (a status
-      saying the step will not complete, a retask or an empty battery, stops the run); with
-      ``"plan"`` (a link that reports nothing) :meth:`poll` ends it ``flyable_s`` after the
-      step was handed out, an estimate; a repeating last step ends it at once, the vehicle
-      ``until_retasked``.
+    * the step whose completion the run waits for (the one before an ``after_previous`` step
+      in auto mode, or the last), once acknowledged, completes: with
+      ``completion_by="vehicle"`` when a status fed to :meth:`observe` says so (a status
+      saying it will not complete, a retask or an empty battery, stops the run); with
+      ``"estimate"`` (a link that reports nothing) ``completion_s`` after it was handed out,
+      by :meth:`poll`. The last step's completion ends the run; a repeating last step ends it
+      once acknowledged, the vehicle ``until_retasked``.
 
-    A step "on completion" never waits on the vehicle: the longest wait is the previous
-    step's planned completion time. A handed-out step shows as ``sent`` (``transmitted``
-    false until :meth:`mark_sent`).
+    A handed-out step shows as ``sent`` (``transmitted`` false until :meth:`mark_sent`).
 
     Args:
         script: a validated script.
         mode: ``auto`` or ``step``.
-        completion_s: each step's completion time (s after it takes effect; ``None``: it
-            repeats), from the expansion the run was planned with
+        completion_s: each step's estimated completion (s after it takes effect; ``None``:
+            it repeats), from the expansion the run was planned with
             (:meth:`ScriptRunner.planned` gives them). Default: the script expanded from the
-            NED origin at the surface, at rest.
-        flyable_s: each step's duration at the speed the vehicle can fly (s; ``None``: it
-            repeats), the estimate a link that reports nothing ends the run by. Default:
-            ``completion_s``.
+            NED origin at the surface, at rest, by a vehicle of unknown figures.
         start_s: the run clock at the start (default: the first poll's).
         clock: the run clock (s), read when :meth:`poll` or :meth:`go` get no ``now_s``.
         completion_by: how the last step's completion is known (the caller may change
@@ -88,28 +82,23 @@ class ScriptRunner:
         mode: RunMode = "auto",
         *,
         completion_s: Sequence[float | None] | None = None,
-        flyable_s: Sequence[float | None] | None = None,
         start_s: float | None = None,
         clock: Callable[[], float] | None = None,
-        completion_by: CompletionBy = "plan",
+        completion_by: CompletionBy = "estimate",
     ) -> None:
         if mode not in ("auto", "step"):
             raise ValueError(f"run mode must be 'auto' or 'step', got {mode!r}")
         n = len(script.steps)
         if completion_s is None:
             completion_s = [s.completion_s for s in expand(script, VehicleState(0.0, 0.0, 0.0))]
-        if flyable_s is None:
-            flyable_s = completion_s
-        for name, times in (("completion_s", completion_s), ("flyable_s", flyable_s)):
-            if len(times) != n:
-                raise ValueError(f"{name} has {len(times)} times for {n} steps")
+        if len(completion_s) != n:
+            raise ValueError(f"completion_s has {len(completion_s)} times for {n} steps")
         for i in range(1, n):
             if script.steps[i].trigger.kind == "after_previous" and completion_s[i - 1] is None:
                 raise ValueError(after_repeating(i, script.steps[i - 1].pattern))
         self.script = script
         self.mode: RunMode = mode
         self.completion_s: tuple[float | None, ...] = tuple(completion_s)
-        self.flyable_s: tuple[float | None, ...] = tuple(flyable_s)
         self.start_s = start_s
         self.clock = clock
         self.completion_by: CompletionBy = completion_by
@@ -117,8 +106,10 @@ class ScriptRunner:
         self.running = True
         self.outcome: Outcome = "running"
         self.reason: str | None = None
-        #: When the last step completed (run clock), as the vehicle reported or estimated.
-        self.completed_at: float | None = None
+        #: Which steps completed, and when (run clock, as the vehicle reported or estimated):
+        #: the steps the run waited for only (the last: the run's completion).
+        self._done = [False] * n
+        self._done_at: list[float | None] = [None] * n
         self._states: list[StepState] = ["pending"] * n
         self._transmitted = [False] * n
         self._by_vehicle = [False] * n  # acknowledged by the vehicle itself
@@ -138,19 +129,14 @@ class ScriptRunner:
         mode: RunMode = "auto",
         *,
         clock: Callable[[], float] | None = None,
-        top_speed_mps: float | None = None,
-        heave_rate_mps: float | None = None,
-        completion_by: CompletionBy = "plan",
+        completion_by: CompletionBy = "estimate",
     ) -> ScriptRunner:
         """A runner timed by ``expanded`` (:func:`backend.scripts.expand.expand` of
-        ``script`` from where the vehicle is), as the preview is; the steps' flyable
-        durations at the vehicle's ``top_speed_mps`` and ``heave_rate_mps`` (unknown: as
-        planned)."""
+        ``script`` from where the vehicle is, timed by its profile), as the preview is."""
         return cls(
             script,
             mode,
             completion_s=[s.completion_s for s in expanded],
-            flyable_s=[flyable_s(s.plan, top_speed_mps, heave_rate_mps) for s in expanded],
             clock=clock,
             completion_by=completion_by,
         )
@@ -188,40 +174,52 @@ class ScriptRunner:
         ``operator`` steps), once the previous one is acknowledged."""
         return self.next_index if self.waiting_for() == "operator" else None
 
-    def due_s(self) -> float | None:
-        """For an ``at`` or ``after_previous`` step in auto mode: when it is due (run clock),
-        if known (acknowledgement of the previous step still needed); once every step is
-        handed out, when the last one is expected to complete (its flyable duration after it
-        was handed out)."""
+    def watched(self) -> int | None:
+        """The step whose completion the run waits for now: before an ``after_previous`` step
+        in auto mode, or the last once every step is handed out; acknowledged, not yet
+        complete. ``None``: none."""
+        if not self.running or not self._previous_acknowledged():
+            return None
         i = self.next_index
         if i is None:
-            return self._last_expected_s()
+            return len(self._states) - 1
+        after = self.script.steps[i].trigger.kind == "after_previous"
+        waits = i > 0 and after and self.mode == "auto" and not self._done[i - 1]
+        return i - 1 if waits else None
+
+    def expected_s(self, i: int) -> float | None:
+        """When step ``i`` is estimated to complete (run clock): its estimated completion
+        after it was handed out; ``None``: unknown, or it repeats."""
+        handed, takes = self._handed_at[i], self.completion_s[i]
+        return None if handed is None or takes is None else handed + takes
+
+    def due_s(self) -> float | None:
+        """For an ``at`` or ``after_previous`` step in auto mode: when it is due (run clock),
+        if known (acknowledgement of the previous step still needed; on completion: when the
+        vehicle reported the previous step complete, else its estimated completion); once
+        every step is handed out, when the last one is expected to complete (estimated)."""
+        i = self.next_index
+        if i is None:
+            return self.expected_s(len(self._states) - 1)
         if self.mode != "auto" or self.start_s is None:
             return None
         t = self.script.steps[i].trigger
         if t.kind == "at" and t.t_s is not None:
             return self.start_s + t.t_s
         if t.kind == "after_previous" and i > 0:
-            handed, done = self._handed_at[i - 1], self.completion_s[i - 1]
-            return None if handed is None or done is None else handed + done
+            if self._done[i - 1]:
+                return self._done_at[i - 1] if self._done_at[i - 1] is not None else self.now_s
+            return self.expected_s(i - 1) if self.completion_by == "estimate" else None
         return None
-
-    def _last_expected_s(self) -> float | None:
-        last = len(self._states) - 1
-        handed, takes = self._handed_at[last], self.flyable_s[last]
-        return None if handed is None or takes is None else handed + takes
 
     def _rel(self, t: float | None) -> float | None:
         """A run-clock value as seconds from the run's start."""
         return None if t is None or self.start_s is None else round(t - self.start_s, 3)
 
     def state(self) -> dict[str, Any]:
-        """The run as JSON: ``{running, mode, outcome, name, step, next, waiting_for, due_s,
-        elapsed_s, completion_by, completed_s, steps: [{index, pattern, trigger, t_s, state,
-        transmitted, acknowledged_by_vehicle, sent_s, completion_s, completed_s, and the
-        texts}], reason, summary}``; times in s from the run's start, the texts in words
-        (:mod:`backend.scripts.labels`)."""
-        proposed = self.proposed()
+        """The run as JSON (:class:`backend.api.schemas.RunState`); times in s from the run's
+        start, the texts in words (:mod:`backend.scripts.labels`)."""
+        proposed, watched = self.proposed(), self.watched()
         nxt: dict[str, Any] | None = None
         if proposed is not None:
             s = self.script.steps[proposed]
@@ -231,7 +229,6 @@ class ScriptRunner:
                 "params": dict(s.params),
                 "trigger": s.trigger.model_dump(),
             }
-        last = len(self._states) - 1
         steps = [
             {
                 "index": i,
@@ -243,7 +240,7 @@ class ScriptRunner:
                 "acknowledged_by_vehicle": self._by_vehicle[i],
                 "sent_s": self._rel(self._handed_at[i]),
                 "completion_s": self.completion_s[i],
-                "completed_s": self._rel(self.completed_at) if i == last else None,
+                "completed_s": self._rel(self._done_at[i]),
             }
             for i, s in enumerate(self.script.steps)
         ]
@@ -257,9 +254,10 @@ class ScriptRunner:
             "next": nxt,
             "waiting_for": self.waiting_for(),
             "due_s": self._rel(self.due_s()) if self.running else None,
+            "expected_s": self._rel(self.expected_s(watched)) if watched is not None else None,
             "elapsed_s": self._rel(self.now_s),
             "completion_by": self.completion_by,
-            "completed_s": self._rel(self.completed_at),
+            "completed_s": self._rel(self._done_at[-1]),
             "steps": steps,
             "reason": self.reason,
         }
@@ -280,22 +278,21 @@ class ScriptRunner:
     def poll(self, now_s: float | None = None) -> list[int]:
         """The steps to send now (auto mode; at most one, as each waits for the previous
         acknowledgement). ``now_s``: the run clock (s; default: the constructor's clock).
-        With ``completion_by="plan"`` it also ends the run when the last step is estimated
-        complete."""
+        With ``completion_by="estimate"`` the step the run waits for completes at its
+        estimated completion (the last: the run ends)."""
         now = self._now(now_s)
         if self.start_s is None:
             self.start_s = now
         self.now_s = now
+        w = self.watched()
+        if w is not None and self.completion_by == "estimate":
+            expected = self.expected_s(w)
+            if expected is not None and now >= expected - EPS_S:
+                self._step_complete(w, expected)
         i = self.next_index
-        if self.running and i is None and self.completion_by == "plan":
-            expected = self._last_expected_s()
-            if self._previous_acknowledged() and expected is not None and now >= expected - EPS_S:
-                self._complete(expected)
         if not self.running or i is None or not self._previous_acknowledged():
             return []
-        if self.mode != "auto":
-            return []
-        due = self.due_s()
+        due = self.due_s()  # None in step mode
         if due is None or now < due - EPS_S:
             return []
         self._hand_out(i, now)
@@ -324,9 +321,7 @@ class ScriptRunner:
         return i
 
     def _hand_out(self, i: int, now: float | None) -> None:
-        self._states[i] = "sent"
-        self._handed_at[i] = now
-        self._next = i + 1
+        self._states[i], self._handed_at[i], self._next = "sent", now, i + 1
 
     def _check_handed_out(self, i: int, what: str) -> None:
         if not 0 <= i < len(self._states):
@@ -354,32 +349,31 @@ class ScriptRunner:
         self._by_vehicle[i] = by_vehicle
         self._acked_t_s[i] = vehicle_t_s
         every = all(s == "acknowledged" for s in self._states)
-        if self.running and every and None in (self.flyable_s[-1], self.completion_s[-1]):
-            self.running = False  # the last step repeats: nothing more to wait for
-            self.outcome = "until_retasked"
+        if self.running and every and self.completion_s[-1] is None:
+            # the last step repeats: nothing more to wait for
+            self.running, self.outcome = False, "until_retasked"
 
     def observe(self, status: Mapping[str, Any] | None) -> None:
-        """The vehicle's latest status (``completion_by="vehicle"``): once every step is
-        acknowledged, the run completes when it reports the last step complete, and stops
-        when it reports that step will not complete (retasked, battery empty)."""
-        last = len(self._states) - 1
-        waiting = self.running and self.next_index is None and self._previous_acknowledged()
-        if not waiting or self.completion_by != "vehicle":
+        """The vehicle's latest status (``completion_by="vehicle"``): the step the run waits
+        for (:meth:`watched`) completes when it reports that step complete (the last: the run
+        is over); the run stops when it reports that step will not complete (retasked,
+        battery empty)."""
+        w = self.watched()
+        if w is None or self.completion_by != "vehicle":
             return
-        command = self._commands[last]
+        command = self._commands[w]
         verdict, why = vehicle_verdict(
-            status, command.pattern.name, command.params, self._acked_t_s[last]
+            status, command.pattern.name, command.params, self._acked_t_s[w]
         )
         if verdict == "complete":
-            self._complete(self.clock() if self.clock is not None else self.now_s)
+            self._step_complete(w, self.clock() if self.clock is not None else self.now_s)
         elif verdict == "ended":
-            pattern = self.script.steps[last].pattern
-            self.stop(f"step {last + 1} ({pattern}) will not complete: {why}")
+            self.stop(f"step {w + 1} ({self.script.steps[w].pattern}) will not complete: {why}")
 
-    def _complete(self, at: float | None) -> None:
-        self.running = False
-        self.outcome = "completed"
-        self.completed_at = at
+    def _step_complete(self, i: int, at: float | None) -> None:
+        self._done[i], self._done_at[i] = True, at
+        if i == len(self._states) - 1:
+            self.running, self.outcome = False, "completed"
 
     def mark_failed(self, i: int, reason: str) -> None:
         """Step ``i`` could not be delivered (failed, rejected, timed out): the run stops."""

@@ -216,3 +216,37 @@ def test_odometry_that_is_not_finite_is_ignored() -> None:
     assert core.on_odometry(odometry(T0_S)) is True
     assert core.on_odometry(odometry(T0_S, speed_mps=float("inf"))) is False
     assert core.odometry == odometry(T0_S)
+
+
+# --- the path's end: done only at its depth (issue 20) --------------------------------------
+
+
+def test_at_the_path_end_above_its_depth_the_status_says_running_and_it_aims_at_the_end() -> None:
+    """A straight whose depth ramp outlasts its line: at the horizontal end the vehicle is
+    still flying the last depth change, in place. The status says ``running`` (the command is
+    not done) and the setpoint is the end point at the path's depth, not a line-of-sight point
+    ahead; ``holding`` once the vehicle is at that depth."""
+    core, rec = make_core()
+    core.on_odometry(odometry(T0_S, up_m=-2.0))
+    ack = receive_checked(
+        core, rec, frame_bytes("straight", speed=0.3, depth=6, duration=10, heading=0), T0_S
+    )
+    assert ack["outcome"] == "accepted"
+    active = core.agent.active
+    assert active is not None
+    path = active.path
+    end_n, end_e, end_z = path.xs[-1], path.ys[-1], path.zs[-1]
+    assert end_z == pytest.approx(6.0) and (path.xs[-2], path.ys[-2]) == (end_n, end_e)
+    for i in range(len(path)):  # along the line, level at 3 m, to its end
+        core.on_odometry(odometry(T0_S + 1 + i, east_m=path.ys[i], north_m=path.xs[i], up_m=-3.0))
+        core.tick_guidance(T0_S + 1 + i)
+    core.on_odometry(odometry(T0_S + 20, east_m=end_e, north_m=end_n, up_m=-3.0))
+    sp = core.tick_guidance(T0_S + 20)
+    assert sp is not None and sp.mode == "running"
+    assert core.guidance.at_end
+    assert (sp.x_north_m, sp.y_east_m, sp.depth_m) == (end_n, end_e, end_z)
+    assert core.tick_status(T0_S + 20)["mode"] == "running"
+    core.on_odometry(odometry(T0_S + 80, east_m=end_e, north_m=end_n, up_m=-5.95))
+    sp = core.tick_guidance(T0_S + 80)
+    assert sp is not None and sp.mode == "holding"
+    assert core.tick_status(T0_S + 80)["mode"] == "holding"

@@ -8,7 +8,7 @@ import math
 import pytest
 
 from codec import ParamValue, encode_frame
-from onboard.guidance import Guidance, GuidanceConfig
+from onboard.guidance import AT_DEPTH_M, Guidance, GuidanceConfig
 from planner import Plan, VehicleState, plan
 from sim.environment import CurrentConfig
 from sim.simulation import Sample, SimConfig, Simulation
@@ -37,6 +37,11 @@ def _run(pattern: str, seconds: float, **params: ParamValue) -> Simulation:
 def _mode(sim: Simulation) -> Mode:
     """The mode now (a call, so the type checker does not narrow it across steps)."""
     return sim.mode
+
+
+def _g_mode(g: Guidance) -> Mode:
+    """Guidance's mode now (a call: the type checker does not narrow it across updates)."""
+    return g.mode
 
 
 def _active(sim: Simulation) -> Plan:
@@ -380,3 +385,65 @@ def test_guidance_config_is_used() -> None:
     assert ref.speed_mps == 0.0
     assert ref.depth_m == 1.0
     assert g.mode is Mode.IDLE
+
+
+# --- holding means done: at the path's end *and* its depth (issue 20) ------------------------
+
+
+def test_the_path_end_above_its_depth_is_running_until_the_depth_is_reached() -> None:
+    """The straight's ramp outlasts its 3 m of line: guidance reaches the horizontal end with
+    the vehicle well above the commanded depth and flies the rest in place. The mode (what
+    the status reports) stays ``running`` until the vehicle is at the depth, then
+    ``holding``: never holding short of it, as it was (7 m short, issue 20)."""
+    sim = _run("straight", 250.0, speed=0.3, depth=6, duration=10, heading=0)
+    path = _active(sim).path
+    end = (path.xs[-1], path.ys[-1])
+    assert path.zs[-1] == pytest.approx(6.0) and (path.xs[-2], path.ys[-2]) == end
+    capture = sim.guidance.config.capture_m
+    at_end = [s for s in sim.track if math.hypot(s.x_m - end[0], s.y_m - end[1]) < capture]
+    short = [s for s in at_end if s.z_m < 6.0 - 1.0]
+    assert short, "the vehicle reached the line's end well above its depth"
+    assert {s.mode for s in short} == {"running"}
+    holding = [s for s in sim.track if s.mode == "holding"]
+    assert holding and sim.mode is Mode.HOLDING
+    # holding only at the depth (the sensor's reading within AT_DEPTH_M; the true depth a
+    # little more, for the sensor's noise)
+    assert all(abs(s.z_m - 6.0) <= AT_DEPTH_M + 0.03 for s in holding)
+    first = holding[0].t_s
+    assert all(s.mode == "running" for s in sim.track if 1.0 <= s.t_s < first)
+    # the simulator's completion reads the same mode: done when it first held
+    assert sim.completion.done_s == pytest.approx(first, abs=1.0 / RECORD_HZ)
+
+
+def test_guidance_holds_the_end_in_running_until_at_depth() -> None:
+    """Guidance alone: at the path's horizontal end it keeps station (the hold point and the
+    path's last depth as its references), ``running``, until the depth is within
+    :data:`AT_DEPTH_M`; a hover likewise after its time."""
+    cmd = encode_frame("straight", speed=0.3, depth=6, duration=10, heading=0).command
+    p = plan(cmd, VehicleState(0.0, 0.0, 2.0, 0.0))
+    g = Guidance()
+    g.set_plan(p, 0.0)
+    path = p.path
+    for i in range(len(path)):
+        g.update(path.xs[i], path.ys[i], 3.0, float(i))
+    ref = g.update(path.xs[-1], path.ys[-1], 3.0, 20.0)
+    assert g.at_end and _g_mode(g) is Mode.RUNNING
+    assert ref.speed_mps == 0.0 and ref.depth_m == pytest.approx(6.0)
+    assert g.hold[:3] == (path.xs[-1], path.ys[-1], path.zs[-1])
+    g.update(path.xs[-1], path.ys[-1], 6.0 - 1.5 * AT_DEPTH_M, 60.0)
+    assert _g_mode(g) is Mode.RUNNING
+    g.update(path.xs[-1], path.ys[-1], 6.0 - 0.5 * AT_DEPTH_M, 80.0)
+    assert _g_mode(g) is Mode.HOLDING
+    hover = plan(
+        encode_frame("hover", duration=10, depth=4, heading=0).command,
+        VehicleState(0.0, 0.0, 2.0, 0.0),
+    )
+    g.set_plan(hover, 100.0)
+    assert not g.at_end
+    up_s = 100.0 + hover.path.duration_s  # its duration, or the planner's descent if longer
+    g.update(0.0, 0.0, 2.5, up_s - 1.0)
+    assert _g_mode(g) is Mode.RUNNING and not g.at_end  # its time is not up
+    g.update(0.0, 0.0, 2.5, up_s)
+    assert _g_mode(g) is Mode.RUNNING and g.at_end  # up, but 1.5 m short of its depth
+    g.update(0.0, 0.0, 4.0, up_s + 30.0)
+    assert _g_mode(g) is Mode.HOLDING

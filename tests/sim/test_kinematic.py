@@ -94,19 +94,32 @@ def test_surface_is_done_at_the_surface_at_the_ascent_rate() -> None:
 # --- the completion rule ------------------------------------------------------------------
 
 
+def _mode(g: Guidance) -> Mode:
+    """Guidance's mode now (a call: the type checker does not narrow it across updates)."""
+    return g.mode
+
+
 def test_holding_is_not_done_until_the_depth_is_reached() -> None:
+    """Guidance reports ``holding`` (done) only at the held depth: at the horizontal end it
+    keeps station, ``running``, while the depth change left for the end is flown; completion
+    reads guidance's mode, as the console reads the vehicle's status."""
     g = Guidance()
     p = planned("straight", speed=0.15, depth=7, duration=10, heading=0)
     g.set_plan(p, 0.0)
     c = Completion()
     end = (p.path.xs[-1], p.path.ys[-1])
     g.update(*end, 2.5, 60.0)  # at the horizontal end, 4.5 m short of the depth
-    assert g.mode is Mode.HOLDING
-    assert c.update(g, 2.5, 60.0) is None
-    assert c.update(g, 7.0 - AT_DEPTH_M / 2, 120.0) == 120.0
-    assert c.update(g, 7.0, 130.0) == 120.0  # the first time stays
+    assert _mode(g) is Mode.RUNNING and g.at_end
+    assert c.update(g, 60.0) is None
+    g.update(*end, 7.0 - 2 * AT_DEPTH_M, 110.0)  # still short of it
+    assert _mode(g) is Mode.RUNNING and c.update(g, 110.0) is None
+    g.update(*end, 7.0 - AT_DEPTH_M / 2, 120.0)
+    assert _mode(g) is Mode.HOLDING
+    assert c.update(g, 120.0) == 120.0
+    g.update(*end, 6.5, 130.0)  # done is done: a depth excursion later does not undo it
+    assert _mode(g) is Mode.HOLDING and c.update(g, 130.0) == 120.0  # the first time stays
     g.set_plan(planned("hover", duration=5, depth=7, heading=0), 130.0)
-    assert c.update(g, 7.0, 130.5) is None and c.plan is g.plan  # a new plan: afresh
+    assert c.update(g, 130.5) is None and c.plan is g.plan  # a new plan: afresh
 
 
 def test_a_repeating_pattern_is_done_with_the_join_and_one_lap_in_the_simulator() -> None:

@@ -63,12 +63,14 @@ class RunStep(BaseModel):
         description="s from the run's start when the step was handed out for sending"
     )
     completion_s: float | None = Field(
-        description="a duration: how long the step takes, s after it takes effect (the end of "
-        "its path; a hover: its duration); null: it repeats until retasked"
+        description="a duration, estimated: how long the step takes as the vehicle flies it, "
+        "s after it takes effect (the end of its path and its depth; a hover: its duration); "
+        "null: it repeats until retasked"
     )
     completed_s: float | None = Field(
-        description="the last step: when it completed, s from the run's start (see the run's "
-        "completion_by); null for the others"
+        description="when the step completed, s from the run's start, for the steps the run "
+        "waited for (before a step on completion, and the last; see completion_by); null "
+        "otherwise"
     )
     trigger_text: str = Field(description="the trigger in words ('at 60 s from the run's start')")
     takes_text: str = Field(description="the duration in words ('takes 127.8 s')")
@@ -90,14 +92,20 @@ class RunState(BaseModel):
     waiting_for: WaitingFor | None
     due_s: float | None = Field(
         description="when the next step is due, s from the run's start (at: its time; "
-        "after_previous: the previous step's send time plus its planned completion); once "
-        "every step is sent, when the last is expected to complete (its send time plus its "
-        "flyable duration)"
+        "after_previous: when the vehicle reported the previous step complete, null until "
+        "then; on a link that reports nothing, the previous step's send time plus its "
+        "estimated completion); once every step is sent, when the last is expected to "
+        "complete (estimated)"
+    )
+    expected_s: float | None = Field(
+        None,
+        description="when the step the run waits for (before a step on completion, or the "
+        "last) is estimated to complete, s from the run's start",
     )
     elapsed_s: float | None = Field(description="run clock: vehicle s since the run started")
     completion_by: CompletionBy | None = Field(
-        description="how the last step's completion is known: vehicle (its status reports it) "
-        "or plan (estimated: the link reports nothing)"
+        description="how a step's completion is known: vehicle (its status reports it) or "
+        "estimate (the link reports nothing)"
     )
     completed_s: float | None = Field(description="when the run completed, s from the run's start")
     steps: list[RunStep]

@@ -324,9 +324,11 @@ class VehicleCore:
     def _aim(self, ref: Reference, ned: NedPose) -> tuple[float, float]:
         """The point guidance aims at (NED). Path following: the line-of-sight point, along
         the commanded course at ``hypot(lookahead, cross-track)`` (exact on a straight
-        segment); station keeping, hover and surfacing: the hold point."""
+        segment); station keeping (a hover, the path's end while its last depth change is
+        flown, after it) and surfacing: the hold point."""
         g = self.guidance
-        if g.mode is Mode.RUNNING and g.plan is not None and g.plan.pattern != "hover":
+        following = g.mode is Mode.RUNNING and not g.at_end
+        if following and g.plan is not None and g.plan.pattern != "hover":
             reach_m = math.hypot(g.config.lookahead_m, g.cross_track_m)
             return (
                 ned.x_north_m + reach_m * math.cos(ref.course_rad),

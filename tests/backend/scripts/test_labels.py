@@ -33,6 +33,9 @@ def test_durations_and_times_read_differently() -> None:
     assert seconds(20.0) == "20 s"
     assert seconds(19.96) == "20 s"
     assert takes(127.778) == "takes 127.8 s"
+    assert takes(160.0, estimated=True) == "takes 160 s (estimated)"
+    assert takes(160.0, True, 210.0) == "takes 160 s (estimated; 210 s by the plan's own clock)"
+    assert takes(160.0, True, 160.04) == "takes 160 s (estimated)"  # reads the same: once
     assert takes(None) == "repeats until retasked"
     assert at_time(20.0) == "at 20 s from the run's start"
 
@@ -63,15 +66,16 @@ def test_timeline_and_steps_label_times_from_the_runs_start() -> None:
     labels = [e.label for e in pv.timeline]
     assert labels[0] == "at 0 s from the run's start: hover starts (at its set time)"
     assert (
-        "at 30 s from the run's start: lawnmower retasks the vehicle (after step 1 completes)"
-        in labels
+        "at 30 s from the run's start: lawnmower retasks the vehicle (after step 1 completes, "
+        "estimated)" in labels
     )
     assert "at 400 s from the run's start: circle retasks the vehicle (at its set time)" in labels
     for e in pv.timeline:
         assert e.label == f"{at_time(e.t_s)}: {e.text}"
     mow = pv.steps[1]
     assert mow.timing_text == (
-        f"starts at 30 s from the run's start, takes {seconds(mow.completion_s or 0.0)}"
+        "starts at 30 s from the run's start (estimated), "
+        + takes(mow.completion_s, True, mow.planned_completion_s)
     )
     assert pv.steps[2].timing_text == "starts at 400 s from the run's start, repeats until retasked"
 
@@ -79,7 +83,7 @@ def test_timeline_and_steps_label_times_from_the_runs_start() -> None:
 def every_state_of_a_run() -> list[dict[str, Any]]:
     """A run's state at each of its stages, two-way and one-way."""
     states = []
-    for by in ("vehicle", "plan"):
+    for by in ("vehicle", "estimate"):
         s = script(
             step("straight", STRAIGHT, "at", 0),
             step("hover", HOVER, "after_previous"),
@@ -93,6 +97,9 @@ def every_state_of_a_run() -> list[dict[str, Any]]:
         states.append(r.state())
         r.mark_acknowledged(0, by_vehicle=by == "vehicle", vehicle_t_s=10.0)
         states.append(r.state())
+        if by == "vehicle":  # the hover goes when the vehicle reports the straight complete
+            assert r.poll(40.0) == []
+            r.observe({"t_s": 45.0, "mode": "holding", "pattern": "straight"})
         assert r.poll(40.0) == [1]
         r.mark_acknowledged(1, by_vehicle=by == "vehicle", vehicle_t_s=50.0)
         r.poll(41.0)
@@ -133,8 +140,20 @@ def test_step_states_in_words() -> None:
     )
     assert states[4]["summary"] == "running (auto): step 3 (lawnmower) awaits the operator's go"
     assert states[3]["summary"] == (
-        "running (auto): step 2 (hover) goes when step 1 (straight) completes, expected at 40 s "
-        "from the run's start by the plan"
+        "running (auto): step 2 (hover) goes when the vehicle reports step 1 (straight) "
+        "complete, expected at 40 s from the run's start by the estimate"
+    )
+    assert states[7 + 3]["summary"] == (
+        "running (auto): step 2 (hover) goes when step 1 (straight) is estimated to complete "
+        "at 40 s from the run's start (the link reports nothing)"
+    )
+    assert states[4]["steps"][0]["state_text"] == (
+        "sent at 0 s from the run's start, acknowledged by the vehicle; completed at 40 s from "
+        "the run's start, as the vehicle reported"
+    )
+    assert states[7 + 4]["steps"][0]["state_text"] == (
+        "sent at 0 s from the run's start (this link gives no acknowledgement); completed at "
+        "40 s from the run's start by the estimate (the link reports nothing)"
     )
     assert [s["trigger_text"] for s in states[0]["steps"]] == [
         "at 0 s from the run's start",
@@ -142,7 +161,7 @@ def test_step_states_in_words() -> None:
         "on the operator's go",
     ]
     assert [s["takes_text"] for s in states[0]["steps"]] == [
-        "takes 40 s",
-        "takes 30 s",
-        "takes 150 s",
+        "takes 40 s (estimated)",
+        "takes 30 s (estimated)",
+        "takes 150 s (estimated)",
     ]

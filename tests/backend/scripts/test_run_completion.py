@@ -1,9 +1,10 @@
 """A script run against the console (the light app on an in-memory vehicle running the onboard
-agent), on a manual clock: the run is over when its last step's pattern completes, as the
-vehicle reports it on a two-way link, estimated by the plan on a one-way link, never while
-that pattern still flies (issue 20: "completed" at 120 s, the last step flying on to 248 s); a
-repeating last step leaves the vehicle "running until retasked". The trigger loop sleeps on
-the console's clock, so nothing here waits in real time."""
+agent), on a manual clock: a step on completion goes, and the run is over, when the step
+before it (the last) completes, as the vehicle reports it on a two-way link (its guidance
+reporting ``holding`` only at the path's end *and* its depth), by the estimate on a one-way
+link, never while that pattern still flies (issue 20: "completed" at 120 s, the last step
+flying on to 248 s); a repeating last step leaves the vehicle "running until retasked". The
+trigger loop sleeps on the console's clock, so nothing here waits in real time."""
 
 from __future__ import annotations
 
@@ -22,10 +23,14 @@ from tests.manual_clock import ManualClock
 
 #: The hover's duration (s): it completes this long after the vehicle takes it.
 HOVER_S = float(HOVER["duration"])
-#: A straight, then a hover on completion; the run's last step is the hover.
+#: A straight at the in-memory vehicle's 2 m (so is the hover), then a hover on completion;
+#: the run's last step is the hover.
 STRAIGHT_THEN_HOVER = doc(
-    step("straight", STRAIGHT, "at", 0), step("hover", HOVER, "after_previous")
+    step("straight", {**STRAIGHT, "depth": 2}, "at", 0), step("hover", HOVER, "after_previous")
 )
+#: From the in-memory vehicle's 2 m: 3 m of line, 4 m down, so the last of the depth is flown
+#: in place at the line's end (the planner's ramp outlasts the line).
+DEEP: dict[str, float | str] = {"speed": 0.3, "depth": 6, "duration": 10, "heading": 90}
 
 
 def run(client: TestClient, script: dict[str, Any]) -> dict[str, Any]:
@@ -65,6 +70,66 @@ def vehicle_flies_on(client: TestClient, link: AgentLink, t_s: float) -> None:
     client.portal.call(tick)  # type: ignore[union-attr]
 
 
+def vehicle_at(client: TestClient, link: AgentLink, x_m: float, y_m: float, z_m: float) -> None:
+    """The in-memory vehicle flies along its plan's waypoints (guidance following, at
+    ``z_m``) to ``(x_m, y_m, z_m)``, a second of vehicle time per waypoint, and reports."""
+
+    def fly() -> None:
+        s, g = link.state, link.agent.guidance
+        t = s.t_s
+        path = g.plan.path if g.plan is not None else None
+        for i in range(len(path) if path is not None and g.mode.value == "running" else 0):
+            t += 1.0
+            assert path is not None
+            g.update(path.xs[i], path.ys[i], z_m, t)
+        t += 1.0
+        link.state = VehicleState(x_m, y_m, z_m, s.heading_deg, 0.0, t)
+        g.update(x_m, y_m, z_m, t)
+        link.report()
+
+    client.portal.call(fly)  # type: ignore[union-attr]
+
+
+def test_two_way_a_step_on_completion_waits_for_the_vehicle_at_the_end_and_its_depth(
+    make_light_client: MakeLightClient,
+) -> None:
+    """The straight's line ends 4 m above its depth: the hover waits, past the estimate, for
+    the vehicle to report the straight complete, and the vehicle does not while it flies
+    the rest of the depth in place (before issue 20's fix its guidance said ``holding`` at
+    the line's end); at the depth it does, and the hover goes."""
+    clock, link = ManualClock(), AgentLink()
+    client = make_light_client(link, clock=clock)
+    started = run(
+        client, doc(step("straight", DEEP, "at", 0), step("hover", HOVER, "after_previous"))
+    )
+    assert started["completion_by"] == "vehicle"
+    done_s = started["steps"][0]["completion_s"]
+    until(client, clock, lambda s: s["steps"][0]["state"] == "acknowledged", 5.0)
+    advance(client, clock, done_s + 30.0)  # well past the straight's estimated completion
+    waiting = state(client)
+    assert waiting["steps"][1]["state"] == "pending" and waiting["waiting_for"] == "completion"
+    assert waiting["summary"].startswith(
+        "running (auto): step 2 (hover) goes when the vehicle reports step 1 (straight) "
+        "complete, expected at "
+    )
+    active = link.agent.active
+    assert active is not None
+    end = (active.path.xs[-1], active.path.ys[-1])
+    vehicle_at(client, link, *end, 3.0)  # at the line's end, 3 m above the depth
+    assert link.agent.guidance.at_end
+    assert console_of(client).hub.status["mode"] == "running"  # type: ignore[index]
+    advance(client, clock, 3 * POLL_S)
+    assert state(client)["steps"][1]["state"] == "pending"
+    assert len(link.frames) == 1
+    vehicle_at(client, link, *end, 6.0)  # at its depth: complete
+    assert console_of(client).hub.status["mode"] == "holding"  # type: ignore[index]
+    until(client, clock, lambda s: s["steps"][1]["state"] == "acknowledged", 2 * POLL_S)
+    after = state(client)
+    assert after["steps"][0]["state_text"].endswith(", as the vehicle reported")
+    assert after["steps"][1]["sent_s"] >= after["steps"][0]["completed_s"] > done_s
+    assert len(link.frames) == 2
+
+
 def test_two_way_the_run_completes_when_the_vehicle_reports_the_hover_complete(
     make_light_client: MakeLightClient,
 ) -> None:
@@ -72,9 +137,12 @@ def test_two_way_the_run_completes_when_the_vehicle_reports_the_hover_complete(
     client = make_light_client(link, clock=clock)
     started = run(client, STRAIGHT_THEN_HOVER)
     assert started["completion_by"] == "vehicle"
-    done_s = started["steps"][0]["completion_s"]
-    # the straight goes at once; the hover when the straight is complete by the plan
-    until(client, clock, lambda s: s["steps"][1]["state"] == "acknowledged", done_s + 5.0)
+    # the straight goes at once; the hover when the vehicle reports the straight complete
+    until(client, clock, lambda s: s["steps"][0]["state"] == "acknowledged", 5.0)
+    active = link.agent.active
+    assert active is not None
+    vehicle_at(client, link, active.path.xs[-1], active.path.ys[-1], active.path.zs[-1])
+    until(client, clock, lambda s: s["steps"][1]["state"] == "acknowledged", 5.0)
     waiting = state(client)
     assert waiting["running"] and waiting["waiting_for"] == "completion"
     assert waiting["summary"].startswith(
@@ -103,13 +171,13 @@ def test_one_way_the_completion_is_estimated_from_the_send_and_said_so(
     clock, link = ManualClock(), AgentLink(Capability.NONE)
     client = make_light_client(link, clock=clock)
     started = run(client, doc(step("hover", HOVER, "at", 0)))
-    assert started["completion_by"] == "plan"
+    assert started["completion_by"] == "estimate"
     until(client, clock, lambda s: s["steps"][0]["state"] == "acknowledged", 30.0)
     sent = state(client)
     assert sent["steps"][0]["acknowledged_by_vehicle"] is False
     assert sent["steps"][0]["state_text"].endswith("(this link gives no acknowledgement)")
-    # from the surface (no telemetry: the origin) the hover's descent outlasts its 30 s; the
-    # flyable duration is the plan's here (nothing asks for more than the vehicle's rates)
+    # from the surface (no telemetry: the origin) the hover's descent outlasts its 30 s: the
+    # estimate of the vehicle flying it
     takes_s = sent["steps"][0]["completion_s"]
     assert takes_s > HOVER_S
     expected = sent["steps"][0]["sent_s"] + takes_s
@@ -117,7 +185,7 @@ def test_one_way_the_completion_is_estimated_from_the_send_and_said_so(
     assert sent["running"]
     took = until(client, clock, lambda s: not s["running"], 2 * takes_s)
     done = state(client)
-    assert done["outcome"] == "completed" and done["completion_by"] == "plan"
+    assert done["outcome"] == "completed" and done["completion_by"] == "estimate"
     assert done["completed_s"] == pytest.approx(expected)
     assert done["elapsed_s"] >= expected - 1e-6  # not before its time
     assert took > 0.0
@@ -130,6 +198,8 @@ def test_a_repeating_last_step_is_running_until_retasked(
     clock, link = ManualClock(), AgentLink()
     client = make_light_client(link, clock=clock)
     run(client, doc(step("hover", HOVER, "at", 0), step("circle", CIRCLE, "after_previous")))
+    until(client, clock, lambda s: s["steps"][0]["state"] == "acknowledged", 5.0)
+    vehicle_flies_on(client, link, link.state.t_s + HOVER_S)  # the hover complete, reported
     until(client, clock, lambda s: not s["running"], 2 * HOVER_S)
     done = state(client)
     assert done["outcome"] == "until_retasked"

@@ -267,7 +267,7 @@ def test_a_step_whose_copies_are_going_out_sends_none_after_the_surface(
     console = console_of(client)
     assert console.log is not None
     log = console.log
-    assert run(client, THREE)["completion_by"] == "plan"
+    assert run(client, THREE)["completion_by"] == "estimate"
     client.portal.call(clock.advance_until, link.holding.is_set, 90.0)  # type: ignore[union-attr]
     straight = client.portal.call(  # type: ignore[union-attr]
         lambda: log.commands(pattern="straight", dive=console.dive)

@@ -1,5 +1,7 @@
 """The script run's state machine: triggers on the run clock, acknowledgements, the
-operator's go, failures, and completion by the plan (never by waiting on the vehicle)."""
+operator's go, failures, and completion: as the vehicle reports it where its status reaches
+the console (a step on completion waits for it, as the run's end does), else by the
+estimate, said to be estimated."""
 
 from __future__ import annotations
 
@@ -8,6 +10,7 @@ from collections.abc import Callable
 
 import pytest
 
+from backend.authoring.profile import twin_profile
 from backend.scripts.operations import (
     CompletionBy,
     MissionScript,
@@ -15,7 +18,10 @@ from backend.scripts.operations import (
     ScriptRunError,
     ScriptRunner,
     expand,
+    flown_timing,
 )
+from codec import decode_frame, encode_frame
+from planner import Limits
 from tests.backend.scripts.test_scripts import (
     CIRCLE,
     HOVER,
@@ -26,7 +32,7 @@ from tests.backend.scripts.test_scripts import (
     step,
 )
 
-#: The planned completion times the tests give the runner (s after each step takes effect).
+#: The estimated completions the tests give the runner (s after each step takes effect).
 STRAIGHT_DONE_S = 40.0
 MOW_DONE_S = 150.0
 HOVER_DONE_S = 30.0
@@ -97,7 +103,7 @@ def test_explicit_start_time() -> None:
     assert r.poll(960.0) == [1]
 
 
-def test_after_previous_is_due_the_planned_completion_after_the_previous_send() -> None:
+def test_after_previous_is_due_the_estimated_completion_after_the_previous_send() -> None:
     r = runner()
     assert r.poll(0.0) == [0]
     r.mark_acknowledged(0)
@@ -107,7 +113,7 @@ def test_after_previous_is_due_the_planned_completion_after_the_previous_send() 
     st = r.state()
     assert st["waiting_for"] == "completion"
     assert st["due_s"] == 62.5 + MOW_DONE_S
-    # no vehicle report is needed, and none is waited for
+    # a link that reports nothing: no vehicle report is waited for
     assert r.poll(62.5 + MOW_DONE_S - 0.1) == []
     assert r.poll(62.5 + MOW_DONE_S) == [2]
     assert r.poll(62.5 + MOW_DONE_S + 1) == []
@@ -116,8 +122,8 @@ def test_after_previous_is_due_the_planned_completion_after_the_previous_send() 
     st = r.state()
     assert st["running"] and st["outcome"] == "running"
     assert st["waiting_for"] == "completion" and st["step"] is None
-    assert st["due_s"] == 62.5 + MOW_DONE_S + HOVER_DONE_S  # expected, by the plan
-    assert r.poll(62.5 + MOW_DONE_S + HOVER_DONE_S) == []  # completion_by "plan": estimated
+    assert st["due_s"] == 62.5 + MOW_DONE_S + HOVER_DONE_S  # expected, by the estimate
+    assert r.poll(62.5 + MOW_DONE_S + HOVER_DONE_S) == []  # completion_by "estimate"
     st = r.state()
     assert not st["running"]
     assert st["outcome"] == "completed"
@@ -319,7 +325,7 @@ def test_state_is_json_ready() -> None:
         "completion_s": STRAIGHT_DONE_S,
         "completed_s": None,
         "trigger_text": "at 0 s from the run's start",
-        "takes_text": "takes 40 s",
+        "takes_text": "takes 40 s (estimated)",
         "state_text": "sending",
     }
     assert (
@@ -348,6 +354,13 @@ def status(
     return doc
 
 
+#: The straight as the vehicle decodes it.
+STRAIGHT_ACTIVE: dict[str, object] = {
+    "pattern": "straight",
+    "params": dict(decode_frame(encode_frame("straight", STRAIGHT).frame.bits).command.params),
+}
+
+
 def straight_then_hover(clock: Callable[[], float]) -> ScriptRunner:
     """A straight, then a hover on completion; the vehicle reports its status."""
     s = script(step("straight", STRAIGHT, "at", 0), step("hover", HOVER, "after_previous"))
@@ -356,24 +369,28 @@ def straight_then_hover(clock: Callable[[], float]) -> ScriptRunner:
 
 
 def to_the_last_ack(r: ScriptRunner, vehicle_t_s: float | None = 500.0) -> None:
+    """Both steps out: the hover once the vehicle reports the straight complete."""
     assert r.poll(0.0) == [0]
     r.mark_sent(0)
     r.mark_acknowledged(0, vehicle_t_s=vehicle_t_s)
-    assert r.poll(STRAIGHT_DONE_S) == [1]
+    assert r.poll(STRAIGHT_DONE_S) == []  # estimated complete, but not reported
+    r.observe(status("holding", (vehicle_t_s or 0.0) + STRAIGHT_DONE_S, STRAIGHT_ACTIVE))
+    assert r.poll() == [1]  # at once, on the run's clock
     r.mark_sent(1)
     r.mark_acknowledged(1, vehicle_t_s=vehicle_t_s)
 
 
 def test_the_run_completes_when_the_vehicle_reports_the_last_pattern_complete() -> None:
-    now = [0.0]
+    now = [STRAIGHT_DONE_S]
     r = straight_then_hover(lambda: now[0])
     to_the_last_ack(r)
     st = r.state()
     assert st["running"] and st["waiting_for"] == "completion"
     assert st["summary"] == (
         "running (auto): every step sent; waiting for the vehicle to report step 2 (hover) "
-        "complete, expected at 70 s from the run's start by the plan"
+        "complete, expected at 70 s from the run's start by the estimate"
     )
+    assert st["expected_s"] == 70.0
     # long past the plan's time, the vehicle still runs the hover: the run waits
     now[0] = 248.0
     assert r.poll() == []
@@ -428,41 +445,93 @@ def test_an_empty_battery_stops_the_wait() -> None:
     assert "battery is empty" in (r.reason or "")
 
 
-def test_a_link_that_reports_nothing_estimates_completion_by_the_flyable_duration() -> None:
+def test_a_link_that_reports_nothing_completes_each_step_by_the_estimate() -> None:
     s = script(step("straight", STRAIGHT, "at", 0), step("hover", HOVER, "after_previous"))
-    # the hover flies slower than planned (its flyable duration at the vehicle's rates)
-    r = ScriptRunner(
-        s, "auto", completion_s=[STRAIGHT_DONE_S, 30.0], flyable_s=[STRAIGHT_DONE_S, 45.0]
-    )
+    r = ScriptRunner(s, "auto", completion_s=[STRAIGHT_DONE_S, 45.0])
+    assert r.completion_by == "estimate"
     assert r.poll(0.0) == [0]
     r.mark_acknowledged(0, by_vehicle=False)
-    assert r.poll(STRAIGHT_DONE_S) == [1]  # on completion: timed by the plan, as before
+    assert r.poll(STRAIGHT_DONE_S - 0.1) == []
+    assert r.poll(STRAIGHT_DONE_S + 2.0) == [1]  # on completion: by the estimate
+    assert r.state()["steps"][0]["completed_s"] == STRAIGHT_DONE_S  # the estimate's time
     r.mark_sent(1)
     r.mark_acknowledged(1, by_vehicle=False)
-    r.observe(status("holding", 9999.0))  # completion_by "plan": a status decides nothing
+    r.observe(status("holding", 9999.0))  # a link that reports nothing: a status decides nothing
     assert r.running
     st = r.state()
-    assert st["due_s"] == STRAIGHT_DONE_S + 45.0
+    assert st["due_s"] == STRAIGHT_DONE_S + 2.0 + 45.0
     assert st["summary"] == (
-        "running (auto): every step sent; step 2 (hover) is estimated to complete at 85 s "
+        "running (auto): every step sent; step 2 (hover) is estimated to complete at 87 s "
         "from the run's start (the link reports nothing)"
     )
-    assert r.poll(STRAIGHT_DONE_S + 44.9) == []
+    assert r.poll(STRAIGHT_DONE_S + 46.9) == []
     assert r.poll(STRAIGHT_DONE_S + 60.0) == []
     st = r.state()
-    assert st["outcome"] == "completed" and st["completion_by"] == "plan"
-    assert st["completed_s"] == STRAIGHT_DONE_S + 45.0  # the estimate, not the poll's time
+    assert st["outcome"] == "completed" and st["completion_by"] == "estimate"
+    assert st["completed_s"] == STRAIGHT_DONE_S + 47.0  # the estimate, not the poll's time
     assert st["summary"] == (
-        "completed at 85 s from the run's start (estimated): step 2 (hover) completes then by "
-        "the plan; the link reports nothing to confirm it"
+        "completed at 87 s from the run's start (estimated): step 2 (hover) completes then by "
+        "the estimate; the link reports nothing to confirm it"
     )
     assert st["steps"][1]["state_text"] == (
-        "sent at 40 s from the run's start (this link gives no acknowledgement); completed at "
-        "85 s from the run's start by the plan (estimated: the link reports nothing)"
+        "sent at 42 s from the run's start (this link gives no acknowledgement); completed at "
+        "87 s from the run's start by the estimate (the link reports nothing)"
     )
 
 
-@pytest.mark.parametrize("completion_by", ["vehicle", "plan"])
+def test_a_step_on_completion_waits_for_the_vehicle_to_report_the_previous_one() -> None:
+    """Two-way: the hover goes when the vehicle reports the straight complete (the same
+    verdict as the run's end), not at the straight's estimated completion; a report that
+    the straight will not complete stops the run."""
+    now = [0.0]
+    r = straight_then_hover(lambda: now[0])
+    assert r.poll(0.0) == [0]
+    r.mark_sent(0)
+    r.mark_acknowledged(0, vehicle_t_s=500.0)
+    now[0] = 3 * STRAIGHT_DONE_S  # long past its estimate
+    assert r.poll() == []
+    st = r.state()
+    assert st["waiting_for"] == "completion" and st["due_s"] is None
+    assert st["expected_s"] == STRAIGHT_DONE_S
+    assert st["summary"] == (
+        "running (auto): step 2 (hover) goes when the vehicle reports step 1 (straight) "
+        "complete, expected at 40 s from the run's start by the estimate"
+    )
+    r.observe(status("running", 600.0, STRAIGHT_ACTIVE))  # still flying it
+    r.observe({"t_s": 499.0, "mode": "holding", "pattern": "straight"})  # older than the ack
+    r.observe(None)
+    assert r.poll() == [] and r.running
+    now[0] = 130.0
+    r.observe(status("holding", 630.0, STRAIGHT_ACTIVE))
+    assert r.state()["due_s"] == 130.0
+    assert r.poll() == [1]
+    st = r.state()
+    assert st["steps"][0]["completed_s"] == 130.0
+    assert st["steps"][0]["state_text"].endswith(
+        "completed at 130 s from the run's start, as the vehicle reported"
+    )
+    assert st["steps"][1]["sent_s"] == 130.0
+    # the same wait, ended by another command: the run stops, naming the step
+    r2 = straight_then_hover(lambda: 50.0)
+    assert r2.poll(0.0) == [0]
+    r2.mark_acknowledged(0, vehicle_t_s=500.0)
+    r2.observe(status("running", 510.0, {"pattern": "circle", "params": {}}))
+    assert r2.state()["outcome"] == "stopped"
+    assert r2.reason == (
+        "step 1 (straight) will not complete: the vehicle runs circle (running), not this "
+        "step's command"
+    )
+    assert r2.poll(1000.0) == []
+    # and a link that stops reporting: by the estimate, from then on
+    r3 = straight_then_hover(lambda: 50.0)
+    assert r3.poll(0.0) == [0]
+    r3.mark_acknowledged(0, vehicle_t_s=500.0)
+    assert r3.poll(STRAIGHT_DONE_S + 1.0) == []
+    r3.completion_by = "estimate"
+    assert r3.poll(STRAIGHT_DONE_S + 2.0) == [1]
+
+
+@pytest.mark.parametrize("completion_by", ["vehicle", "estimate"])
 def test_a_repeating_last_step_leaves_the_vehicle_running_until_retasked(
     completion_by: CompletionBy,
 ) -> None:
@@ -474,7 +543,8 @@ def test_a_repeating_last_step_leaves_the_vehicle_running_until_retasked(
         completion_by=completion_by,
     )
     assert r.poll(0.0) == [0]
-    r.mark_acknowledged(0)
+    r.mark_acknowledged(0, vehicle_t_s=500.0)
+    r.observe(status("holding", 530.0))  # the hover complete, as reported
     assert r.poll(HOVER_DONE_S) == [1]
     r.mark_acknowledged(1)
     st = r.state()
@@ -484,12 +554,11 @@ def test_a_repeating_last_step_leaves_the_vehicle_running_until_retasked(
     assert st["steps"][1]["takes_text"] == "repeats until retasked"
 
 
-def test_planned_runner_takes_the_planners_flyable_estimate() -> None:
+def test_planned_runner_takes_the_estimate_of_the_vehicles_profile() -> None:
     s = script(step("straight", STRAIGHT, "at", 0), step("circle", CIRCLE, "after_previous"))
-    expanded = expand(s, START)
-    # a vehicle slower than the straight's 0.4 m/s takes longer than the plan's own times
-    r = ScriptRunner.planned(s, expanded, top_speed_mps=0.2)
-    assert r.completion_s[0] == pytest.approx(expanded[0].duration_s)
-    slow, planned = r.flyable_s[0], r.completion_s[0]
-    assert slow is not None and planned is not None and slow > planned + 10.0
-    assert r.flyable_s[1] is None  # Estimate.repeats: the circle
+    # the twin is slower than the straight's 0.4 m/s: the estimate outlasts the plan's clock
+    expanded = expand(s, START, None, flown_timing(twin_profile(Limits().max_depth_m)))
+    r = ScriptRunner.planned(s, expanded)
+    assert r.completion_s == (expanded[0].completion_s, None)  # the circle repeats
+    slow, planned = r.completion_s[0], expanded[0].plan.path.duration_s
+    assert slow is not None and slow > planned + 10.0

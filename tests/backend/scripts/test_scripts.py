@@ -16,6 +16,7 @@ from backend.scripts.operations import (
     ScriptError,
     expand,
     export_onboard,
+    flown_timing,
     onboard_csv,
     preview,
 )
@@ -214,10 +215,13 @@ def test_preview_second_step_starts_where_square_is_at_120_s() -> None:
     assert sq.t_start_s == 0.0
     assert ci.t_start_s == 120.0
     assert sq.t_end_s == 120.0
-    # the square as the vehicle flies it, from the snapped frame
+    # the square as the vehicle flies it, from the snapped frame: where the estimate (not the
+    # plan's own clock) has the vehicle at 120 s
     square_cmd = decode_frame(encode_frame("square", SQUARE).frame.bits).command
     square_plan = plan(square_cmd, START)
-    at = square_plan.path.sample(120.0)
+    flies = expand(s, START)[0].timing
+    assert flies.to_plan_s(120.0) != pytest.approx(120.0, abs=1.0)  # the clocks differ
+    at = square_plan.path.sample(flies.to_plan_s(120.0))
     assert (ci.start.x_m, ci.start.y_m, ci.start.z_m) == pytest.approx((at.x_m, at.y_m, at.z_m))
     assert ci.start.heading_deg == pytest.approx(at.course_deg)
     assert ci.start.t_s == 120.0
@@ -258,11 +262,14 @@ def test_combined_path_is_continuous_in_time() -> None:
     assert n == len(p.x_m) == len(p.y_m) == len(p.z_m)
     assert p.t_s[0] == 0.0
     assert all(p.t_s[i + 1] > p.t_s[i] for i in range(n - 1))
+    # the plan's path timed as the vehicle is estimated to fly it: it passes each corner a
+    # lookahead early (it cuts it), so along the drawn corner it seems a little faster than
+    # its 0.18 m/s and the planner's 0.05 m/s ramp; never a jump
     for i in range(n - 1):
         dt = p.t_s[i + 1] - p.t_s[i]
         horizontal = math.hypot(p.x_m[i + 1] - p.x_m[i], p.y_m[i + 1] - p.y_m[i])
-        assert horizontal <= 0.18 * dt + 0.01, i
-        assert abs(p.z_m[i + 1] - p.z_m[i]) <= 0.05 * dt + 0.01, i
+        assert horizontal <= 1.5 * 0.18 * dt + 0.01, i
+        assert abs(p.z_m[i + 1] - p.z_m[i]) <= 1.5 * 0.05 * dt + 0.01, i
     # the retask point is shared: step 1 starts at the point at 120 s
     k = p.step_start[1]
     assert p.step_start[0] == 0
@@ -385,7 +392,8 @@ def test_current_plan_keeps_the_anchor_and_is_flown_first() -> None:
     s = script(step("square", SQUARE, "at", 50))
     ex = expand(s, START, current)
     assert ex[0].plan.anchor == current.anchor
-    at = current.path.sample(START.t_s + 50.0 - current.t0_s)
+    flies = flown_timing(None)(current)  # where the estimate has the vehicle on it
+    at = current.path.sample(flies.to_plan_s(START.t_s + 50.0 - current.t0_s))
     assert (ex[0].state.x_m, ex[0].state.y_m) == pytest.approx((at.x_m, at.y_m))
     pv = preview(s, START, current)
     assert pv.path.t_s[pv.path.step_start[0]] == 50.0
@@ -450,7 +458,7 @@ def test_export_frames_match_encoder_and_times() -> None:
 
 
 @pytest.mark.parametrize("fmt", ["json", "csv"])
-def test_export_refuses_on_completion_naming_the_step_and_the_planned_time(fmt: str) -> None:
+def test_export_refuses_on_completion_naming_the_step_and_the_estimated_time(fmt: str) -> None:
     # issue 20: "on completion" became a fixed t = 20 s without a word; the onboard script
     # holds only timed frames, so the export refuses it, in JSON and in CSV alike
     s = script(
@@ -470,8 +478,8 @@ def test_export_refuses_on_completion_naming_the_step_and_the_planned_time(fmt: 
     )
     done_s = 120.0 + (mow.completion_s or 0.0)
     assert err.message.endswith(
-        f"Give step 3 a time ('at'): by the plan step 2 completes at {done_s:.1f} s from the "
-        "run's start"
+        f"Give step 3 a time ('at'): step 2 is estimated to complete at {done_s:.1f} s from "
+        "the run's start (its plan flown on the vehicle's profile)"
     )
 
 
