@@ -48,6 +48,8 @@ class Evidence:
     datum: Datum | None
     #: How fast the vehicle may go when its plan is not known (m/s).
     top_speed_mps: float
+    #: The vehicle's mission clock now, when the console knows it (the training simulator's).
+    vehicle_now_s: float | None = None
 
 
 def surface_of(records: Sequence[Record], now_s: float) -> SurfaceBelief:
@@ -92,6 +94,7 @@ def estimate(ev: Evidence, seq: int = 0) -> Belief:
         current=ev.current,
         datum=ev.datum,
         top_speed_mps=ev.top_speed_mps,
+        vehicle_now_s=ev.vehicle_now_s,
     )
     last = ev.last_sent
     return Belief(

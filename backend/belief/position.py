@@ -2,7 +2,7 @@
 forward under the candidate commands, else a start that is assumed (and says so).
 
 **Fresh** (:data:`FRESH_TELEMETRY_S`): the fix is at most 3 s old on the vehicle's clock
-(the console's age of it times the training simulator's time scale): the link health's
+(the training simulator's clock; else the console's age of it): the link health's
 telemetry turns stale at the same 3 s. The vehicle publishes its pose at 10-20 Hz; a fix
 that old means the telemetry stopped, not that one message was late.
 
@@ -114,10 +114,10 @@ class _Base:
 
 
 def _run(
-    c: Candidate, base: _Base, fix_at_s: float | None, now_s: float, scale: float
+    c: Candidate, base: _Base, total: float, now_s: float, scale: float
 ) -> tuple[VehicleState, float, str]:
-    """Where candidate ``c`` has the vehicle now: (state, uncertainty m, in words)."""
-    total = max(0.0, (now_s - (fix_at_s if fix_at_s is not None else now_s)) * scale)
+    """Where candidate ``c`` has the vehicle now, ``total`` vehicle seconds after the fix (0:
+    no fix): (state, uncertainty m, in words)."""
     record = c.record
     if c.last_known or c.sent_s is None or record is None:
         state, run = base.at(total)
@@ -129,13 +129,13 @@ def _run(
             unknown_speed_mps=base.unknown_speed_mps,
         )
         return state, sigma, base.words
-    start = 0.0 if fix_at_s is None else max(0.0, (c.sent_s - fix_at_s) * scale)
+    since = max(0.0, (now_s - c.sent_s) * scale)  # vehicle seconds since its first copy left
+    start = max(0.0, total - since)
     state0, run0 = base.at(start)
     try:
         planned = _planned(str(record["bits"]), state0, base.plan)
     except (PlanError, ValueError) as err:  # sent, so planned before: a bookkeeping oddity
         return state0, sigma_m(total, run0, unknown_speed_mps=base.unknown_speed_mps), str(err)
-    since = max(0.0, (now_s - c.sent_s) * scale)
     run = run_along(planned, 0.0, since, base.current, state0.t_s)
     both = Reckoned(
         run.state,
@@ -165,14 +165,24 @@ def believe_position(
     current: Current,
     datum: Datum | None,
     top_speed_mps: float,
+    vehicle_now_s: float | None = None,
 ) -> BelievedPosition:
-    """The believed position (see the module's doc); ``candidates`` most probable first."""
+    """The believed position (see the module's doc); ``candidates`` most probable first.
+
+    ``now_s``: the console's clock (epoch s); ``vehicle_now_s``: the vehicle's mission clock
+    now when the console knows it (the training simulator's), else it is the fix's advanced
+    by the console's clock times ``time_scale``."""
     age_s = None if fix is None else max(0.0, now_s - fix.at_s)
-    if fix is not None and age_s is not None and age_s * time_scale <= FRESH_TELEMETRY_S:
+    total = 0.0  # vehicle seconds since the fix
+    if fix is not None and age_s is not None:
+        total = age_s * time_scale
+        if vehicle_now_s is not None:
+            total = max(0.0, vehicle_now_s - fix.state.t_s)
+    if fix is not None and age_s is not None and total <= FRESH_TELEMETRY_S:
         s = fix.state
         return _position(
             s,
-            FIX_SIGMA_M + s.speed_mps * age_s * time_scale,
+            FIX_SIGMA_M + s.speed_mps * total,
             "telemetry",
             age_s,
             datum,
@@ -181,9 +191,8 @@ def believe_position(
     known = next((c for c in candidates if c.last_known), None)
     origin = fix.state if fix is not None else start.state
     base = _Base(origin, known, mirror, current, top_speed_mps)
-    fix_at = fix.at_s if fix is not None else None
     runs = [
-        (c.belief.p, *_run(c, base, fix_at, now_s, time_scale))
+        (c.belief.p, *_run(c, base, total, now_s, time_scale))
         for c in candidates
         if c is candidates[0] or c.belief.p >= MIN_P
     ]
@@ -195,8 +204,8 @@ def believe_position(
         basis = f"assumed: {start.what} (no fix ever); then {words} ({what})"
         return _position(state, None, "assumed", None, datum, basis)
     basis = f"the last fix ({fix.what}) {age_s:.1f} s ago, run forward {words} ({what})"
-    total = (sigma * sigma + spread * spread) ** 0.5
-    return _position(state, total, "dead_reckoning", age_s, datum, basis)
+    overall = (sigma * sigma + spread * spread) ** 0.5
+    return _position(state, overall, "dead_reckoning", age_s, datum, basis)
 
 
 def _position(

@@ -201,6 +201,7 @@ class BeliefTracker:
             current=current,
             datum=rt.datum,
             top_speed_mps=rt.profile.top_speed_mps or rt.settings.max_speed_mps,
+            vehicle_now_s=sim.t_s if sim is not None else None,
         )
 
     def current(self) -> Belief:
