@@ -167,7 +167,7 @@ def cmd_decode(args: argparse.Namespace, out: TextIO) -> int:
 
 
 #: The benchmarks: each is ``bench.<name>`` with ``run(out, quick=...)``, imported on use.
-BENCHMARKS = ("codec", "planner", "sim", "console", "reconfig", "recovery")
+BENCHMARKS = ("codec", "planner", "sim", "console", "reconfig", "recovery", "dead_reckoning")
 
 
 def cmd_bench(args: argparse.Namespace, out: TextIO) -> int:
