@@ -36,6 +36,7 @@ from station.link import Link
 from vehicle_contract.messages import number
 
 if TYPE_CHECKING:
+    from backend.viewer.viewer import Viewer
     from rosbridge.server import BridgeServer
     from sim.simulation import Simulation
 
@@ -68,6 +69,7 @@ class Runtime(Protocol):
     datum: Datum | None
     profile: VehicleProfile
     dive: int
+    viewer: Viewer | None
 
 
 def _echo_of(doc: Mapping[str, Any], at_s: float, what: str) -> Echo | None:
@@ -119,6 +121,7 @@ class BeliefTracker:
         self._cached: tuple[float, Belief] | None = None
         self._pushed: Belief | None = None
         self._pushed_at = -math.inf
+        self._drawn = False  # the 3D view shows a believed position
         self._wake = asyncio.Event()
 
     # --- the evidence --------------------------------------------------------------------------
@@ -252,7 +255,25 @@ class BeliefTracker:
         self._pushed, self._pushed_at = belief, clock
         if self.rt.hub.client_count:
             self.rt.hub.publish(BeliefMessage(belief=belief))
+        self._show(belief.position)
         return belief
+
+    def _show(self, p: BelievedPosition) -> None:
+        """The 3D view: the believed position and its ring unless it is the fresh fix."""
+        viewer = self.rt.viewer
+        if viewer is None:
+            return
+        from backend.viewer.belief import belief_drawing, clear_belief  # viser: with the view
+
+        if p.source == "telemetry":
+            if self._drawn:
+                viewer.draw_shared(clear_belief)
+                self._drawn = False
+            return
+        spread = "" if p.sigma_m is None else f", +-{p.sigma_m:.1f} m"
+        label = f"believed ({p.source.replace('_', ' ')}{spread})"
+        viewer.draw_shared(belief_drawing(p.x_m, p.y_m, p.z_m, p.sigma_m, label))
+        self._drawn = True
 
     async def run(self) -> None:
         """Push on every change until cancelled."""

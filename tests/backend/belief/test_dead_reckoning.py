@@ -13,7 +13,15 @@ import pytest
 from fastapi.testclient import TestClient
 
 from backend.belief.estimate import estimate
-from tests.backend.conftest import AUTH, CIRCLE, console_of, send, wait_state, wait_until
+from tests.backend.conftest import (
+    AUTH,
+    CIRCLE,
+    MakeClient,
+    console_of,
+    send,
+    wait_state,
+    wait_until,
+)
 
 pytestmark = pytest.mark.training
 
@@ -107,9 +115,15 @@ def _check(samples: list[Sample]) -> None:
 
 
 def test_a_quiet_circle_stays_within_its_sigma(
-    client: TestClient, monkeypatch: pytest.MonkeyPatch
+    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    client = make_client(viewer=True)
     _check(_fly_then_go_quiet(client, monkeypatch, "circle", CIRCLE, 150.0))
+    # the 3D view draws the believed position with its ring (pushed every second)
+    viewer = console_of(client).viewer
+    assert viewer is not None
+    wait_until(lambda: viewer.node("/belief/ring") is not None, what="the belief's ring")
+    assert viewer.node("/belief/label").text.startswith("believed (dead reckoning, +-")  # type: ignore[union-attr]
 
 
 def test_a_quiet_lawnmower_stays_within_its_sigma(
