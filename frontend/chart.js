@@ -40,6 +40,7 @@ const state = {
   active: null, // the vehicle's echoed active command
   activePath: null, // the console's mirror of the path the vehicle flies (/api/vehicle, /ws)
   previewed: new Map(), // command key -> preview path latlngs (the active path, as previewed)
+  belief: null, // the console's belief (belief.js): its position is drawn unless it is the fix
   fittedRing: false,
   fittedPath: false,
 };
@@ -240,6 +241,23 @@ function drawVehicle() {
   }
 }
 
+/** The believed position when it is not the last fix: its uncertainty ring (dead reckoning)
+ *  and a labelled marker (dead-reckoned, or assumed). */
+function drawBelief() {
+  layers.belief.clearLayers();
+  const p = state.belief && state.belief.position;
+  if (!p || p.source === "telemetry" || !Number.isFinite(p.lat_deg) || !Number.isFinite(p.lon_deg)) return;
+  const at = [p.lat_deg, p.lon_deg];
+  const sigma = Number.isFinite(p.sigma_m) ? ` ±${num(p.sigma_m, 1)} m` : "";
+  const text = p.source === "assumed" ? "assumed position (no fix)" : `believed${sigma}`;
+  if (sigma) layers.belief.addLayer(L.circle(at, { radius: p.sigma_m, className: "chart-belief-ring", interactive: false }));
+  const icon = L.divIcon({ className: `chart-belief source-${p.source}`, html: `<span>${text}</span>`, iconSize: [12, 12] });
+  const marker = L.marker(at, { icon, keyboard: false, title: p.basis || text, interactive: false });
+  layers.belief.addLayer(marker);
+  const node = marker.getElement();
+  if (node) Object.assign(node.dataset, { testid: "chart-belief", source: p.source, sigma: String(p.sigma_m ?? "") });
+}
+
 function resetTrack() {
   state.track = [];
   if (layers.track) layers.track.setLatLngs([]);
@@ -363,6 +381,7 @@ function createMap() {
   layers.active = L.layerGroup().addTo(map);
   layers.preview = L.layerGroup().addTo(map);
   layers.predicted = L.layerGroup().addTo(map);
+  layers.belief = L.layerGroup().addTo(map);
   const redrawGrid = () => drawGraticule(L, map, layers.graticule);
   map.on("moveend zoomend resize", redrawGrid);
   redrawGrid();
@@ -375,6 +394,10 @@ export async function initChart() {
   on("vehicle", ({ msg }) => msg && onActive(msg.active));
   on("active_path", ({ path }) => onActivePath(path));
   on("preview", onPreview);
+  on("belief", ({ belief }) => {
+    state.belief = belief;
+    if (map) drawBelief();
+  });
   on("session", ({ session }) => {
     if (!session || session.dive === state.dive) return;
     if (state.dive !== null) resetTrack();
@@ -399,5 +422,6 @@ export async function initChart() {
   drawPredicted();
   drawActive();
   drawVehicle();
+  drawBelief();
   setInterval(loadChart, CHART_REFRESH_MS);
 }

@@ -100,7 +100,7 @@ class _Base:
             self.off_m = off_path_m(mirror, origin, self.tau0)
             self.words = f"along {mirror.pattern} (the plan it acknowledged)"
         elif belief is not None and belief.kind == "last_known" and belief.pattern is None:
-            self.words = "holding"
+            self.words = "holding (as last reported)"
         else:
             self.unknown_speed_mps = unknown_speed_mps
             self.words = f"its plan unknown: anywhere within {unknown_speed_mps:.2f} m/s"
@@ -198,12 +198,15 @@ def believe_position(
     ]
     _p, state, sigma, words = runs[0]
     spread = spread_m([(p, s.x_m, s.y_m) for p, s, _, _ in runs[1:]], state.x_m, state.y_m)
-    top = candidates[0].belief
-    what = f"{top.pattern or 'holding'} p {top.p:.4g}"
+    top = candidates[0]
     if fix is None:
-        basis = f"assumed: {start.what} (no fix ever); then {words} ({what})"
+        basis = f"{start.what}, no fix ever"
+        if not top.last_known:  # the start, then the believed command from there
+            basis += f"; then {words} (p {top.belief.p:.4g})"
         return _position(state, None, "assumed", None, datum, basis)
-    basis = f"the last fix ({fix.what}) {age_s:.1f} s ago, run forward {words} ({what})"
+    basis = f"the last fix ({fix.what}) {age_s:.1f} s ago, then {words}"
+    if not top.last_known:
+        basis += f" (p {top.belief.p:.4g})"
     overall = (sigma * sigma + spread * spread) ** 0.5
     return _position(state, overall, "dead_reckoning", age_s, datum, basis)
 

@@ -172,7 +172,7 @@ class BeliefTracker:
             start = Start(
                 VehicleState(c.start_x_m, c.start_y_m, c.start_z_m, c.start_heading_deg),
                 f"the simulator's start (x {c.start_x_m:g} m, y {c.start_y_m:g} m, depth "
-                f"{c.start_z_m:g} m, heading {c.start_heading_deg:g} deg), holding",
+                f"{c.start_z_m:g} m, heading {c.start_heading_deg:g} deg)",
             )
             drift = sim.current.config
             turn_rad = math.radians(drift.direction_sigma_deg)
@@ -184,8 +184,8 @@ class BeliefTracker:
         else:
             start = Start(
                 VehicleState(0.0, 0.0, 0.0),
-                "the datum's origin at the surface (x 0, y 0, depth 0), holding: nothing is "
-                "known of where the vehicle is",
+                "the datum's origin at the surface (x 0, y 0, depth 0): nothing is known of "
+                "where the vehicle is",
             )
             current = UNKNOWN_CURRENT
         scale = rt.bridge.time_scale if rt.bridge is not None else 1.0

@@ -107,7 +107,7 @@ def test_no_fix_ever_the_position_is_assumed_and_says_what() -> None:
     p = b.position
     assert p.source == "assumed" and p.sigma_m is None and p.age_s is None
     assert (p.x_m, p.y_m, p.z_m) == (0.0, 0.0, 2.0)
-    assert p.basis.startswith("assumed: the simulator's start")
+    assert p.basis == "the simulator's start, no fix ever"
     assert p.lat_deg == pytest.approx(TRAINING_DATUM.lat_deg)
     assert b.command.kind == "unknown" and b.command.p == 1.0
 
@@ -134,7 +134,7 @@ def test_a_stale_fix_holding_stays_and_its_uncertainty_grows() -> None:
     p = estimate(evidence(fix=fix, echo=echo)).position
     assert p.source == "dead_reckoning" and (p.x_m, p.y_m) == (3.0, 4.0)
     assert p.sigma_m == pytest.approx(FIX_SIGMA_M)  # no current, holding: nothing adds
-    assert "holding" in p.basis
+    assert p.basis == "the last fix (pose) 20.0 s ago, then holding (as last reported)"
 
 
 def test_a_command_sent_after_the_fix_moves_the_belief_and_the_spread_counts() -> None:
