@@ -39,12 +39,16 @@ from backend.chart.geo import Datum
 from backend.chart.reach import point_lat_lon
 from codec import decode_frame
 from onboard.agent import command_json
+from onboard.guidance import GuidanceConfig
 from planner import Plan, PlanError, VehicleState, plan
 
 __all__ = ["FRESH_TELEMETRY_S", "MIN_P", "Fix", "Start", "believe_position"]
 
 #: A fix at most this old on the vehicle's clock (s) is fresh: the position is the fix.
 FRESH_TELEMETRY_S: Final = 3.0
+#: How far a holding vehicle drifts before it approaches its hold point again (m): the
+#: guidance's capture radius.
+HOLD_DRIFT_M: Final = GuidanceConfig().capture_m
 #: Candidates less probable than this are not run (their share of the spread is below 1 %
 #: of their distance).
 MIN_P: Final = 1e-4
@@ -87,7 +91,8 @@ class _Base:
         unknown_speed_mps: float,
     ) -> None:
         self.origin = origin
-        self.current = current
+        self.current = current  # what carries the vehicle along a plan
+        self.own_current = current  # what adds to the base's own uncertainty
         self.plan: Plan | None = None
         self.tau0 = 0.0
         self.off_m = 0.0
@@ -100,6 +105,10 @@ class _Base:
             self.off_m = off_path_m(mirror, origin, self.tau0)
             self.words = f"along {mirror.pattern} (the plan it acknowledged)"
         elif belief is not None and belief.kind == "last_known" and belief.pattern is None:
+            # it keeps station: the current does not carry it off, but it lets it drift to its
+            # capture radius before it approaches its hold point again
+            self.own_current = Current(0.0, 0.0, 0.0, "held against")
+            self.off_m = HOLD_DRIFT_M
             self.words = "holding (as last reported)"
         else:
             self.unknown_speed_mps = unknown_speed_mps
@@ -125,7 +134,7 @@ def _run(
             total,
             run,
             off_path=base.off_m,
-            current=base.current,
+            current=base.own_current,
             unknown_speed_mps=base.unknown_speed_mps,
         )
         return state, sigma, base.words

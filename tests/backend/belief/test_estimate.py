@@ -10,7 +10,7 @@ import pytest
 
 from backend.belief.commands import Echo
 from backend.belief.estimate import Evidence, estimate
-from backend.belief.position import FRESH_TELEMETRY_S, Fix, Start
+from backend.belief.position import FRESH_TELEMETRY_S, HOLD_DRIFT_M, Fix, Start
 from backend.belief.reckoning import FIX_SIGMA_M, Current
 from backend.chart.geo import TRAINING_DATUM
 from codec import encode_frame
@@ -133,7 +133,8 @@ def test_a_stale_fix_holding_stays_and_its_uncertainty_grows() -> None:
     echo = Echo(None, NOW - 20.0, "status")
     p = estimate(evidence(fix=fix, echo=echo)).position
     assert p.source == "dead_reckoning" and (p.x_m, p.y_m) == (3.0, 4.0)
-    assert p.sigma_m == pytest.approx(FIX_SIGMA_M)  # no current, holding: nothing adds
+    # it keeps station: no current carries it off, it drifts to its capture radius at most
+    assert p.sigma_m == pytest.approx(FIX_SIGMA_M + HOLD_DRIFT_M)
     assert p.basis == "the last fix (pose) 20.0 s ago, then holding (as last reported)"
 
 
