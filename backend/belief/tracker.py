@@ -123,6 +123,7 @@ class BeliefTracker:
         self._pushed_at = -math.inf
         self._drawn = False  # the 3D view shows a believed position
         self._wake = asyncio.Event()
+        self._loop: asyncio.AbstractEventLoop | None = None  # the push loop's (run)
 
     # --- the evidence --------------------------------------------------------------------------
 
@@ -225,9 +226,20 @@ class BeliefTracker:
     # --- pushing --------------------------------------------------------------------------------
 
     def poke(self) -> None:
-        """Something changed: look again now."""
+        """Something changed: look again now (from any thread: news may be published from
+        the server's thread pool)."""
         self._cached = None
-        self._wake.set()
+        loop = self._loop
+        if loop is None:
+            return
+        try:
+            here = asyncio.get_running_loop()
+        except RuntimeError:
+            here = None
+        if here is loop:
+            self._wake.set()
+        else:
+            loop.call_soon_threadsafe(self._wake.set)
 
     def on_news(self, news: News) -> None:
         """The hub's observer: a command's state, an echo or the active path changed."""
@@ -235,7 +247,10 @@ class BeliefTracker:
             self.poke()
 
     def refresh(self) -> Belief | None:
-        """Push the belief when it changed (see the module's doc); returns what was pushed."""
+        """Push the belief when it changed (see the module's doc); returns what was pushed.
+        Nothing is worked out while no page listens and there is no 3D view."""
+        if not self.rt.hub.client_count and self.rt.viewer is None:
+            return None
         belief = self.current()
         old, clock = self._pushed, time.monotonic()
         since = clock - self._pushed_at
@@ -277,6 +292,7 @@ class BeliefTracker:
 
     async def run(self) -> None:
         """Push on every change until cancelled."""
+        self._loop = asyncio.get_running_loop()
         while True:
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._wake.wait(), TICK_S)

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import time
 from typing import Any
 
 from fastapi.testclient import TestClient
@@ -58,3 +59,18 @@ def test_a_command_on_its_way_is_the_runner_up_with_p_0(
     assert b["runner_up"]["reason"] == "on its way: not acknowledged yet"
     assert b["last_sent"]["id"] == second["id"]
     assert console_of(client).beliefs is not None
+
+
+def test_a_change_is_pushed_as_a_belief_message(client: TestClient) -> None:
+    with client.websocket_connect("/ws") as ws:
+        cmd = send(client)
+        deadline = time.monotonic() + 10.0
+        while True:
+            msg: dict[str, Any] = ws.receive_json()
+            b = msg.get("belief") if msg["type"] == "belief" else None
+            if b is not None and b["command"]["id"] == cmd["id"]:
+                break
+            assert time.monotonic() < deadline, "no belief naming the new command"
+    assert b["last_sent"]["id"] == cmd["id"] and b["command"]["p"] == 1.0
+    assert b["seq"] >= 1
+    assert client.get("/api/vehicle").json()["belief"]["seq"] >= b["seq"]
