@@ -1,7 +1,7 @@
 // The console's belief of the vehicle (GET /api/vehicle "belief", the /ws "belief" message):
 // what it probably runs and how sure that is, the runner-up, where it probably is, the last
-// command sent. The page shows it as it comes and decides nothing itself; the chart and the
-// SURFACE banner get it as the "belief" page event.
+// command sent. The page shows it as it comes and decides nothing itself; the chart (its
+// layers are made here) and the SURFACE banner get it as the "belief" page event.
 
 import { pct } from "./delivery.js";
 import { commandText } from "./form.js";
@@ -87,4 +87,25 @@ function renderPosition(p, stale) {
   else how = "assumed: no fix ever (hover for what was assumed)";
   node.className = p.source === "telemetry" ? "" : "warn-text";
   node.textContent = `${stale}${where}${ring}: ${how}`;
+}
+
+/** The chart's layers (Leaflet ``L``) for the believed position when it is not the fix: its
+ *  uncertainty ring (dead-reckoned) and a labelled marker (dead-reckoned, or assumed); none
+ *  otherwise, or without lat/lon (no datum). */
+export function beliefLayers(L, belief) {
+  const p = belief && belief.position;
+  if (!p || p.source === "telemetry" || !Number.isFinite(p.lat_deg) || !Number.isFinite(p.lon_deg)) return [];
+  const at = [p.lat_deg, p.lon_deg];
+  const sigma = Number.isFinite(p.sigma_m) ? ` ±${num(p.sigma_m, 1)} m` : "";
+  const text = p.source === "assumed" ? "assumed position (no fix)" : `believed${sigma}`;
+  const out = [];
+  if (sigma) out.push(L.circle(at, { radius: p.sigma_m, className: "chart-belief-ring", interactive: false }));
+  const icon = L.divIcon({ className: `chart-belief source-${p.source}`, html: `<span>${text}</span>`, iconSize: [12, 12] });
+  const marker = L.marker(at, { icon, keyboard: false, title: p.basis || text, interactive: false });
+  marker.on("add", () => {
+    const node = marker.getElement();
+    if (node) Object.assign(node.dataset, { testid: "chart-belief", source: p.source, sigma: String(p.sigma_m ?? "") });
+  });
+  out.push(marker);
+  return out;
 }

@@ -5,6 +5,7 @@
 // page never converts NED metres itself (backend/chart/geo.py is the one edge).
 
 import { api } from "./api.js";
+import { beliefLayers } from "./belief.js";
 import { drawGraticule } from "./graticule.js";
 import { $, el, on, num } from "./ui.js";
 
@@ -241,21 +242,10 @@ function drawVehicle() {
   }
 }
 
-/** The believed position when it is not the last fix: its uncertainty ring (dead reckoning)
- *  and a labelled marker (dead-reckoned, or assumed). */
+/** The believed position when it is not the last fix (belief.js draws it). */
 function drawBelief() {
   layers.belief.clearLayers();
-  const p = state.belief && state.belief.position;
-  if (!p || p.source === "telemetry" || !Number.isFinite(p.lat_deg) || !Number.isFinite(p.lon_deg)) return;
-  const at = [p.lat_deg, p.lon_deg];
-  const sigma = Number.isFinite(p.sigma_m) ? ` ±${num(p.sigma_m, 1)} m` : "";
-  const text = p.source === "assumed" ? "assumed position (no fix)" : `believed${sigma}`;
-  if (sigma) layers.belief.addLayer(L.circle(at, { radius: p.sigma_m, className: "chart-belief-ring", interactive: false }));
-  const icon = L.divIcon({ className: `chart-belief source-${p.source}`, html: `<span>${text}</span>`, iconSize: [12, 12] });
-  const marker = L.marker(at, { icon, keyboard: false, title: p.basis || text, interactive: false });
-  layers.belief.addLayer(marker);
-  const node = marker.getElement();
-  if (node) Object.assign(node.dataset, { testid: "chart-belief", source: p.source, sigma: String(p.sigma_m ?? "") });
+  for (const layer of beliefLayers(L, state.belief)) layers.belief.addLayer(layer);
 }
 
 function resetTrack() {
