@@ -8,8 +8,9 @@ the vehicle advances along the path from there (:func:`run_along`). A water curr
 its speed over ground: the part along the path adds to it, the part across it is crabbed
 against (``sqrt(v^2 - c_across^2)``). Integrated in steps of :data:`STEP_S`: 0.4 ms for a
 minute without telemetry, 2.6 ms for ten (at most :data:`MAX_STEPS` steps); the simulated
-twin costs 0.8 ms per simulated second, 46 ms for the same minute, and the belief is pushed
-every second while dead-reckoning (``bench/dead_reckoning.py`` measures both).
+twin costs 0.8-1.7 ms per simulated second on this machine, 50-100 ms for the same minute
+and growing with the time without telemetry, and the belief is pushed every second while
+dead-reckoning (``nemesys bench dead_reckoning`` measures both).
 
 The uncertainty (:func:`sigma_m`, one standard deviation of the horizontal error) grows from
 the fix's own (:data:`FIX_SIGMA_M`, and how far the vehicle was off the path) with the
