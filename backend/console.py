@@ -19,6 +19,8 @@ from typing import TYPE_CHECKING, Any
 from backend.authoring import operations
 from backend.authoring.predict import TwinWorker
 from backend.authoring.profile import VehicleProfile, profile_for
+from backend.belief.model import BelievedPosition
+from backend.belief.tracker import Beliefs
 from backend.chart.geo import Datum, initial_datum
 from backend.chart.gps import GpsFix, GpsReader, Station, parse_gps, station_of
 from backend.chart.reach import active_path_doc, with_lat_lon
@@ -41,7 +43,7 @@ from backend.viewer.draw_queue import PreviewDrawer
 from codec import Encoded, airtime_s
 from planner import Limits, Plan, VehicleState
 from station.link import Link, RosbridgeLink, open_link
-from vehicle_contract.messages import number, pose_from_message, position_known
+from vehicle_contract.messages import pose_from_message
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
     from backend.scripts.operations import ScriptRunner
@@ -88,6 +90,7 @@ class Console:
         self.link: Link | None = None
         self.hub = TelemetryHub(settings.telemetry_hz)
         self.commands: CommandManager | None = None
+        self.beliefs: Beliefs | None = None  # what each vehicle is believed to do
         #: The one checked path to the vehicle (every frame leaves through it).
         self.service: CommandService | None = None
         self.viewer: Viewer | None = None  # the 3D view (None: started without one)
@@ -161,6 +164,8 @@ class Console:
         )
         self.service = CommandService(self.commands, self.assess, s.operator)
         self.service.watch(self.script_guard)
+        self.beliefs = Beliefs(self)
+        self.beliefs.start()
         link.on_mission = self._on_mission
         self.commands.vehicle.on_plan = self._show_active
         await link.start()
@@ -179,6 +184,8 @@ class Console:
                 task.cancel()
                 with contextlib.suppress(asyncio.CancelledError):
                     await task
+        if self.beliefs is not None:
+            await self.beliefs.stop()
         if self.commands is not None:
             await self.commands.close()
         if self.link is not None:
@@ -285,21 +292,13 @@ class Console:
         return delay / scale if scale > 0 else 3600.0
 
     def vehicle_state(self) -> VehicleState:
-        """The vehicle as last reported (NED), for previews and joins."""
-        pose, status = self.hub.known_pose, self.hub.status or {}
-        if pose is None or not position_known(pose):
-            if self.sim is not None:
-                c = self.sim.config
-                return VehicleState(c.start_x_m, c.start_y_m, c.start_z_m, c.start_heading_deg)
-            return VehicleState(0.0, 0.0, 0.0)
-        return VehicleState(
-            pose["x_m"] or 0.0,
-            pose["y_m"] or 0.0,
-            max(0.0, pose["z_m"] or 0.0),
-            pose["heading_deg"] or 0.0,
-            number(status.get("speed_mps")) or 0.0,
-            pose["t_s"] or 0.0,
-        )
+        """Where previews, predictions and joins start: the believed position (NED)."""
+        return self.vehicle_start()[0]
+
+    def vehicle_start(self) -> tuple[VehicleState, BelievedPosition]:
+        """The believed state, and what it rests on (telemetry, dead reckoning, assumed)."""
+        assert self.beliefs is not None, "the console has not started"
+        return self.beliefs.default.state()
 
     def vehicle(self) -> VehicleView:
         """Pose, status, the vehicle's echoed active command vs the last sent, link health."""
@@ -314,6 +313,7 @@ class Console:
                 "echo_mismatch": cm.echo_mismatch if cm else False,
                 "age_s": self.hub.age_s(),
                 "link": self.link_health(),
+                "belief": self.beliefs.default.current() if self.beliefs else None,
             }
         )
 

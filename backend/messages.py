@@ -14,6 +14,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from backend.belief.model import Belief
 from backend.commands.health import LinkHealth
 from backend.mission_log.records import CommandJson, CommandRecord, LogEvent, Params, lenient
 
@@ -116,6 +117,9 @@ class VehicleView(BaseModel):
     echo_mismatch: bool
     age_s: float | None = Field(description="seconds since the vehicle was last heard from")
     link: LinkHealth
+    belief: Belief | None = Field(
+        None, description="what the console believes the vehicle does (null: starting)"
+    )
 
 
 # --- the news: server -> every page ---------------------------------------------------------
@@ -169,6 +173,15 @@ class EventMessage(Message):
     event: LogEvent = Field(description="the event as the mission log wrote it")
 
 
+class BeliefMessage(Message):
+    """What the console believes the vehicle does (as in ``/api/vehicle``): on every change
+    of a command's state, an acknowledgement or a status, with a new position at most every
+    0.5 s, and at least every second while the position is dead-reckoned or assumed."""
+
+    type: Literal["belief"] = "belief"
+    belief: Belief = Field(description="the last sent, the believed command, position, Surface")
+
+
 #: What the hub publishes to every page.
 News = Annotated[
     TelemetryMessage
@@ -176,7 +189,8 @@ News = Annotated[
     | VehicleMessage
     | ActivePathMessage
     | LinkMessage
-    | EventMessage,
+    | EventMessage
+    | BeliefMessage,
     Field(discriminator="type"),
 ]
 
@@ -184,6 +198,7 @@ __all__ = [
     "ActiveEcho",
     "ActivePath",
     "ActivePathMessage",
+    "BeliefMessage",
     "CommandMessage",
     "EventMessage",
     "LastSent",

@@ -12,6 +12,7 @@ import asyncio
 import contextlib
 import time
 from collections import deque
+from collections.abc import Callable
 from typing import Any, Protocol
 
 from backend.messages import News, TelemetryMessage, message_json
@@ -50,6 +51,9 @@ class TelemetryHub:
         #: The last pose whose position was known (for previews and joins).
         self.known_pose: Pose | None = None
         self.status: dict[str, Any] | None = None
+        #: Monotonic arrival times of ``known_pose`` and ``status`` (None: none yet).
+        self.known_pose_s: float | None = None
+        self.status_s: float | None = None
         self.last_message_s: float | None = None  # monotonic arrival time
         #: Telemetry numbers that came unknown (null / NaN / missing) since the dive began,
         #: and the arrival times of the recent ones.
@@ -57,6 +61,8 @@ class TelemetryHub:
         self._unknown_at: deque[tuple[float, int]] = deque(maxlen=1000)
         self._version = 0
         self._clients: set[_Client] = set()
+        #: Called with every event published, before the pages get it (the belief listens).
+        self.observers: list[Callable[[News], None]] = []
 
     @property
     def client_count(self) -> int:
@@ -71,19 +77,20 @@ class TelemetryHub:
     def set_pose(self, pose: Pose) -> None:
         self.pose = pose
         if position_known(pose):
-            self.known_pose = pose
+            self.known_pose, self.known_pose_s = pose, time.monotonic()
         self._count_unknown(unknown_count(pose))
         self._touch()
 
     def set_status(self, msg: dict[str, Any]) -> None:
         """A status message as the vehicle sent it (numbers may be null)."""
         self.status, unknown = status_from_message(msg)
+        self.status_s = time.monotonic()
         self._count_unknown(unknown)
         self._touch()
 
     def reset(self) -> None:
         """A new dive: no pose, no counts."""
-        self.pose = self.known_pose = None
+        self.pose = self.known_pose = self.known_pose_s = None
         self.unknown_values = 0
         self._unknown_at.clear()
 
@@ -109,6 +116,8 @@ class TelemetryHub:
     def publish(self, event: News) -> None:
         """Queue an event for every client (in order), serialised once; a client too far
         behind is dropped."""
+        for observer in self.observers:
+            observer(event)
         text = message_json(event)
         for client in list(self._clients):
             try:

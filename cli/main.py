@@ -176,6 +176,7 @@ BENCHMARKS = (
     "recovery",
     "channel_estimate",
     "durations",
+    "dead_reckoning",
 )
 
 

@@ -3,9 +3,10 @@
 import { api, adoptUrlToken, setToken, hasToken } from "./api.js";
 import { initAssumptions, setAssumptionsMode } from "./assumptions.js";
 import { initAuthoring, current } from "./authoring.js";
+import { renderBelief, setBeliefReachable } from "./belief.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
 import { setDictionary } from "./form.js";
-import { renderLink, setSessionLink } from "./link.js";
+import { renderLink, setConsoleReachable, setSessionLink } from "./link.js";
 import { connectLive } from "./live.js";
 import { initLog, loadLog } from "./log.js";
 import { initChart } from "./chart.js";
@@ -125,6 +126,7 @@ async function loadVehicle() {
     renderTelemetry(v);
     emit("telemetry", { msg: v });
     renderEcho(v);
+    renderBelief(v.belief);
   } catch (err) {
     notifyError("vehicle state", err);
   }
@@ -194,16 +196,24 @@ async function main() {
     },
     link: (m) => renderLink(m.link),
     event: (m) => emit("log_event", m.event), // a mission log event (script.js: a run stopped)
+    belief: (m) => renderBelief(m.belief),
     auth_ok: tokenAccepted,
     auth_refused: tokenRefused,
     active_path: (m) => emit("active_path", { path: m.active_path }),
     open: () => {
+      setConsoleReachable(true);
+      setBeliefReachable(true);
       if (opened) {
         loadCommands();
         loadVehicle();
         if (!session) loadSession().then((again) => again && loadTraining(again.mode));
       }
       opened = true;
+    },
+    // what the page last heard of the vehicle link and the belief is no longer current
+    close: () => {
+      setConsoleReachable(false);
+      setBeliefReachable(false);
     },
   });
   startVehicleFallback();

@@ -124,6 +124,7 @@ function renderPreview(r) {
   $("frame-hex").textContent = r.hex || "–";
   $("airtime").textContent = r.airtime_ms == null ? "–" : `${num(r.airtime_ms, 3)} ms at ${num(r.bitrate_bps, 0)} b/s`;
   renderEstimates(r.estimate);
+  renderStart(r.start);
   $("estimates").dataset.pattern = r.pattern || ""; // whose preview is shown (tests wait on it)
   const violations = Array.isArray(r.violations) ? r.violations : [];
   state.form.setSnaps(r.snaps);
@@ -132,7 +133,24 @@ function renderPreview(r) {
   renderChecks(violations.map(violationItem), violations.length ? "" : withinLimits(r), skippedTitle(r));
 }
 
+/** Where the preview starts, said when it is not the last fix: the console's belief (its
+ *  "start": dead-reckoned, or assumed), in its words. */
+export function startText(start) {
+  if (!start || start.source === "telemetry") return "";
+  if (start.source === "assumed") return `starts from an assumed position: ${start.basis}`;
+  const sigma = Number.isFinite(start.sigma_m) ? ` ± ${num(start.sigma_m, 1)} m` : "";
+  return `starts from the dead-reckoned position${sigma} (${num(start.age_s, 0)} s since the last fix)`;
+}
+
+function renderStart(start) {
+  const node = $("preview-start");
+  node.textContent = startText(start);
+  node.hidden = !node.textContent;
+  node.dataset.source = start ? start.source : "";
+}
+
 function renderPreviewError(err) {
+  renderStart(null);
   for (const id of ["bits-strip", "estimates"]) $(id).replaceChildren();
   $("frame-hex").textContent = "–";
   $("airtime").textContent = "–";
@@ -294,7 +312,8 @@ function renderConfirm(preview, command, error) {
       const geo = latLon(from.lat_deg, from.lon_deg);
       parts.push(el("p", { class: "hint", testid: "confirm-from" },
         "starts from ", el("span", { class: "position" }, `x ${num(from.x_m, 1)} m north, y ${num(from.y_m, 1)} m east`),
-        geo === "–" ? null : el("span", { class: "latlon" }, ` ${geo}`)));
+        geo === "–" ? null : el("span", { class: "latlon" }, ` ${geo}`),
+        startText(preview.start) ? el("span", { class: "warn-text", testid: "confirm-start" }, ` (${startText(preview.start)})`) : null));
     }
     parts.push(el("p", { class: "hint" }, `frame ${preview.hex || "–"}, ${num(preview.airtime_ms, 3)} ms on air`));
     const violations = Array.isArray(preview.violations) ? preview.violations : [];

@@ -5,6 +5,7 @@
 // page never converts NED metres itself (backend/chart/geo.py is the one edge).
 
 import { api } from "./api.js";
+import { beliefLayers } from "./belief.js";
 import { drawGraticule } from "./graticule.js";
 import { $, el, on, num } from "./ui.js";
 
@@ -40,6 +41,7 @@ const state = {
   active: null, // the vehicle's echoed active command
   activePath: null, // the console's mirror of the path the vehicle flies (/api/vehicle, /ws)
   previewed: new Map(), // command key -> preview path latlngs (the active path, as previewed)
+  belief: null, // the console's belief (belief.js): its position is drawn unless it is the fix
   fittedRing: false,
   fittedPath: false,
 };
@@ -240,6 +242,12 @@ function drawVehicle() {
   }
 }
 
+/** The believed position when it is not the last fix (belief.js draws it). */
+function drawBelief() {
+  layers.belief.clearLayers();
+  for (const layer of beliefLayers(L, state.belief)) layers.belief.addLayer(layer);
+}
+
 function resetTrack() {
   state.track = [];
   if (layers.track) layers.track.setLatLngs([]);
@@ -363,6 +371,7 @@ function createMap() {
   layers.active = L.layerGroup().addTo(map);
   layers.preview = L.layerGroup().addTo(map);
   layers.predicted = L.layerGroup().addTo(map);
+  layers.belief = L.layerGroup().addTo(map);
   const redrawGrid = () => drawGraticule(L, map, layers.graticule);
   map.on("moveend zoomend resize", redrawGrid);
   redrawGrid();
@@ -375,6 +384,10 @@ export async function initChart() {
   on("vehicle", ({ msg }) => msg && onActive(msg.active));
   on("active_path", ({ path }) => onActivePath(path));
   on("preview", onPreview);
+  on("belief", ({ belief }) => {
+    state.belief = belief;
+    if (map) drawBelief();
+  });
   on("session", ({ session }) => {
     if (!session || session.dive === state.dive) return;
     if (state.dive !== null) resetTrack();
@@ -399,5 +412,6 @@ export async function initChart() {
   drawPredicted();
   drawActive();
   drawVehicle();
+  drawBelief();
   setInterval(loadChart, CHART_REFRESH_MS);
 }

@@ -1,18 +1,18 @@
-// The command lifecycle list (states, copies, delivery, Retry) and the echo check.
+// The command lifecycle list (states, copies, delivery, Retry) and the echo mismatch; what
+// the vehicle runs and the last sent are the console's belief (belief.js).
 
 import { api } from "./api.js";
 import { openRetry } from "./authoring.js";
 import { RETRYABLE, copiesText, stateText } from "./delivery.js";
 import { commandText } from "./form.js";
-import { initSurface, trackSurface, followSurface } from "./surface.js";
-import { $, el, num, clock, notify, notifyError, applyAuth, debounce } from "./ui.js";
+import { initSurface } from "./surface.js";
+import { $, el, num, clock, notify, notifyError, applyAuth } from "./ui.js";
 
 const MAX_ROWS = 200;
 const commands = new Map(); // id -> record
-let lastSent = null; // the server's last sent, as shown
 
 export function initCommands({ wsSurface }) {
-  initSurface({ wsSurface, record: upsertCommand, find: (id) => commands.get(String(id)) || null });
+  initSurface({ wsSurface, record: upsertCommand });
 }
 
 export async function loadCommands() {
@@ -50,9 +50,6 @@ export function upsertCommand(record, { quiet = false } = {}) {
     list.lastElementChild.remove();
   }
   applyAuth(undefined, row);
-  trackSurface(r);
-  // a first copy left: the server's "last sent" has moved (the /ws messages do not carry it)
-  if (!quiet && r.first_sent_at && !(old && old.first_sent_at)) refreshLastSent();
   if (!quiet && old && old.state !== r.state && r.state === "rejected") {
     // the row says why in full; the toast names the reason's code and points there
     const code = (r.ack && r.ack.reason) || "see its row";
@@ -125,42 +122,15 @@ async function retry(id) {
   }
   try {
     const r = await api(`/api/commands/${encodeURIComponent(id)}/retry`, { method: "POST" });
-    if (r && r.id !== undefined) followSurface(r.id);
     upsertCommand(r && r.id !== undefined ? r : { id, state: "queued" });
   } catch (err) {
     notifyError(`retry of command ${id}`, err);
   }
 }
 
-// ---- echo check: "last sent" is the server's (GET /api/vehicle), never worked out here ----
-
-/** Not older on the wire than the last sent shown, as far as the list knows (a late answer
- *  never puts an older command back); unknown to the list: the server's word is taken. */
-function isNewer(cmd) {
-  const shown = lastSent && commands.get(String(lastSent.id));
-  const next = commands.get(String(cmd.id));
-  if (!shown || !next || !shown.first_sent_at || !next.first_sent_at) return true;
-  return sortKey(next) >= sortKey(shown);
-}
-
-const refreshLastSent = debounce(async () => {
-  try {
-    renderEcho({ last_sent: (await api("/api/vehicle")).last_sent });
-  } catch {
-    // the console is unreachable: the connection state says so, and reconnecting reloads it
-  }
-}, 100);
-
-function setLastSent(cmd) {
-  lastSent = cmd;
-  $("echo-sent").textContent = cmd ? commandText(cmd) : "–";
-}
+// ---- echo mismatch: the vehicle's echo differs from what it last accepted (the console's) ----
 
 /** From GET /api/vehicle or a websocket "vehicle" message. */
 export function renderEcho(v) {
-  if (!v) return;
-  if ("active" in v) $("echo-active").textContent = v.active ? commandText(v.active) : "nothing (idle)";
-  // a late or polled answer never puts an older command back (the stale echo)
-  if (v.last_sent && isNewer(v.last_sent)) setLastSent(v.last_sent);
-  if ("echo_mismatch" in v) $("echo-mismatch").hidden = !v.echo_mismatch;
+  if (v && "echo_mismatch" in v) $("echo-mismatch").hidden = !v.echo_mismatch;
 }

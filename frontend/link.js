@@ -21,6 +21,9 @@ const LEVEL = {
 };
 
 let vehicleLink = null; // GET /api/vehicle "link" or a websocket "link" message
+let linkAt = 0; // performance.now() when it came
+let reachable = true; // the page's websocket to the console is open
+let staleTicker = null;
 let sessionLink = null; // GET /api/session "link"
 let radio = null; // the simulator's own view of the channel (telemetry status.link)
 const listeners = new Set();
@@ -99,9 +102,20 @@ export function setSessionLink(link) {
 export function renderLink(link) {
   if (!link || typeof link !== "object") return;
   vehicleLink = link;
+  linkAt = performance.now();
   renderIndicator(link);
   renderRow();
   changed();
+}
+
+/** The page's connection to the console opened (true) or closed (false): closed, what the
+ *  page last heard of the vehicle link is old news, and says so (its ages keep counting). */
+export function setConsoleReachable(ok) {
+  reachable = ok;
+  clearInterval(staleTicker);
+  staleTicker = ok ? null : setInterval(renderRow, 1000);
+  renderIndicator(vehicleLink || sessionLink);
+  renderRow();
 }
 
 /** The simulator's channel facts from telemetry (status.link); null when absent. */
@@ -113,11 +127,15 @@ export function setRadio(r) {
 function renderIndicator(l) {
   const node = $("link-indicator");
   if (!node) return;
-  const level = l ? levelOf(l) : "unknown";
+  const level = l && reachable ? levelOf(l) : "unknown";
   const problems = problemsOf(l);
   const { glyph, word } = LEVEL[level];
-  const text = l ? `${capabilityText(l)}${word ? ` – ${word}` : ""}` : "waiting…";
-  const title = l ? (problems.length ? problems.join("\n") : "no problems") : "no vehicle link state yet";
+  let text = l ? `${capabilityText(l)}${word ? ` – ${word}` : ""}` : "waiting…";
+  let title = l ? (problems.length ? problems.join("\n") : "no problems") : "no vehicle link state yet";
+  if (!reachable) {
+    text = "unknown (console unreachable)";
+    title = "this page lost its connection to the console: the vehicle link's state is not known";
+  }
   const key = `${level}|${text}|${title}`;
   if (node.dataset.key === key) return; // unchanged: a live region must not repeat itself every second
   node.dataset.key = key;
@@ -153,13 +171,16 @@ function renderRow() {
   if (!node) return;
   const l = vehicleLink;
   const facts = [];
+  const since = (performance.now() - linkAt) / 1000; // the ages count on since it came
+  const later = (a) => (typeof a === "number" && Number.isFinite(a) ? a + since : a);
+  if (!reachable && l) facts.push(`console unreachable: the vehicle link as of ${Math.round(since)} s ago`);
   if (l) {
     facts.push(capabilityText(l));
-    if (l.connected !== undefined) facts.push(l.connected ? "connected" : "NOT CONNECTED");
+    if (l.connected !== undefined && reachable) facts.push(l.connected ? "connected" : "NOT CONNECTED");
     const recent = framesText(l.frames && l.frames.recent);
     if (recent) facts.push(`recent frames: ${recent}`);
-    if (l.acknowledges && l.last_ack_age_s !== undefined) facts.push(`last ack ${age(l.last_ack_age_s)}`);
-    if (l.telemetry && l.last_telemetry_age_s !== undefined) facts.push(`telemetry ${age(l.last_telemetry_age_s)}`);
+    if (l.acknowledges && l.last_ack_age_s !== undefined) facts.push(`last ack ${age(later(l.last_ack_age_s))}`);
+    if (l.telemetry && l.last_telemetry_age_s !== undefined) facts.push(`telemetry ${age(later(l.last_telemetry_age_s))}`);
     if (l.ber != null) facts.push(`BER ${berText(l.ber)}${berSourceText(l)}`);
     if (Number.isFinite(l.copies)) facts.push(`${l.copies} cop${l.copies === 1 ? "y" : "ies"} per command`);
     if (l.unknown_values) facts.push(`${l.unknown_values} unknown telemetry values`);
@@ -167,7 +188,7 @@ function renderRow() {
   facts.push(...radioText(radio));
   const problems = problemsOf(l);
   const level = l ? levelOf(l) : "unknown";
-  const bad = level === "red" || level === "amber" || (radio && radio.in_range === false);
+  const bad = !reachable || level === "red" || level === "amber" || (radio && radio.in_range === false);
   node.className = bad ? "warn-text" : "";
   const estimate = l ? estimateNode(l) : null;
   node.replaceChildren(

@@ -1,29 +1,34 @@
-// The SURFACE abort: the button, and the banner that follows its command to an end state.
-// The banner promises acknowledgement only on a link that gives one.
+// The SURFACE abort: the button, and the banner. The banner shows the console's belief of the
+// newest Surface (belief.surface: from its record's state only), nothing it works out itself:
+// "surfacing…" exactly while that record is on its way. Between a press and the console's
+// answer it says the press is being sent; once the answer names a record, the banner waits for
+// a belief that knows that record (a belief is pushed on every change of a record's state), so a
+// late or out-of-order answer cannot leave it behind. The banner promises acknowledgement only
+// on a link that gives one.
 
 import { api, ApiError } from "./api.js";
+import { currentBelief } from "./belief.js";
 import { progressText, deliveryText } from "./delivery.js";
 import { linkAcknowledges, autoSurfaceCopies, onLinkChange } from "./link.js";
-import { $, notify, notifyError, setTip } from "./ui.js";
+import { $, notify, notifyError, setTip, on } from "./ui.js";
 
-let surfaceId = null; // the surface command followed by the banner
-let successorOf = null; // the id a followed surface was superseded by (adopted if it is a surface)
-let surfaceWaiting = false; // POST /api/surface sent, no record yet
-let surfaceClickedAt = 0;
+// How long an ended Surface stays in the banner (s since its record last changed).
+const SHOWN_S = { acknowledged: 15, sent: 60, superseded: 60 };
+const ERROR_SHOWN_S = 300;
+
+let pressed = null; // a press the console has not answered: {id: null} until it names a record
 let clearTimer = null;
 let onRecord = () => {};
-let lookup = () => null;
 let sendOverWs = null;
 
-/** wsSurface(): send SURFACE over the websocket (REST down); onRecord(r): show a record;
- * lookup(id): a record already known by id. */
-export function initSurface({ wsSurface, record, find }) {
+/** wsSurface(): send SURFACE over the websocket (REST down); record(r): show a record. */
+export function initSurface({ wsSurface, record }) {
   sendOverWs = wsSurface;
   onRecord = record;
-  lookup = find;
   $("surface-button").addEventListener("click", surface);
   onLinkChange(updateButtonTip);
   updateButtonTip();
+  on("belief", ({ belief }) => render(belief));
 }
 
 function updateButtonTip() {
@@ -35,101 +40,79 @@ function updateButtonTip() {
   setTip($("surface-button"), tip);
 }
 
-function pendingText(r) {
-  const twoWay = r && typeof r.two_way === "boolean" ? r.two_way : linkAcknowledges();
+function pendingText(s) {
+  const twoWay = s && typeof s.two_way === "boolean" ? s.two_way : linkAcknowledges();
   if (twoWay === true) return "surfacing... repeating until acknowledged";
-  const progress = progressText(r);
+  const progress = progressText(s);
   if (twoWay === false) return `surfacing... ${progress || "sending copies"}`;
   return progress ? `surfacing... ${progress}` : "surfacing...";
 }
 
 async function surface() {
-  setSurfaceState(pendingText(null), "pending");
-  surfaceWaiting = true;
-  surfaceClickedAt = Date.now();
+  pressed = { id: null };
+  setSurfaceState("surfacing... sending", "pending");
   try {
     const r = await api("/api/surface", { method: "POST" });
-    if (r && r.id !== undefined) {
-      follow(r.id);
-      onRecord(r);
-    }
+    pressed = { id: r && Number.isFinite(r.id) ? r.id : -1 };
+    if (r && r.id !== undefined) onRecord(r);
   } catch (err) {
+    pressed = null;
     if (err instanceof ApiError && err.status === 0 && sendOverWs && sendOverWs()) {
       notify("REST unreachable: SURFACE sent over the websocket", "warn");
+      render(currentBelief()); // the console's next belief shows its record
       return;
     }
-    surfaceWaiting = false;
     setSurfaceState(`SURFACE NOT SENT: ${err.message}`, "error");
     notifyError("SURFACE failed", err);
+    return;
   }
+  render(currentBelief());
 }
 
-/** Follow a surface command the operator started another way (Retry of a surface). */
-export function followSurface(id) {
-  follow(id);
-  surfaceWaiting = false;
-}
-
-function follow(id) {
-  surfaceId = id;
-  successorOf = null;
-}
-
-const isSurface = (r) => Boolean(r) && (r.kind === "surface" || r.pattern === "surface");
-
-/** Every command record passes here; the banner follows the surface the operator pressed. */
-export function trackSurface(r) {
-  if (!isSurface(r)) return;
-  if (successorOf !== null && String(r.id) === successorOf) follow(r.id);
-  const created = Date.parse(r.created_at || "");
-  const recent = Number.isNaN(created) || created >= surfaceClickedAt - 60000;
-  if (surfaceId === null && surfaceWaiting && recent) follow(r.id);
-  if (surfaceId === null || String(r.id) !== String(surfaceId)) return;
-  surfaceWaiting = false;
-  const reason = r.reason ? `: ${r.reason}` : "";
-  switch (r.state) {
+/** The banner from a belief (null: none yet). */
+function render(belief) {
+  const s = belief && belief.surface;
+  if (pressed) {
+    // the press is answered by a belief that knows its record (or a newer one)
+    if (pressed.id === null || !s || s.id === null || s.id < pressed.id) return;
+    pressed = null;
+  }
+  clearTimeout(clearTimer);
+  if (!s || s.id === null || s.id === undefined) {
+    setSurfaceState("", "");
+    return;
+  }
+  if (s.in_progress) {
+    setSurfaceState(pendingText(s), "pending");
+    return;
+  }
+  const reason = s.reason ? `: ${s.reason}` : "";
+  let text;
+  let kind;
+  switch (s.state) {
     case "acknowledged":
-      finish("surface acknowledged", "done", 15000);
+      [text, kind] = ["surface acknowledged", "done"];
       break;
     case "sent": {
-      const p = deliveryText(r);
-      const n = r.copies_sent ?? r.copies;
-      finish(`surface sent: ${n ?? "all"} cop${n === 1 ? "y" : "ies"}${p ? `, ${p}` : ""} (no acknowledgement on this link)`, "sent", 60000);
+      const p = deliveryText(s);
+      const n = s.copies_sent ?? s.copies;
+      [text, kind] = [`surface sent: ${n ?? "all"} cop${n === 1 ? "y" : "ies"}${p ? `, ${p}` : ""} (no acknowledgement on this link)`, "sent"];
       break;
     }
-    case "superseded": {
-      const by = r.superseded_by;
-      setSurfaceState(`surface superseded by ${by != null ? `#${by}` : "a newer command"}`, "warn");
-      if (by != null) {
-        const next = lookup(by);
-        if (isSurface(next)) {
-          follow(next.id);
-          trackSurface(next);
-        } else if (!next) successorOf = String(by);
-      }
-      break;
-    }
-    case "interrupted":
-    case "failed":
-    case "rejected":
-    case "timed_out":
-      setSurfaceState(`surface ${r.state.replace("_", " ")}${reason} (press SURFACE again or Retry)`, "error");
+    case "superseded":
+      [text, kind] = [`surface superseded by ${s.superseded_by != null ? `#${s.superseded_by}` : "a newer command"}`, "warn"];
       break;
     default:
-      setSurfaceState(pendingText(r), "pending");
+      [text, kind] = [`surface ${String(s.state).replace("_", " ")}${reason} (press SURFACE again or Retry)`, "error"];
   }
-}
-
-function finish(text, kind, clearMs) {
-  const id = surfaceId;
+  const shownS = SHOWN_S[s.state] ?? ERROR_SHOWN_S;
+  const leftMs = (shownS - (Number(s.changed_s) || 0)) * 1000;
+  if (leftMs <= 0) {
+    setSurfaceState("", "");
+    return;
+  }
   setSurfaceState(text, kind);
-  clearTimeout(clearTimer);
-  clearTimer = setTimeout(() => {
-    if (surfaceId === id && !surfaceWaiting) {
-      surfaceId = null;
-      setSurfaceState("", "");
-    }
-  }, clearMs);
+  clearTimer = setTimeout(() => setSurfaceState("", ""), leftMs);
 }
 
 function setSurfaceState(text, kind) {
@@ -137,4 +120,5 @@ function setSurfaceState(text, kind) {
   box.textContent = text;
   box.hidden = !text;
   box.className = `surface-state ${kind}`;
+  box.dataset.kind = kind;
 }

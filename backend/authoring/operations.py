@@ -79,7 +79,7 @@ def preview(
     """
     enc, doc = encode(console, pattern, params)
     cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
-    state = console.vehicle_state()
+    state, start = console.vehicle_start()
     current = console.commands.mirror if console.commands else None
     new = plan(cmd, state, current)
     path = new.path
@@ -92,6 +92,7 @@ def preview(
     )
     add_geo(doc, console.datum, station, range_m)  # lat/lon, the chart's reach
     doc["from"] = state.as_dict()
+    doc["start"] = start.model_dump()  # telemetry, dead reckoning or assumed: the page says
     if console.commands is not None:
         # what sending it now would do: copies chosen from the link, and their odds
         ber, loss = console.link_ber()

@@ -8,6 +8,7 @@ compares what the vehicle says it runs with the last command it accepted from th
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -30,6 +31,10 @@ class VehicleMirror:
         self.active: dict[str, Any] | None = None
         #: The newest command (by id) the vehicle accepted from this console: its record.
         self.accepted: dict[str, Any] | None = None
+        #: When the last acknowledgement arrived (monotonic s); the state the vehicle planned
+        #: from in the last one it accepted, with when it arrived (a fix, for the belief).
+        self.heard_s: float | None = None
+        self.planned_from: tuple[float, dict[str, Any]] | None = None
         self.on_plan: Callable[[Plan], None] = lambda _p: None
 
     def reset(self) -> None:
@@ -37,10 +42,13 @@ class VehicleMirror:
         self.plan = None
         self.active = None
         self.accepted = None
+        self.heard_s = None
+        self.planned_from = None
 
     def on_ack(self, ack: dict[str, Any], record: dict[str, Any] | None) -> None:
         """An acknowledgement, with the record it settled (if it matched one)."""
         self.active = ack.get("active")
+        self.heard_s = time.monotonic()
         accepted = ack.get("outcome") == "accepted"
         newest = record is not None and (
             self.accepted is None or record["id"] > self.accepted["id"]
@@ -48,6 +56,7 @@ class VehicleMirror:
         if accepted and newest:
             self.accepted = record
         if accepted and not ack.get("duplicate") and ack.get("from"):
+            self.planned_from = (self.heard_s, ack["from"])
             self._replay_plan(ack)
 
     def _replay_plan(self, ack: dict[str, Any]) -> None:

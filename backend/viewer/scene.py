@@ -33,6 +33,7 @@ LEGEND: Final = (
     "green: active path, yellow: track  \n"
     "magenta: replay, red: commands  \n"
     "violet: mission script  \n"
+    "red ring: believed position, no fresh fix  \n"
     "grid: surface, 1 m cells, 10 m sections"
 )
 

@@ -18,6 +18,8 @@ vehicle's state, the same for all::
     /vehicle, /vehicle/hull, /vehicle/nose, /vehicle/info   the vehicle model (hidden until
                                                             the first pose)
     /track/chunk_0000 ..., /track/live, /track/tail the vehicle's track (backend.viewer.track)
+    /belief/ring, /belief/point, /belief/label   the believed position when it is not the
+                                                 last fix (backend.viewer.belief)
 
 Each page's **own** view (a viser client, :mod:`backend.viewer.views`) holds what that page
 asked for: its preview (``/preview/...``), mission script preview (``/script/...``) and replay
@@ -33,7 +35,7 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path as FilePath
 from types import TracebackType
 
@@ -263,6 +265,13 @@ class Viewer:
             if placed:
                 c.label("/active/label", text, placed[0].position)
             self._views.relabel()
+
+    def draw_shared(self, draw: Callable[[Canvas], None]) -> None:
+        """Draw on the shared scene, atomically (the believed position:
+        :mod:`backend.viewer.belief`)."""
+        with self._lock, self._server.atomic():
+            if not self._stopped:
+                draw(self._shared)
 
     def clear_active(self) -> None:
         """Remove the active path."""

@@ -17,7 +17,9 @@ from starlette.responses import PlainTextResponse
 from starlette.types import Message, Receive, Scope, Send
 
 from backend.api.live import MAX_CONTROL_BYTES, MAX_CONTROL_DEPTH, nesting_over
+from backend.api.schemas.live import message_types
 from backend.bounded_input import EXCERPT_CHARS, BodyLimit, excerpt
+from backend.messages import News
 from backend.settings import Settings
 from cli.main import main as cli_main
 from tests.backend.conftest import AUTH, CIRCLE, TOKEN, MakeClient, clear_nemesys_env, loc_of, send
@@ -295,11 +297,15 @@ def test_script_numbers_refuse_nan_and_infinity(client: TestClient, value: str) 
 # --- /ws control messages -----------------------------------------------------------------
 
 
+#: The server's own messages, which may come between a control message and its answer.
+NEWS = message_types(News)
+
+
 def ws_reply(ws: Any, text: str) -> dict[str, Any]:
     ws.send_text(text)
     while True:
         msg: dict[str, Any] = ws.receive_json()
-        if msg["type"] not in ("telemetry", "command", "vehicle"):
+        if msg["type"] not in NEWS:  # the news every page gets (a belief, the link, ...)
             return msg
 
 

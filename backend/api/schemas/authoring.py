@@ -16,6 +16,7 @@ from backend.api.schemas.common import (
     ParamValue,
     VehicleStateOut,
 )
+from backend.belief.model import BelievedPosition
 from station.link import Capability
 
 # --- session ------------------------------------------------------------------------------
@@ -257,6 +258,11 @@ class PreviewDoc(EncodeDoc):
     )
     diff: PlanDiff | None = Field(description="null when no pattern is active")
     from_: VehicleStateOut = Field(alias="from", description="where the path starts")
+    start: BelievedPosition | None = Field(
+        None,
+        description="what the start rests on: the last fix (telemetry), the fix run forward "
+        "(dead_reckoning) or an assumed start (assumed), with its uncertainty",
+    )
     two_way: bool | None = None
     copies: int | None = None
     p_delivered: float | None = None

@@ -2,10 +2,10 @@
 them (``scripts/gen_live_doc.py``).
 
 Server -> client: the news every page gets (:mod:`backend.messages`: ``telemetry``,
-``command``, ``vehicle``, ``active_path``, ``link``, ``event``) and the answers to a page's
-own control messages (``auth_ok``, ``auth_refused``, ``queued``, ``error``). Client -> server:
-``auth``, then ``surface`` or ``send``. Each message is a JSON object whose ``type`` names it:
-the unions below are discriminated by it.
+``command``, ``vehicle``, ``active_path``, ``link``, ``event``, ``belief``) and the answers
+to a page's own control messages (``auth_ok``, ``auth_refused``, ``queued``, ``error``).
+Client -> server: ``auth``, then ``surface`` or ``send``. Each message is a JSON object whose
+``type`` names it: the unions below are discriminated by it.
 """
 
 from __future__ import annotations
@@ -18,6 +18,7 @@ from backend.api.models import SendIn
 from backend.api.schemas.common import LimitViolation
 from backend.messages import (
     ActivePathMessage,
+    BeliefMessage,
     CommandMessage,
     EventMessage,
     LinkMessage,
@@ -105,6 +106,7 @@ _Server = (
     | ActivePathMessage
     | LinkMessage
     | EventMessage
+    | BeliefMessage
     | AuthOk
     | AuthRefused
     | Queued

@@ -1,0 +1,1 @@
+"""tests.backend.belief package."""
