@@ -132,7 +132,9 @@ class TelemetryHub:
         try:
             while client in self._clients:
                 with contextlib.suppress(TimeoutError):
-                    text = await asyncio.wait_for(client.events.get(), self.period_s)
+                    # asyncio.timeout: wait_for (3.11) can swallow a cancel at its timeout
+                    async with asyncio.timeout(self.period_s):
+                        text = await client.events.get()
                     await sender.send_text(text)
                     while not client.events.empty():
                         await sender.send_text(client.events.get_nowait())

@@ -294,8 +294,11 @@ class BeliefTracker:
         """Push on every change until cancelled."""
         self._loop = asyncio.get_running_loop()
         while True:
+            # asyncio.timeout, not wait_for: on 3.11 wait_for can swallow a cancel that comes
+            # as its timeout fires, and this loop would then outlive the console's stop
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self._wake.wait(), TICK_S)
+                async with asyncio.timeout(TICK_S):
+                    await self._wake.wait()
             self._wake.clear()
             self.refresh()
 
