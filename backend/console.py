@@ -117,7 +117,7 @@ class Console:
             logger.warning(
                 "%d commands an earlier run left on their way are interrupted", recovered
             )
-        dives = self.dives = Dives(self.log, s.target)
+        dives = self.dives = Dives(self.log, s.target, self.hub)
         if self._given_link is not None:
             link: Link = self._given_link
         elif s.training:

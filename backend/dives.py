@@ -21,6 +21,7 @@ from typing import Any
 
 from backend.commands.manager import CommandManager
 from backend.mission_log.store import LogWriteError, MissionLog
+from backend.telemetry import TelemetryHub
 
 logger = logging.getLogger("backend.console")
 
@@ -29,11 +30,13 @@ TRACK_INTERVAL_S = 1.0
 
 
 class Dives:
-    """The console's current dive in the mission log ``log`` (None until one starts)."""
+    """The console's current dive in the mission log ``log`` (None until one starts), named
+    in ``hub``'s telemetry (every page's plots follow it)."""
 
-    def __init__(self, log: MissionLog, target: str) -> None:
+    def __init__(self, log: MissionLog, target: str, hub: TelemetryHub | None = None) -> None:
         self.log = log
         self.target = target
+        self.hub = hub
         #: The current dive's number (None: none started since this console started).
         self.current: int | None = None
         self._last_track_s: float | None = None
@@ -49,6 +52,7 @@ class Dives:
             self.current = self.log.new_dive(self.target)
             self._last_track_s = None
             logger.info("dive %d started", self.current)
+            self._started()
         return self.current
 
     def start_new(self) -> int:
@@ -60,7 +64,12 @@ class Dives:
         self.current = self.log.new_dive(self.target)
         self._last_track_s = None
         logger.info("dive %d started (vehicle reset)", self.current)
+        self._started()
         return self.current
+
+    def _started(self) -> None:
+        if self.hub is not None:
+            self.hub.dive = self.current
 
     def heard(self) -> int | None:
         """The vehicle was heard: the current dive (started now if none); None when the log

@@ -50,6 +50,8 @@ class TelemetryHub:
         #: The last pose whose position was known (for previews and joins).
         self.known_pose: Pose | None = None
         self.status: dict[str, Any] | None = None
+        #: The dive the console records into (None: none yet), named in every telemetry.
+        self.dive: int | None = None
         self.last_message_s: float | None = None  # monotonic arrival time
         #: Telemetry numbers that came unknown (null / NaN / missing) since the dive began,
         #: and the arrival times of the recent ones.
@@ -103,7 +105,7 @@ class TelemetryHub:
 
     def telemetry(self) -> TelemetryMessage:
         return TelemetryMessage.model_validate(
-            {"pose": self.pose, "status": self.status, "age_s": self.age_s()}
+            {"pose": self.pose, "status": self.status, "age_s": self.age_s(), "dive": self.dive}
         )
 
     def publish(self, event: News) -> None:
