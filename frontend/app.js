@@ -16,7 +16,7 @@ import { initShortcuts } from "./shortcuts.js";
 import { renderDatum, renderTelemetry, startAgeTicker } from "./status.js";
 import { initTheme } from "./theme.js";
 import { initTraining, loadTraining } from "./training.js";
-import { $, notify, notifyError, applyAuth, debounce, emit } from "./ui.js";
+import { $, notify, notifyError, resolved, applyAuth, debounce, emit } from "./ui.js";
 import { initView, viewerSrc } from "./view.js"; // this page's own 3D view
 
 const RETRY_MS = 3000;
@@ -90,6 +90,7 @@ function tokenAccepted() {
 async function loadSession() {
   try {
     session = await api("/api/session");
+    resolved("session");
   } catch (err) {
     notifyError("session", err);
     session = null;
@@ -122,6 +123,7 @@ function initToken() {
 async function loadVehicle() {
   try {
     const v = await api("/api/vehicle");
+    resolved("vehicle state");
     renderTelemetry(v);
     emit("telemetry", { msg: v });
     renderEcho(v);

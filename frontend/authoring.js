@@ -5,7 +5,7 @@
 import { api, ApiError } from "./api.js";
 import { initCopies, readCopies, copiesLine } from "./copies.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
-import { $, el, num, withUnit, delta, notify, notifyError, slug, canWrite, emit, latLon } from "./ui.js";
+import { $, el, num, withUnit, delta, notify, notifyError, resolved, slug, canWrite, emit, latLon } from "./ui.js";
 import { confirmChecks, isHard, kindText, skippedTitle, withinLimits } from "./checks.js";
 
 const state = {
@@ -95,6 +95,7 @@ export async function runPreview({ errorDelayMs = 0 } = {}) {
     state.preview = preview;
     state.previewError = null;
     renderPreview(preview);
+    resolved("parameters"); // the values a Send was refused for are fixed: its message goes
     $("estimates").dataset.command = state.lastKey; // whose estimates these are (tests, bench)
     emit("preview", { preview, command: body });
   } catch (err) {
@@ -234,7 +235,7 @@ async function openConfirm() {
   await runPreview();
   const err = state.previewError;
   if (err && err.status === 422) {
-    notify("Fix the parameters first: " + err.items.map((i) => `${i.param} ${i.msg}`).join("; "), "error");
+    notify("Fix the parameters first: " + err.items.map((i) => `${i.param} ${i.msg}`).join("; "), "error", "parameters");
     const bad = err.items.find((i) => i.param);
     if (bad && state.form) state.form.focus(bad.param);
     return;
@@ -374,6 +375,7 @@ async function confirmSend() {
     const record = await api(path, { method: "POST", body });
     $("confirm-dialog").close();
     const id = record && record.id !== undefined ? ` (command ${record.id})` : "";
+    resolved("send");
     notify(retry ? `retry of command ${command.retryOf} (${command.pattern}) queued${id}` : `${command.pattern} queued${id}`);
     state.onSent(record);
   } catch (err) {

@@ -3,7 +3,7 @@
 import { api } from "./api.js";
 import { copiesText, stateText } from "./delivery.js";
 import { dictionary, unitOf } from "./form.js";
-import { $, el, clock, withUnit, summarize, notify, notifyError, applyAuth, debounce } from "./ui.js";
+import { $, el, clock, withUnit, summarize, notify, notifyError, resolved, applyAuth, debounce } from "./ui.js";
 
 let rows = [];
 
@@ -42,6 +42,7 @@ export async function loadLog() {
   try {
     const data = await api(`/api/commands?${q}`);
     rows = Array.isArray(data) ? data : (data && data.commands) || [];
+    resolved("mission log");
   } catch (err) {
     notifyError("mission log", err);
     rows = [];
@@ -103,6 +104,7 @@ async function loadDives() {
   try {
     const data = await api("/api/dives");
     dives = Array.isArray(data) ? data : (data && data.dives) || [];
+    resolved("dives");
   } catch (err) {
     notifyError("dives", err);
     return;
