@@ -42,6 +42,7 @@ const state = {
   previewed: new Map(), // command key -> preview path latlngs (the active path, as previewed)
   fittedRing: false,
   fittedPath: false,
+  operatorMoved: false, // dragged or zoomed by the operator: new previews no longer refit it
 };
 
 function missing(text) {
@@ -89,7 +90,7 @@ function buttonsControl() {
       };
       box.append(
         button(ICON_CENTRE, "centre on the vehicle", "chart-centre-vehicle", centreOnVehicle),
-        button(ICON_FIT, "fit the preview, the predicted track and the vehicle", "chart-fit", fitAll),
+        button(ICON_FIT, "fit the preview, the predicted track and the vehicle (and each new preview again)", "chart-fit", fitButton),
       );
       L.DomEvent.disableClickPropagation(box);
       return box;
@@ -122,11 +123,37 @@ function legendControl() {
 }
 
 function centreOnVehicle() {
+  state.operatorMoved = true; // the operator chose this view
   if (state.pose) map.setView(state.pose, Math.max(map.getZoom(), 17));
 }
 
-function fitAll() {
-  const pts = [...(latLngs(state.preview && state.preview.path) || []), ...(state.predicted || [])];
+/** The Fit button: fit now, and fit each new preview again from now on. */
+function fitButton() {
+  state.operatorMoved = false;
+  $("chart").dataset.fit = "auto";
+  fitAll();
+}
+
+/** Only the operator's own input (drag, wheel, double click, keys, the zoom buttons, a box
+ *  zoom, a touch) stops the refit of each new preview; the page's own fits do not. */
+function watchOperator() {
+  const moved = () => {
+    state.operatorMoved = true;
+    $("chart").dataset.fit = "operator";
+  };
+  map.on("dragstart boxzoomend", moved);
+  const box = map.getContainer();
+  for (const kind of ["wheel", "dblclick", "touchstart"]) box.addEventListener(kind, moved, { passive: true });
+  box.addEventListener("keydown", (e) => /^(Arrow|\+|-|=)/.test(e.key) && moved());
+  box.querySelector(".leaflet-control-zoom").addEventListener("click", moved, true); // Leaflet stops it
+  map.on("zoomend", () => ($("chart").dataset.zoom = String(map.getZoom())));
+}
+
+/** Fit the preview, the vehicle and (`predicted`) the predicted track: a new preview's own
+ *  fit leaves out the track predicted for the command before it. */
+function fitAll(predicted = true) {
+  $("chart").dataset.fits = String(Number($("chart").dataset.fits || 0) + 1); // (tests)
+  const pts = [...(latLngs(state.preview && state.preview.path) || []), ...((predicted && state.predicted) || [])];
   if (state.pose) pts.push(state.pose);
   if (pts.length) map.fitBounds(L.latLngBounds(pts), { padding: [24, 24], maxZoom: FIT_MAX_ZOOM });
   else if (layers.ring) map.fitBounds(layers.ring.getBounds(), { padding: [8, 8] });
@@ -182,6 +209,11 @@ function drawPreview() {
   warning.textContent = (reach && reach.warning) || "";
   warning.hidden = !(reach && reach.warning);
   if (!pts) return;
+  // each new preview is fitted, unless the operator has moved or zoomed the chart since
+  if (!state.operatorMoved) {
+    state.fittedPath = true;
+    fitAll(false);
+  }
   const segments = reach && Array.isArray(reach.segments) && reach.segments.length ? reach.segments : [{ state: null, start: 0, end: pts.length - 1 }];
   for (const seg of segments) {
     // from the waypoint before: the stretch into a segment is drawn in the segment's state
@@ -190,10 +222,6 @@ function drawPreview() {
     const cls = `chart-preview${seg.state ? ` reach-${seg.state}` : ""}`;
     const line = L.polyline(part, { className: cls, interactive: false });
     layers.preview.addLayer(line);
-  }
-  if (!state.fittedPath) {
-    state.fittedPath = true;
-    fitAll();
   }
 }
 
@@ -352,6 +380,7 @@ function createMap() {
   L.control.zoom({ position: "topright" }).addTo(map);
   buttonsControl().addTo(map);
   legendControl().addTo(map);
+  watchOperator();
   for (const [name, z] of [["graticule", 250], ["graticule-labels", 450]]) {
     const pane = map.createPane(name);
     pane.style.zIndex = String(z);
