@@ -64,6 +64,7 @@ API_PATHS = {
     "/api/dives",
     "/api/dives/{dive}",
     "/api/dives/{dive}/replay",
+    "/api/dives/{dive}/timeline",
     "/api/series",
     "/api/vehicle",
     "/api/link",
@@ -82,6 +83,7 @@ API_PATHS = {
     "/api/datum",
     "/api/tiles/{z}/{x}/{y}",
     "/api/replay",
+    "/api/replay/at",
     "/api/predict",
 }
 SCRIPT: dict[str, Any] = {

@@ -76,7 +76,6 @@ def test_plots_after_a_reload_come_from_the_log_from_the_dive_start(
     page.reload()
     wait_logged(page, LOGGED)
     again = console.get("/api/series")
-    got = shown(page)
     # nothing before the reload is lost: every sample the log holds up to then is shown
     assert again["start_t_s"] == series["start_t_s"]
     upto = sum(1 for t in again["t_s"] if t <= before)
