@@ -11,6 +11,7 @@ import { initLog, loadLog } from "./log.js";
 import { initChart } from "./chart.js";
 import { initPlots } from "./plots.js";
 import { initPrediction } from "./prediction.js";
+import { initReplay } from "./replay.js";
 import { initScript, addStep } from "./script.js";
 import { initShortcuts } from "./shortcuts.js";
 import { renderDatum, renderTelemetry, startAgeTicker } from "./status.js";
@@ -222,6 +223,7 @@ async function main() {
   $("script-add").addEventListener("click", () => addStep(current()));
   initScript();
   initLog();
+  initReplay();
   loadLog();
   renderSession(session);
 }

@@ -2,6 +2,7 @@
 
 import { api } from "./api.js";
 import { copiesText, stateText } from "./delivery.js";
+import { openReplay } from "./replay.js";
 import { dictionary, unitOf } from "./form.js";
 import { $, el, clock, withUnit, summarize, notify, notifyError, resolved, applyAuth, debounce } from "./ui.js";
 
@@ -127,7 +128,9 @@ async function loadDives() {
 async function replay(id) {
   try {
     await api(`/api/dives/${encodeURIComponent(id)}/replay`, { method: "POST" });
-    notify(`dive ${id} drawn in the 3D view`);
+    resolved(`replay of dive ${id}`);
+    notify(`dive ${id} drawn in the 3D view: its time slider is under the view`);
+    openReplay(id);
   } catch (err) {
     notifyError(`replay of dive ${id}`, err);
   }

@@ -145,10 +145,11 @@ def replay_drawing(
             :data:`REPLAY_RGB`, subsampled evenly to at most ``max_points`` (first and last
             kept). The heading is not drawn.
         commands: ``(t_s, x_m, y_m, z_m, label)`` where a command was acknowledged; each gets
-            a marker in :data:`REPLAY_COMMAND_RGB`; those far enough apart a label
-            ``"<label> @ <t> s"`` (time order, the first kept; ``t`` from the track's start):
-            no two of the replay's labels are closer than its extent over
-            :data:`REPLAY_LABELS_ACROSS`, and the start label says how many were left out.
+            a marker in :data:`REPLAY_COMMAND_RGB`, and those far enough apart their (short)
+            label, in time order: no two of the replay's labels are closer than its extent
+            over :data:`REPLAY_LABELS_ACROSS` (the start's says how many went without). The
+            track's start and end are labelled (one label when they are that close); the
+            time slider (the page) says what happened when.
 
     Raises:
         ValueError: non-finite positions.
@@ -162,15 +163,16 @@ def replay_drawing(
     cmd = np.array([row[1:4] for row in commands], dtype=np.float64).reshape(-1, 3)
     if not np.isfinite(cmd).all():
         raise ValueError("replay: command positions must be finite numbers")
-    zero = track[0][0] if track else 0.0
-    t1 = track[-1][0] - zero if track else 0.0
-    marks = [f"{row[4]} @ {row[0] - zero:.0f} s" for row in commands]
+    t1 = track[-1][0] - track[0][0] if track else 0.0
+    marks = [str(row[4]) for row in commands]
     track_view = ned_to_view(samples[:, 0], samples[:, 1], samples[:, 2])
     cmd_view = ned_to_view(cmd[:, 0], cmd[:, 1], cmd[:, 2])
     everything = np.concatenate([track_view.reshape(-1, 3), cmd_view.reshape(-1, 3)])
     extent = float(np.ptp(everything, axis=0).max()) if len(everything) else 0.0
     sep = max(MIN_LABEL_SEPARATION_M, extent / REPLAY_LABELS_ACROSS)
-    ends = [track_view[0], track_view[-1]] if len(samples) else []
+    ends = list(track_view[:1]) if len(samples) else []
+    if len(samples) and float(np.linalg.norm(track_view[-1] - track_view[0])) >= sep:
+        ends.append(track_view[-1])  # the end has a label of its own when far enough
     kept = _apart([*ends, *cmd_view.reshape(-1, 3)], len(ends), sep)
     left_out = len(marks) - len(kept)
 
@@ -182,13 +184,12 @@ def replay_drawing(
             labels = [LabelSpec.at(f"/replay/cmd_{k:03d}", marks[k], cmd_view[k]) for k in kept]
         if len(samples):
             c.polyline("/replay/track", track_view, REPLAY_RGB)
-            start = "replay start, 0 s" + (
-                f" ({left_out} of {len(marks)} command labels left out: see the slider)"
-                if left_out
-                else ""
-            )
+            start = "replay start" if len(ends) == 2 else f"replay, 0-{t1:.0f} s"
+            if left_out:
+                start += f" ({left_out} command{'s' if left_out > 1 else ''} unlabelled)"
             labels.append(LabelSpec.at("/replay/start", start, track_view[0]))
-            labels.append(LabelSpec.at("/replay/end", f"replay end, {t1:.0f} s", track_view[-1]))
+            if len(ends) == 2:
+                labels.append(LabelSpec.at("/replay/end", f"end, {t1:.0f} s", track_view[-1]))
         return labels
 
     return draw
