@@ -85,9 +85,10 @@ def command_key(pattern: str, params: dict[str, Any]) -> str:
 
 
 def measure(
-    base_url: str, pattern: str, edits: int, gap_s: float
+    base_url: str, pattern: str, edits: int, gap_s: float, *, viewer: bool = True
 ) -> list[tuple[float, float, float]]:
-    """(bits ms, all ms, request ms) of each edit."""
+    """(bits ms, all ms, request ms) of each edit; ``viewer`` False: the 3D view's page is
+    not loaded (a placeholder), to tell its software rendering's share."""
     import httpx
     from playwright.sync_api import sync_playwright
 
@@ -97,6 +98,8 @@ def measure(
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         page = browser.new_page(viewport={"width": WIDTH, "height": HEIGHT})
         page.set_default_timeout(60_000)
+        if not viewer:
+            page.route("**/viewer/**", lambda r: r.fulfill(content_type="text/html", body="off"))
         page.goto(f"{base_url}/?token={TOKEN}")
         page.wait_for_function("() => document.querySelector('#param-form input') !== null")
         page.get_by_test_id("pattern-select").select_option(pattern)
@@ -138,12 +141,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--edits", type=int, default=20, help="edits to time (at most 40)")
     parser.add_argument("--pattern", choices=sorted(EDITS), default="lawnmower")
     parser.add_argument("--gap-s", type=float, default=1.0, help="pause between two edits (s)")
+    parser.add_argument(
+        "--no-viewer", action="store_true", help="without the 3D view (its software rendering)"
+    )
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
         env = {"NEMESYS_DB_PATH": str(Path(tmp) / "log.sqlite3"), "NEMESYS_SIM_TIME_SCALE": "10"}
         console = start_console(Path(tmp) / "console.log", TOKEN, env=env)
         try:
-            samples = measure(console.base_url, args.pattern, args.edits, args.gap_s)
+            samples = measure(
+                console.base_url, args.pattern, args.edits, args.gap_s, viewer=not args.no_viewer
+            )
         finally:
             console.stop()
     columns = (
@@ -155,7 +163,11 @@ def main(argv: list[str] | None = None) -> int:
         [name, str(len(v)), ms_cell(percentile(v, 50)), ms_cell(percentile(v, 95)), ms_cell(max(v))]
         for name, v in columns
     ]
-    print(f"edit-to-bits latency, {args.pattern}, Chromium 1280x800 (ms from the input event)")
+    view = "without" if args.no_viewer else "with"
+    print(
+        f"edit-to-bits latency, {args.pattern}, Chromium 1280x800, {view} the 3D view "
+        "(ms from the input event)"
+    )
     print(table(["shown", "edits", "p50", "p95", "max"], rows))
     return 0
 
