@@ -5,6 +5,7 @@
 // page never converts NED metres itself (backend/chart/geo.py is the one edge).
 
 import { api } from "./api.js";
+import { watchOperator } from "./chart-operator.js";
 import { drawGraticule } from "./graticule.js";
 import { $, el, on, num } from "./ui.js";
 
@@ -132,21 +133,6 @@ function fitButton() {
   state.operatorMoved = false;
   $("chart").dataset.fit = "auto";
   fitAll();
-}
-
-/** Only the operator's own input (drag, wheel, double click, keys, the zoom buttons, a box
- *  zoom, a touch) stops the refit of each new preview; the page's own fits do not. */
-function watchOperator() {
-  const moved = () => {
-    state.operatorMoved = true;
-    $("chart").dataset.fit = "operator";
-  };
-  map.on("dragstart boxzoomend", moved);
-  const box = map.getContainer();
-  for (const kind of ["wheel", "dblclick", "touchstart"]) box.addEventListener(kind, moved, { passive: true });
-  box.addEventListener("keydown", (e) => /^(Arrow|\+|-|=)/.test(e.key) && moved());
-  box.querySelector(".leaflet-control-zoom").addEventListener("click", moved, true); // Leaflet stops it
-  map.on("zoomend", () => ($("chart").dataset.zoom = String(map.getZoom())));
 }
 
 /** Fit the preview, the vehicle and (`predicted`) the predicted track: a new preview's own
@@ -380,7 +366,10 @@ function createMap() {
   L.control.zoom({ position: "topright" }).addTo(map);
   buttonsControl().addTo(map);
   legendControl().addTo(map);
-  watchOperator();
+  watchOperator(map, () => {
+    state.operatorMoved = true;
+    $("chart").dataset.fit = "operator";
+  });
   for (const [name, z] of [["graticule", 250], ["graticule-labels", 450]]) {
     const pane = map.createPane(name);
     pane.style.zIndex = String(z);
