@@ -20,6 +20,7 @@ from starlette.exceptions import HTTPException
 from starlette.types import Scope
 
 from backend.api import authoring, chart, commands, errors_db, live, predict, scripts, training
+from backend.api import dives as dives_api
 from backend.api import view as view_api
 from backend.api.openapi import security_schemes
 from backend.bounded_input import BodyLimit, shorten, validation_errors
@@ -94,6 +95,7 @@ def create_app(
         live.router,
         chart.router,
         predict.router,
+        dives_api.router,
     ):
         app.include_router(router)
     app.include_router(view_api.router)  # a page's own 3D view

@@ -1,6 +1,7 @@
 """The console's runtime: everything the app's lifespan owns, and the operations on it.
 
-:class:`Console` starts, in order: the mission log (a new dive), in training mode the
+:class:`Console` starts, in order: the mission log (a dive starts when the vehicle is first
+heard: :mod:`backend.dives`), in training mode the
 simulated vehicle and its rosbridge server on loopback, the link to the vehicle (the same
 rosbridge client a real vehicle gets), the telemetry hub, the command manager and the viser
 3D view. The routers only call its methods; nothing starts at import time.
@@ -32,10 +33,11 @@ from backend.commands.link_ber import BerChoice, CopiesFrom
 from backend.commands.link_settings import ber_now, change_link
 from backend.commands.manager import CommandManager
 from backend.commands.service import Assessment, CommandService
+from backend.dives import Dives
 from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMessage, VehicleView
 from backend.mission_log.opening import open_checked
 from backend.mission_log.records import log_event
-from backend.mission_log.store import LogWriteError, MissionLog
+from backend.mission_log.store import MissionLog
 from backend.scripts.guard import RunGuard
 from backend.settings import Settings
 from backend.telemetry import TelemetryHub
@@ -84,7 +86,7 @@ class Console:
         self.gps: GpsReader | None = None  # the surface GPS (``gps`` setting)
         self.tiles: TileSource | None = None  # local map tiles (``tiles`` setting)
         self.log: MissionLog | None = None
-        self.dive = 0
+        self.dives: Dives | None = None  # the current dive (started when the vehicle is heard)
         self.sim: Simulation | None = None  # training mode: the simulated vehicle
         self.bridge: BridgeServer | None = None  # training mode: its rosbridge server
         self.link: Link | None = None
@@ -102,8 +104,6 @@ class Console:
         self.drawer = PreviewDrawer(PREVIEW_DRAW_INTERVAL_S)
         self._drawer: asyncio.Task[None] | None = None
         self._health_task: asyncio.Task[None] | None = None
-        self._last_track_s = -1.0
-        self._echo_flagged = False  # an echo mismatch is logged once each time it begins
         #: The BER assumed of a real link (``link_ber``) and what the copies follow there.
         self.ber_choice = BerChoice(settings.link_ber)
 
@@ -125,7 +125,7 @@ class Console:
             logger.warning(
                 "%d commands an earlier run left on their way are interrupted", recovered
             )
-        self.dive = self.log.new_dive(s.target)
+        dives = self.dives = Dives(self.log, s.target, self.hub)
         if self._given_link is not None:
             link: Link = self._given_link
         elif s.training:
@@ -149,7 +149,7 @@ class Console:
             self.log,
             link,
             self.hub,
-            dive=lambda: self.dive,
+            dive=dives.ensure,  # a command before the vehicle is heard starts the dive
             operator=s.operator,
             ack_timeout_s=s.ack_timeout_s,
             surface_repeat_s=s.surface_repeat_s,
@@ -208,35 +208,31 @@ class Console:
             self._runner_task.cancel()
         self._runner_task = asyncio.create_task(coro, name="mission script")
 
+    @property
+    def dive(self) -> int | None:
+        """The current dive's number (None: none has started since this console started)."""
+        return None if self.dives is None else self.dives.current
+
     # --- telemetry -----------------------------------------------------------------------
 
     def _on_status(self, msg: dict[str, Any]) -> None:
+        if self.dives is not None:
+            self.dives.heard()
         self.hub.set_status(msg)
         self._check_echo()
 
     def _on_mission(self, ack: dict[str, Any]) -> None:
-        assert self.commands is not None
+        assert self.commands is not None and self.dives is not None
+        self.dives.heard()
         self.commands.on_mission(ack)
         self._check_echo()
 
     def _check_echo(self) -> None:
-        """Vehicle activity this console did not cause (an echo mismatch) goes into the
-        mission log as an event, once each time it begins."""
-        cm = self.commands
-        mismatch = cm is not None and cm.echo_mismatch
-        if not mismatch or self._echo_flagged:
-            self._echo_flagged = mismatch
-            return
-        self._echo_flagged = True
-        assert cm is not None and self.log is not None
-        detail, data = cm.vehicle.mismatch_event()
-        try:
-            event = self.log.add_event(self.dive, "echo_mismatch", detail, data)
-        except LogWriteError as err:
-            logger.error("could not log an echo mismatch: %s", err)
-            return
-        logger.warning("echo mismatch: %s", detail)
-        self.hub.publish(EventMessage(event=log_event(event)))
+        """An echo mismatch goes into the mission log, once each time it begins."""
+        if self.dives is not None and self.commands is not None:
+            event = self.dives.echo_mismatch(self.commands)
+            if event is not None:
+                self.hub.publish(EventMessage(event=log_event(event)))
 
     def _on_fix(self, fix: GpsFix) -> None:
         if self.datum is None:  # a real vehicle without a datum setting: the first fix
@@ -256,9 +252,11 @@ class Console:
             return  # an unknown number: shown as unknown, counted in link health, not drawn
         if self.viewer is not None:
             self.viewer.update_pose(t_s, x, y, z, roll or 0.0, heading)
-        if self.log is not None and t_s - self._last_track_s >= 1.0:
-            self._last_track_s = t_s
-            self.log.add_track(self.dive, t_s, x, y, z, heading)
+        if self.dives is not None:
+            status = self.hub.status or {}
+            if "active" not in status and self.commands is not None:  # the echo instead
+                status = {**status, "active": self.commands.vehicle_active}
+            self.dives.track((t_s, x, y, z, heading), status)
 
     def _show_active(self, active: Plan | None) -> None:
         """The path the vehicle flies (as the station mirrors it): in the 3D view, and for
@@ -382,18 +380,17 @@ class Console:
     def reset_vehicle(self, start_z_m: float | None = None) -> int:
         """Training: the simulated vehicle back to its start (optionally at another depth), a
         full battery, no command; a new dive. Returns the dive."""
-        if self.sim is None or self.log is None:
+        if self.sim is None or self.dives is None:
             raise RuntimeError("not in training mode")
+        dive = self.dives.start_new()  # first: a log that cannot be written changes nothing
         if start_z_m is None:
             self.sim.reset()
         else:
             self.sim.reset(replace(self.sim.config, start_z_m=start_z_m))
         self.hub.reset()
-        self.dive = self.log.new_dive(self.settings.target)
-        self._last_track_s = -1.0
         if self.commands is not None:
             self.commands.reset_vehicle()
         if self.viewer is not None:
             self.viewer.reset_track()
         self._show_active(None)
-        return self.dive
+        return dive

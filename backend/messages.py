@@ -133,6 +133,11 @@ class TelemetryMessage(Message):
     pose: Pose | None = Field(description="the last pose (null: none yet)")
     status: VehicleStatus | None = Field(description="the last status (null: none yet)")
     age_s: float | None = Field(description="seconds since the vehicle was last heard from")
+    dive: int | None = Field(
+        default=None,
+        description="the dive the console records them in (null: none yet); a page's plots "
+        "start again when it changes",
+    )
 
 
 class CommandMessage(Message):

@@ -54,6 +54,8 @@ class TelemetryHub:
         #: Monotonic arrival times of ``known_pose`` and ``status`` (None: none yet).
         self.known_pose_s: float | None = None
         self.status_s: float | None = None
+        #: The dive the console records into (None: none yet), named in every telemetry.
+        self.dive: int | None = None
         self.last_message_s: float | None = None  # monotonic arrival time
         #: Telemetry numbers that came unknown (null / NaN / missing) since the dive began,
         #: and the arrival times of the recent ones.
@@ -110,7 +112,7 @@ class TelemetryHub:
 
     def telemetry(self) -> TelemetryMessage:
         return TelemetryMessage.model_validate(
-            {"pose": self.pose, "status": self.status, "age_s": self.age_s()}
+            {"pose": self.pose, "status": self.status, "age_s": self.age_s(), "dive": self.dive}
         )
 
     def publish(self, event: News) -> None:

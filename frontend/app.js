@@ -12,12 +12,13 @@ import { initLog, loadLog } from "./log.js";
 import { initChart } from "./chart.js";
 import { initPlots } from "./plots.js";
 import { initPrediction } from "./prediction.js";
+import { initReplay } from "./replay.js";
 import { initScript, addStep } from "./script.js";
 import { initShortcuts } from "./shortcuts.js";
 import { renderDatum, renderTelemetry, startAgeTicker } from "./status.js";
 import { initTheme } from "./theme.js";
 import { initTraining, loadTraining } from "./training.js";
-import { $, notify, notifyError, applyAuth, debounce, emit } from "./ui.js";
+import { $, notify, notifyError, resolved, applyAuth, debounce, emit } from "./ui.js";
 import { initView, viewerSrc } from "./view.js"; // this page's own 3D view
 
 const RETRY_MS = 3000;
@@ -91,6 +92,7 @@ function tokenAccepted() {
 async function loadSession() {
   try {
     session = await api("/api/session");
+    resolved("session");
   } catch (err) {
     notifyError("session", err);
     session = null;
@@ -123,6 +125,7 @@ function initToken() {
 async function loadVehicle() {
   try {
     const v = await api("/api/vehicle");
+    resolved("vehicle state");
     renderTelemetry(v);
     emit("telemetry", { msg: v });
     renderEcho(v);
@@ -231,6 +234,7 @@ async function main() {
   $("script-add").addEventListener("click", () => addStep(current()));
   initScript();
   initLog();
+  initReplay();
   loadLog();
   renderSession(session);
 }

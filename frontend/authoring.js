@@ -5,7 +5,7 @@
 import { api, ApiError } from "./api.js";
 import { initCopies, readCopies, copiesLine } from "./copies.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
-import { $, el, num, withUnit, delta, debounce, notify, notifyError, slug, canWrite, emit, latLon } from "./ui.js";
+import { $, el, num, withUnit, delta, notify, notifyError, resolved, slug, canWrite, emit, latLon } from "./ui.js";
 import { confirmChecks, isHard, kindText, skippedTitle, withinLimits } from "./checks.js";
 import { duration } from "./prediction.js";
 
@@ -17,6 +17,8 @@ const state = {
   previewError: null, // the last ApiError of the preview
   seq: 0,
   controller: null,
+  lastKey: "", // the command last previewed (JSON), to skip an edit's change event
+  errorTimer: null,
   onSent: () => {},
   // what the open confirm dialog sends: {pattern, params, retryOf} (retryOf: null, or the
   // id of the logged command a retry repeats as a new command)
@@ -27,7 +29,17 @@ export function current() {
   return { pattern: state.pattern, params: state.form ? state.form.read() : {} };
 }
 
-const schedulePreview = debounce(() => runPreview(), 150);
+// An edit previews at once: the preview is a millisecond's work on the console, and the 150 ms
+// debounce the page had was most of the edit-to-bits time (bench/edit_latency.py). A newer edit
+// aborts the older request. What a half-typed value gets (a 422: "0." on the way to "0.5") is
+// shown only if no edit follows within ERROR_SHOW_MS; meanwhile the last frame is dimmed.
+const ERROR_SHOW_MS = 300;
+
+/** A form edit: preview, unless it is the change event of values already previewed. */
+function onEdit() {
+  if (state.form && JSON.stringify(current()) === state.lastKey) return;
+  runPreview({ errorDelayMs: ERROR_SHOW_MS });
+}
 
 /** Build the picker from the dictionary. onSent(record) is told about every queued command. */
 export function initAuthoring({ onSent }) {
@@ -57,8 +69,8 @@ export function choosePattern(name, values) {
   $("pattern-select").value = name;
   const p = dictionary.byName.get(name);
   $("pattern-doc").textContent = p ? p.doc || "" : "";
-  state.form = paramForm($("param-form"), name, start, { onChange: schedulePreview });
-  schedulePreview();
+  state.form = paramForm($("param-form"), name, start, { onChange: onEdit });
+  runPreview();
 }
 
 function pick(values, pattern) {
@@ -67,28 +79,43 @@ function pick(values, pattern) {
   return Object.fromEntries(Object.entries(values).filter(([k]) => names.has(k)));
 }
 
-export async function runPreview() {
-  schedulePreview.cancel();
+/** Preview the form's command; a failure is drawn after `errorDelayMs` if no newer preview
+ *  started meanwhile (0: at once, as the Send button needs it). */
+export async function runPreview({ errorDelayMs = 0 } = {}) {
   if (!state.pattern) return;
   if (state.controller) state.controller.abort();
+  clearTimeout(state.errorTimer);
   const controller = new AbortController();
   state.controller = controller;
   const seq = ++state.seq;
   const body = current();
+  state.lastKey = JSON.stringify(body);
   try {
     const preview = await api("/api/preview", { method: "POST", body, signal: controller.signal });
     if (seq !== state.seq) return;
     state.preview = preview;
     state.previewError = null;
     renderPreview(preview);
+    resolved("parameters"); // the values a Send was refused for are fixed: its message goes
+    $("estimates").dataset.command = state.lastKey; // whose estimates these are (tests, bench)
     emit("preview", { preview, command: body });
   } catch (err) {
     if (err.name === "AbortError" || seq !== state.seq) return;
     state.preview = null;
     state.previewError = err;
-    renderPreviewError(err);
     emit("preview", { preview: null, command: body });
+    if (errorDelayMs <= 0) {
+      renderPreviewError(err);
+      return;
+    }
+    setStale(true); // the frame shown is not this value's
+    state.errorTimer = setTimeout(() => seq === state.seq && renderPreviewError(err), errorDelayMs);
   }
+}
+
+/** Dim the frame and estimates while they are not the form's values (a failure not shown yet). */
+function setStale(stale) {
+  for (const id of ["bits-strip", "frame-hex", "estimates"]) $(id).classList.toggle("stale", stale);
 }
 
 // ---- rendering the preview ----
@@ -120,6 +147,7 @@ export function renderBits(container, response) {
 }
 
 function renderPreview(r) {
+  setStale(false);
   renderBits($("bits-strip"), r);
   $("frame-hex").textContent = r.hex || "–";
   $("airtime").textContent = r.airtime_ms == null ? "–" : `${num(r.airtime_ms, 3)} ms at ${num(r.bitrate_bps, 0)} b/s`;
@@ -151,6 +179,8 @@ function renderStart(start) {
 
 function renderPreviewError(err) {
   renderStart(null);
+  setStale(false);
+  $("estimates").dataset.command = "";
   for (const id of ["bits-strip", "estimates"]) $(id).replaceChildren();
   $("frame-hex").textContent = "–";
   $("airtime").textContent = "–";
@@ -243,7 +273,7 @@ async function openConfirm() {
   await runPreview();
   const err = state.previewError;
   if (err && err.status === 422) {
-    notify("Fix the parameters first: " + err.items.map((i) => `${i.param} ${i.msg}`).join("; "), "error");
+    notify("Fix the parameters first: " + err.items.map((i) => `${i.param} ${i.msg}`).join("; "), "error", "parameters");
     const bad = err.items.find((i) => i.param);
     if (bad && state.form) state.form.focus(bad.param);
     return;
@@ -384,6 +414,7 @@ async function confirmSend() {
     const record = await api(path, { method: "POST", body });
     $("confirm-dialog").close();
     const id = record && record.id !== undefined ? ` (command ${record.id})` : "";
+    resolved("send");
     notify(retry ? `retry of command ${command.retryOf} (${command.pattern}) queued${id}` : `${command.pattern} queued${id}`);
     state.onSent(record);
   } catch (err) {

@@ -6,6 +6,7 @@
 
 import { api } from "./api.js";
 import { beliefLayers } from "./belief.js";
+import { watchOperator } from "./chart-operator.js";
 import { drawGraticule } from "./graticule.js";
 import { $, el, on, num } from "./ui.js";
 
@@ -44,6 +45,7 @@ const state = {
   belief: null, // the console's belief (belief.js): its position is drawn unless it is the fix
   fittedRing: false,
   fittedPath: false,
+  operatorMoved: false, // dragged or zoomed by the operator: new previews no longer refit it
 };
 
 function missing(text) {
@@ -91,7 +93,7 @@ function buttonsControl() {
       };
       box.append(
         button(ICON_CENTRE, "centre on the vehicle", "chart-centre-vehicle", centreOnVehicle),
-        button(ICON_FIT, "fit the preview, the predicted track and the vehicle", "chart-fit", fitAll),
+        button(ICON_FIT, "fit the preview, the predicted track and the vehicle (and each new preview again)", "chart-fit", fitButton),
       );
       L.DomEvent.disableClickPropagation(box);
       return box;
@@ -124,11 +126,22 @@ function legendControl() {
 }
 
 function centreOnVehicle() {
+  state.operatorMoved = true; // the operator chose this view
   if (state.pose) map.setView(state.pose, Math.max(map.getZoom(), 17));
 }
 
-function fitAll() {
-  const pts = [...(latLngs(state.preview && state.preview.path) || []), ...(state.predicted || [])];
+/** The Fit button: fit now, and fit each new preview again from now on. */
+function fitButton() {
+  state.operatorMoved = false;
+  $("chart").dataset.fit = "auto";
+  fitAll();
+}
+
+/** Fit the preview, the vehicle and (`predicted`) the predicted track: a new preview's own
+ *  fit leaves out the track predicted for the command before it. */
+function fitAll(predicted = true) {
+  $("chart").dataset.fits = String(Number($("chart").dataset.fits || 0) + 1); // (tests)
+  const pts = [...(latLngs(state.preview && state.preview.path) || []), ...((predicted && state.predicted) || [])];
   if (state.pose) pts.push(state.pose);
   if (pts.length) map.fitBounds(L.latLngBounds(pts), { padding: [24, 24], maxZoom: FIT_MAX_ZOOM });
   else if (layers.ring) map.fitBounds(layers.ring.getBounds(), { padding: [8, 8] });
@@ -184,6 +197,11 @@ function drawPreview() {
   warning.textContent = (reach && reach.warning) || "";
   warning.hidden = !(reach && reach.warning);
   if (!pts) return;
+  // each new preview is fitted, unless the operator has moved or zoomed the chart since
+  if (!state.operatorMoved) {
+    state.fittedPath = true;
+    fitAll(false);
+  }
   const segments = reach && Array.isArray(reach.segments) && reach.segments.length ? reach.segments : [{ state: null, start: 0, end: pts.length - 1 }];
   for (const seg of segments) {
     // from the waypoint before: the stretch into a segment is drawn in the segment's state
@@ -192,10 +210,6 @@ function drawPreview() {
     const cls = `chart-preview${seg.state ? ` reach-${seg.state}` : ""}`;
     const line = L.polyline(part, { className: cls, interactive: false });
     layers.preview.addLayer(line);
-  }
-  if (!state.fittedPath) {
-    state.fittedPath = true;
-    fitAll();
   }
 }
 
@@ -360,6 +374,10 @@ function createMap() {
   L.control.zoom({ position: "topright" }).addTo(map);
   buttonsControl().addTo(map);
   legendControl().addTo(map);
+  watchOperator(map, () => {
+    state.operatorMoved = true;
+    $("chart").dataset.fit = "operator";
+  });
   for (const [name, z] of [["graticule", 250], ["graticule-labels", 450]]) {
     const pane = map.createPane(name);
     pane.style.zIndex = String(z);

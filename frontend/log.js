@@ -2,8 +2,9 @@
 
 import { api } from "./api.js";
 import { copiesText, stateText } from "./delivery.js";
+import { openReplay } from "./replay.js";
 import { dictionary, unitOf } from "./form.js";
-import { $, el, clock, withUnit, summarize, notify, notifyError, applyAuth, debounce } from "./ui.js";
+import { $, el, clock, withUnit, summarize, notify, notifyError, resolved, applyAuth, debounce } from "./ui.js";
 
 let rows = [];
 
@@ -42,6 +43,7 @@ export async function loadLog() {
   try {
     const data = await api(`/api/commands?${q}`);
     rows = Array.isArray(data) ? data : (data && data.commands) || [];
+    resolved("mission log");
   } catch (err) {
     notifyError("mission log", err);
     rows = [];
@@ -103,6 +105,7 @@ async function loadDives() {
   try {
     const data = await api("/api/dives");
     dives = Array.isArray(data) ? data : (data && data.dives) || [];
+    resolved("dives");
   } catch (err) {
     notifyError("dives", err);
     return;
@@ -125,7 +128,9 @@ async function loadDives() {
 async function replay(id) {
   try {
     await api(`/api/dives/${encodeURIComponent(id)}/replay`, { method: "POST" });
-    notify(`dive ${id} drawn in the 3D view`);
+    resolved(`replay of dive ${id}`);
+    notify(`dive ${id} drawn in the 3D view: its time slider is under the view`);
+    openReplay(id);
   } catch (err) {
     notifyError(`replay of dive ${id}`, err);
   }

@@ -23,19 +23,24 @@ export function el(tag, attrs = {}, ...children) {
 
 // ---- messages ----
 
-/** Show a dismissable message; kind is "info", "warn" or "error". Info fades after 8 s. */
+/** Show a dismissable message; kind is "info", "warn" or "error". Information fades after 8 s,
+ * a warning after 10 s; an error stays until dismissed, or until its cause is fixed: `key` names
+ * the cause (notifyError's prefix), a new message of the same key replaces the old one, and
+ * resolved(key) removes it (the caller's same action succeeded). */
 const MAX_TOASTS = 3;
 const FADE_MS = { info: 8000, warn: 10000 };
 
-export function notify(text, kind = "info") {
+export function notify(text, kind = "info", key = null) {
   const box = $("messages");
   if (!box) return;
+  if (key) resolved(key);
   const item = el(
     "div",
     { class: `message message-${kind}`, testid: "message", role: kind === "error" ? "alert" : "status" },
     el("span", {}, text),
     el("button", { type: "button", class: "dismiss", testid: "message-dismiss", "aria-label": "dismiss message", onclick: () => item.remove() }, "×"),
   );
+  if (key) item.dataset.key = key;
   box.prepend(item);
   // at most MAX_TOASTS stacked: the oldest that is not an error goes first
   while (box.children.length > MAX_TOASTS) {
@@ -46,9 +51,17 @@ export function notify(text, kind = "info") {
   if (kind in FADE_MS) setTimeout(() => item.remove(), FADE_MS[kind]);
 }
 
+/** An error message keyed by `prefix` (its cause): resolved(prefix) takes it away. */
 export function notifyError(prefix, err) {
   if (err && err.name === "AbortError") return;
-  notify(`${prefix}: ${(err && err.message) || err}`, "error");
+  notify(`${prefix}: ${(err && err.message) || err}`, "error", prefix);
+}
+
+/** The cause `key` is fixed (the same action succeeded): its message goes. */
+export function resolved(key) {
+  const box = $("messages");
+  if (!box) return;
+  for (const item of [...box.children]) if (item.dataset.key === key) item.remove();
 }
 
 // ---- formatting ----

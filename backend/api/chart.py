@@ -101,7 +101,7 @@ def set_datum(body: DatumIn, console: ConsoleDep, _op: OperatorDep) -> ChartDoc:
 
 
 def _log_datum(console: Console, old: Datum | None, new: Datum, source: str) -> None:
-    if console.log is None:
+    if console.dives is None:
         return
     detail = f"datum set from the {source}: {new.lat_deg:.7f}, {new.lon_deg:.7f}"
     data = {
@@ -111,7 +111,7 @@ def _log_datum(console: Console, old: Datum | None, new: Datum, source: str) -> 
         "previous": None if old is None else {"lat_deg": old.lat_deg, "lon_deg": old.lon_deg},
     }
     try:
-        event = console.log.add_event(console.dive, "datum", detail, data)
+        event = console.dives.event("datum", detail, data)  # starts a dive if none has
     except LogWriteError:
         return  # the datum is set; the log's own failure is reported by its health
     console.hub.publish(EventMessage(event=log_event(event)))

@@ -241,7 +241,7 @@ def replay(
         for c in doc.commands:
             origin = c.ack.from_ if isinstance(c.ack, Ack) else None
             if c.state == "acknowledged" and origin:
-                marks.append((origin.t_s, origin.x_m, origin.y_m, origin.z_m, c.pattern))
+                marks.append((origin.t_s, origin.x_m, origin.y_m, origin.z_m, f"#{c.id}"))
         console.viewer.show_replay(x_nemesys_view, track, marks)
     return ReplayResult(dive=dive, track_points=len(doc.track), commands=len(doc.commands))
 

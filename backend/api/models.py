@@ -144,6 +144,14 @@ def check_copies_from(value: object) -> object:
 CopiesFromIn = Annotated[CopiesFrom, BeforeValidator(check_copies_from)]
 
 
+class ReplayAtIn(Strict):
+    """A time of a dive, for the replay's slider."""
+
+    dive: Annotated[int, Field(ge=1, le=SQLITE_INT_MAX)]
+    #: Seconds on the dive's clock (from its start; within its timeline's range).
+    t_s: Annotated[float, Field(ge=-86_400.0, le=864_000.0)]
+
+
 class LinkIn(Strict):
     """What the station assumes of its link; a field left out keeps its value."""
 

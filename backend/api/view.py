@@ -1,4 +1,5 @@
-"""A page's own 3D view: the ``X-Nemesys-View`` header, and clearing what it shows.
+"""A page's own 3D view: the ``X-Nemesys-View`` header, clearing what it shows, and the
+replay's slider marker.
 
 A page makes a random view id when it loads, opens the 3D view with it (the websocket URL
 ``ws://host:port/view/<id>``) and sends it as ``X-Nemesys-View`` on every API call: previews,
@@ -11,11 +12,16 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from fastapi import APIRouter, Header
+from fastapi import APIRouter, Header, HTTPException
+from fastapi.exceptions import RequestValidationError
 
 from backend.api.deps import ConsoleDep
+from backend.api.models import ReplayAtIn
 from backend.api.schemas import errors
+from backend.api.schemas.dives import ReplayAt, TimelineSample
 from backend.api.schemas.view import ViewCleared
+from backend.chart.reach import track_lat_lon
+from backend.mission_log.timeline import vehicle_at
 from backend.viewer.ids import VIEW_ID_PATTERN
 
 #: The caller's view id (8-64 of ``A-Z a-z 0-9 _ -``), or None.
@@ -38,3 +44,37 @@ def clear_replay(console: ConsoleDep, x_nemesys_view: ViewHeader = None) -> View
     if x_nemesys_view is not None and console.viewer is not None:
         cleared = console.viewer.clear_replay(x_nemesys_view)
     return ViewCleared(view=x_nemesys_view, cleared=cleared)
+
+
+@router.put("/replay/at", response_model=ReplayAt, responses=errors((404, 413, 422)))
+def replay_at(body: ReplayAtIn, console: ConsoleDep, x_nemesys_view: ViewHeader = None) -> ReplayAt:
+    """The replayed vehicle at ``t_s`` of dive ``dive`` (s on the dive's clock, within its
+    timeline's ``from_t_s`` .. ``duration_s``: 422 naming them otherwise): where it was and
+    the command it was running, drawn as a marker in the caller's own 3D view
+    (``X-Nemesys-View``; without it, in none). No token: it changes only the caller's view."""
+    log = console.log
+    assert log is not None
+    row = log.dive(body.dive)
+    if row is None:
+        raise HTTPException(404, f"no dive {body.dive}")
+    commands = log.commands(dive=body.dive, limit=100_000, oldest_first=True)
+    events = log.events(body.dive)
+    (lo, hi), pos = vehicle_at(
+        log.track_rows(body.dive), commands, events, row["started_at"], body.t_s
+    )
+    if not lo <= body.t_s <= hi:
+        msg = f"t_s must be within {lo:g} to {hi:g} s (dive {body.dive}'s timeline)"
+        raise RequestValidationError(
+            [{"loc": ("body", "t_s"), "msg": msg, "type": "value_error", "input": body.t_s}]
+        )
+    if pos is None:
+        return ReplayAt(dive=body.dive, t_s=body.t_s, position=None, drawn=False)
+    track_lat_lon([pos], console.datum)
+    drawn = x_nemesys_view is not None and console.viewer is not None
+    if console.viewer is not None and x_nemesys_view is not None:
+        console.viewer.show_replay_at(
+            x_nemesys_view, pos["x_m"], pos["y_m"], pos["z_m"], pos["heading_deg"]
+        )
+    return ReplayAt(
+        dive=body.dive, t_s=body.t_s, position=TimelineSample.model_validate(pos), drawn=drawn
+    )

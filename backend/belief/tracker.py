@@ -68,8 +68,10 @@ class Runtime(Protocol):
     bridge: BridgeServer | None
     datum: Datum | None
     profile: VehicleProfile
-    dive: int
     viewer: Viewer | None
+
+    @property
+    def dive(self) -> int | None: ...
 
 
 def _echo_of(doc: Mapping[str, Any], at_s: float, what: str) -> Echo | None:
@@ -164,9 +166,12 @@ class BeliefTracker:
         fix, echo = self._heard()
         records: list[dict[str, Any]] = []
         if rt.log is not None and cm is not None:
-            dive = rt.dive if rt.sim is not None else None  # the simulator restarts with a dive
-            newest = rt.log.commands(target=cm.target, dive=dive, limit=RECORDS_WINDOW)
-            records = newest[::-1]
+            # the simulator restarts with a dive (none yet: nothing sent to this one); a real
+            # vehicle runs on across dives and console restarts
+            dive = rt.dive if rt.sim is not None else None
+            if rt.sim is None or dive is not None:
+                newest = rt.log.commands(target=cm.target, dive=dive, limit=RECORDS_WINDOW)
+                records = newest[::-1]
         sim = rt.sim
         if sim is not None:
             c = sim.config

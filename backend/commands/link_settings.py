@@ -53,7 +53,8 @@ def change_link(
         detail = f"{operator} chose the copies to follow {COPIES_FROM_WORDS[copies_from]}"
         data = {"operator": operator, "copies_from": copies_from, "was": choice.copies_from}
         try:
-            event = console.log.add_event(console.dive, "copies_from", detail, data)
+            assert console.dives is not None
+            event = console.dives.event("copies_from", detail, data)
         except LogWriteError as err:
             err.outcome = "nothing was changed"
             raise

@@ -48,7 +48,13 @@ CREATE TABLE IF NOT EXISTS track (
     x_m REAL NOT NULL,
     y_m REAL NOT NULL,
     z_m REAL NOT NULL,
-    heading_deg REAL NOT NULL
+    heading_deg REAL NOT NULL,
+    depth_m REAL,
+    speed_mps REAL,
+    battery_pct REAL,
+    mode TEXT,
+    active TEXT,
+    at TEXT
 );
 CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);
 CREATE TABLE IF NOT EXISTS events (
@@ -77,13 +83,25 @@ ADDED_COLUMNS = (
     ("overrides", "TEXT"),
     ("first_sent_at", "TEXT"),
 )
+#: Columns of the track added since (issue 20: the plots and the replay read the dive back
+#: from the log): the status at the point (null where the vehicle did not say), the active
+#: command the vehicle reported (JSON), and the station's clock when the point arrived.
+ADDED_TRACK_COLUMNS = (
+    ("depth_m", "REAL"),
+    ("speed_mps", "REAL"),
+    ("battery_pct", "REAL"),
+    ("mode", "TEXT"),
+    ("active", "TEXT"),
+    ("at", "TEXT"),
+)
 
 
 def create_or_migrate(db: sqlite3.Connection) -> None:
     """Create the tables a new log lacks, and add the columns an older log lacks (values of
     old rows: the declared defaults)."""
     db.executescript(SCHEMA)
-    have = {row[1] for row in db.execute("PRAGMA table_info(commands)")}
-    for name, declaration in ADDED_COLUMNS:
-        if name not in have:
-            db.execute(f"ALTER TABLE commands ADD COLUMN {name} {declaration}")
+    for table, added in (("commands", ADDED_COLUMNS), ("track", ADDED_TRACK_COLUMNS)):
+        have = {row[1] for row in db.execute(f"PRAGMA table_info({table})")}
+        for name, declaration in added:
+            if name not in have:
+                db.execute(f"ALTER TABLE {table} ADD COLUMN {name} {declaration}")

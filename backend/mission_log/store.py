@@ -26,9 +26,11 @@ from backend.mission_log.schema import create_or_migrate
 from backend.mission_log.track import (
     TRACK_BATCH,
     TRACK_BUFFER_MAX,
+    TRACK_COLUMNS,
     TRACK_FLUSH_S,
     TrackBuffer,
     TrackPoint,
+    track_point,
 )
 
 __all__ = [
@@ -191,6 +193,7 @@ class MissionLog:
     # --- dives ---------------------------------------------------------------------------
 
     def new_dive(self, target: str) -> int:
+        """Open a new dive (``backend.dives`` decides when); returns its number."""
         with self._lock, _writing():
             cur = self._db.execute(
                 "INSERT INTO dives (started_at, target) VALUES (?, ?)", (now_iso(), target)
@@ -208,11 +211,14 @@ class MissionLog:
             ).fetchall()
         return [dict(r) for r in rows]
 
-    def dive_exists(self, dive: int) -> bool:
+    def dive(self, dive: int) -> dict[str, Any] | None:
+        """The dive's row (``id, started_at, target``); None: no such dive."""
         with self._lock:
-            return (
-                self._db.execute("SELECT 1 FROM dives WHERE id = ?", (dive,)).fetchone() is not None
-            )
+            row = self._db.execute("SELECT * FROM dives WHERE id = ?", (dive,)).fetchone()
+        return None if row is None else dict(row)
+
+    def dive_exists(self, dive: int) -> bool:
+        return self.dive(dive) is not None
 
     # --- commands ------------------------------------------------------------------------
 
@@ -343,26 +349,47 @@ class MissionLog:
     # --- track ---------------------------------------------------------------------------
 
     def add_track(
-        self, dive: int, t_s: float, x_m: float, y_m: float, z_m: float, heading_deg: float
+        self,
+        dive: int,
+        t_s: float,
+        x_m: float,
+        y_m: float,
+        z_m: float,
+        heading_deg: float,
+        status: Mapping[str, Any] | None = None,
     ) -> None:
-        """Buffer one track point; written (one commit) within :data:`TRACK_FLUSH_S` of the
-        first point buffered, at :data:`TRACK_BATCH` points, on a read and on close. A write
-        that fails is logged and tried again by the timer (never raised)."""
-        self._track.add((dive, t_s, x_m, y_m, z_m, heading_deg))
+        """Buffer one track point with what ``status`` says then (``track_point``); written
+        (one commit) within :data:`TRACK_FLUSH_S` of the first point buffered, at
+        :data:`TRACK_BATCH` points, on a read and on close. A write that fails is logged and
+        tried again by the timer (never raised)."""
+        position = (t_s, x_m, y_m, z_m, heading_deg)
+        self._track.add(track_point(dive, position, status or {}, now_iso()))
 
     def _write_track(self, points: list[TrackPoint]) -> None:
         """Commit ``points`` together (the track buffer's write)."""
+        cols = ", ".join(TRACK_COLUMNS)
+        marks = ", ".join("?" * len(TRACK_COLUMNS))
         with self.transaction(), _writing():
-            self._db.executemany("INSERT INTO track VALUES (?, ?, ?, ?, ?, ?)", points)
+            self._db.executemany(f"INSERT INTO track ({cols}) VALUES ({marks})", points)
 
     def track(self, dive: int) -> list[dict[str, float]]:
+        """The dive's positions in time order: ``t_s, x_m, y_m, z_m, heading_deg``."""
+        keys = ("t_s", "x_m", "y_m", "z_m", "heading_deg")
+        return [{k: row[k] for k in keys} for row in self.track_rows(dive)]
+
+    def track_rows(self, dive: int) -> list[dict[str, Any]]:
+        """The dive's track points in time order with every column (``active`` parsed; an
+        older log's points have null status columns)."""
         with self._lock:
             self._track.flush()
             rows = self._db.execute(
-                "SELECT t_s, x_m, y_m, z_m, heading_deg FROM track WHERE dive = ? ORDER BY t_s",
+                f"SELECT {', '.join(TRACK_COLUMNS[1:])} FROM track WHERE dive = ? ORDER BY t_s",
                 (dive,),
             ).fetchall()
-        return [dict(r) for r in rows]
+        out = [dict(r) for r in rows]
+        for row in out:
+            row["active"] = None if row["active"] is None else json.loads(row["active"])
+        return out
 
 
 def _record(row: sqlite3.Row) -> dict[str, Any]:

@@ -10,11 +10,14 @@ beyond), and nothing is raised into the telemetry path.
 
 from __future__ import annotations
 
+import json
 import logging
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import Any
 
 from backend.mission_log.errors import LogWriteError
+from vehicle_contract.messages import number
 
 #: The mission log's messages, under the store's name.
 logger = logging.getLogger("backend.mission_log.store")
@@ -26,8 +29,66 @@ TRACK_BATCH = 10
 #: Points kept while the log cannot be written (the oldest are dropped beyond).
 TRACK_BUFFER_MAX = 3600
 
-#: A row of the log's ``track`` table: dive, t_s, x_m, y_m, z_m, heading_deg.
-TrackPoint = tuple[int, float, float, float, float, float]
+#: A row of the log's ``track`` table: dive, t_s, x_m, y_m, z_m, heading_deg, then what the
+#: status said (depth_m, speed_mps, battery_pct, mode; None: not said), the active command
+#: the vehicle reported (JSON text, None: none or not said) and the station's clock (ISO).
+TrackPoint = tuple[
+    int,
+    float,
+    float,
+    float,
+    float,
+    float,
+    float | None,
+    float | None,
+    float | None,
+    str | None,
+    str | None,
+    str,
+]
+#: The track table's columns, in :data:`TrackPoint`'s order.
+TRACK_COLUMNS = (
+    "dive",
+    "t_s",
+    "x_m",
+    "y_m",
+    "z_m",
+    "heading_deg",
+    "depth_m",
+    "speed_mps",
+    "battery_pct",
+    "mode",
+    "active",
+    "at",
+)
+
+
+def track_point(
+    dive: int,
+    position: tuple[float, float, float, float, float],
+    status: Mapping[str, Any],
+    at: str,
+) -> TrackPoint:
+    """The row of one point: ``position`` (t_s, x_m, y_m, z_m, heading_deg), what ``status``
+    says (a number it does not hold, or a mode that is not text: null; an ``active`` that is
+    not a command object: null) and the station's clock ``at``."""
+    t_s, x_m, y_m, z_m, heading_deg = position
+    mode = status.get("mode")
+    active = status.get("active")
+    return (
+        dive,
+        t_s,
+        x_m,
+        y_m,
+        z_m,
+        heading_deg,
+        number(status.get("depth_m")),
+        number(status.get("speed_mps")),
+        number(status.get("battery_pct")),
+        mode if isinstance(mode, str) else None,
+        json.dumps(active) if isinstance(active, dict) else None,
+        at,
+    )
 
 
 class TrackBuffer:

@@ -29,10 +29,11 @@ from typing import TYPE_CHECKING, Protocol
 from backend.commands.service import SendOutcome, SendRefused, SendRequest
 from backend.messages import EventMessage
 from backend.mission_log.records import CommandRecord, log_event
-from backend.mission_log.store import LogWriteError, MissionLog
+from backend.mission_log.store import LogWriteError
 from backend.telemetry import TelemetryHub
 
 if TYPE_CHECKING:
+    from backend.dives import Dives
     from backend.scripts.runner import ScriptRunner
 
 logger = logging.getLogger("backend.scripts.guard")
@@ -42,14 +43,12 @@ STOPPED_EVENT = "script_stopped"
 
 
 class RunHost(Protocol):
-    """What the guard reads of the console: its run, its mission log, dive and ``/ws`` hub."""
+    """What the guard reads of the console: its run, its dives (the mission log) and ``/ws`` hub."""
 
     @property
     def runner(self) -> ScriptRunner | None: ...
     @property
-    def log(self) -> MissionLog | None: ...
-    @property
-    def dive(self) -> int: ...
+    def dives(self) -> Dives | None: ...
     @property
     def hub(self) -> TelemetryHub: ...
 
@@ -125,7 +124,7 @@ class RunGuard:
         self, run: ScriptRunner, reason: str, request: SendRequest, record: CommandRecord
     ) -> None:
         host = self._host
-        if host.log is None:
+        if host.dives is None:
             return
         sent = [s["index"] + 1 for s in run.state()["steps"] if s["transmitted"]]
         data = {
@@ -137,7 +136,7 @@ class RunGuard:
         }
         detail = f"mission script {run.script.name!r} stopped: {reason}"
         try:
-            event = host.log.add_event(host.dive, STOPPED_EVENT, detail, data)
+            event = host.dives.event(STOPPED_EVENT, detail, data)
         except LogWriteError as err:  # stopped all the same
             logger.error("%s, but it could not be logged: %s", detail, err)
             return

@@ -37,6 +37,8 @@ TRACK_RGB: Final[Rgb] = (255, 235, 90)
 #: A past dive's track, and its command markers.
 REPLAY_RGB: Final[Rgb] = (220, 90, 220)
 REPLAY_COMMAND_RGB: Final[Rgb] = (255, 80, 80)
+#: The replayed vehicle at the time slider's time.
+REPLAY_AT_RGB: Final[Rgb] = (255, 255, 255)
 #: A mission script preview.
 SCRIPT_RGB: Final[Rgb] = (165, 145, 255)
 HULL_RGB: Final[Rgb] = (255, 200, 0)

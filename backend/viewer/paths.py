@@ -9,10 +9,12 @@ returns its labels, which the view places together with its other drawings' (see
     /preview/start, /preview/end, /preview/pattern           labels
     /script/path, /script/drops, /script/steps, /script/step_000 ...
     /replay/track, /replay/commands, /replay/start, /replay/end, /replay/cmd_000 ...
+    /replay_at/vehicle, /replay_at/heading          the replay's slider: no label
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Sequence
 
 import numpy as np
@@ -21,6 +23,7 @@ import numpy.typing as npt
 from backend.viewer.draw import (
     PREVIEW_BODY_RGB,
     PREVIEW_JOIN_RGB,
+    REPLAY_AT_RGB,
     REPLAY_COMMAND_RGB,
     REPLAY_RGB,
     SCRIPT_RGB,
@@ -29,10 +32,17 @@ from backend.viewer.draw import (
     columns,
     ned_to_view,
 )
-from backend.viewer.labels import LabelSpec
+from backend.viewer.labels import MIN_LABEL_SEPARATION_M, LabelSpec
 
 #: Draws on a page's canvas (inside its group, which it recreates) and returns its labels.
 Drawing = Callable[[Canvas], list[LabelSpec]]
+#: A replay's labels are at least its extent over this apart (and at least
+#: :data:`MIN_LABEL_SEPARATION_M`): seen whole, a dive shows a handful of labels that do not
+#: run into each other; the time slider shows every command.
+REPLAY_LABELS_ACROSS = 6.0
+#: The replayed vehicle's marker (m) and its heading line's length (m).
+REPLAY_AT_M = 0.6
+REPLAY_AT_NOSE_M = 2.0
 
 
 def preview_drawing(
@@ -135,7 +145,11 @@ def replay_drawing(
             :data:`REPLAY_RGB`, subsampled evenly to at most ``max_points`` (first and last
             kept). The heading is not drawn.
         commands: ``(t_s, x_m, y_m, z_m, label)`` where a command was acknowledged; each gets
-            a marker in :data:`REPLAY_COMMAND_RGB` and a label ``"<label> @ <t> s"``.
+            a marker in :data:`REPLAY_COMMAND_RGB`, and those far enough apart their (short)
+            label, in time order: no two of the replay's labels are closer than its extent
+            over :data:`REPLAY_LABELS_ACROSS` (the start's says how many went without). The
+            track's start and end are labelled (one label when they are that close); the
+            time slider (the page) says what happened when.
 
     Raises:
         ValueError: non-finite positions.
@@ -149,23 +163,70 @@ def replay_drawing(
     cmd = np.array([row[1:4] for row in commands], dtype=np.float64).reshape(-1, 3)
     if not np.isfinite(cmd).all():
         raise ValueError("replay: command positions must be finite numbers")
-    t0, t1 = (track[0][0], track[-1][0]) if track else (0.0, 0.0)
-    marks = [f"{row[4]} @ {row[0]:.0f} s" for row in commands]
+    t1 = track[-1][0] - track[0][0] if track else 0.0
+    marks = [str(row[4]) for row in commands]
+    track_view = ned_to_view(samples[:, 0], samples[:, 1], samples[:, 2])
+    cmd_view = ned_to_view(cmd[:, 0], cmd[:, 1], cmd[:, 2])
+    everything = np.concatenate([track_view.reshape(-1, 3), cmd_view.reshape(-1, 3)])
+    extent = float(np.ptp(everything, axis=0).max()) if len(everything) else 0.0
+    sep = max(MIN_LABEL_SEPARATION_M, extent / REPLAY_LABELS_ACROSS)
+    ends = list(track_view[:1]) if len(samples) else []
+    if len(samples) and float(np.linalg.norm(track_view[-1] - track_view[0])) >= sep:
+        ends.append(track_view[-1])  # the end has a label of its own when far enough
+    kept = _apart([*ends, *cmd_view.reshape(-1, 3)], len(ends), sep)
+    left_out = len(marks) - len(kept)
 
     def draw(c: Canvas) -> list[LabelSpec]:
         c.group("/replay")
         labels = []
         if len(cmd):
-            view = ned_to_view(cmd[:, 0], cmd[:, 1], cmd[:, 2])
-            c.points("/replay/commands", view, REPLAY_COMMAND_RGB, WAYPOINT_M * 2.5)
-            labels = [
-                LabelSpec.at(f"/replay/cmd_{k:03d}", text, view[k]) for k, text in enumerate(marks)
-            ]
+            c.points("/replay/commands", cmd_view, REPLAY_COMMAND_RGB, WAYPOINT_M * 2.5)
+            labels = [LabelSpec.at(f"/replay/cmd_{k:03d}", marks[k], cmd_view[k]) for k in kept]
         if len(samples):
-            view = ned_to_view(samples[:, 0], samples[:, 1], samples[:, 2])
-            c.polyline("/replay/track", view, REPLAY_RGB)
-            labels.append(LabelSpec.at("/replay/start", f"replay start, {t0:.0f} s", view[0]))
-            labels.append(LabelSpec.at("/replay/end", f"replay end, {t1:.0f} s", view[-1]))
+            c.polyline("/replay/track", track_view, REPLAY_RGB)
+            start = "replay start" if len(ends) == 2 else f"replay, 0-{t1:.0f} s"
+            if left_out:
+                start += f" ({left_out} command{'s' if left_out > 1 else ''} unlabelled)"
+            labels.append(LabelSpec.at("/replay/start", start, track_view[0]))
+            if len(ends) == 2:
+                labels.append(LabelSpec.at("/replay/end", f"end, {t1:.0f} s", track_view[-1]))
         return labels
+
+    return draw
+
+
+def _apart(points: Sequence[npt.ArrayLike], fixed: int, sep_m: float) -> list[int]:
+    """Indices (from 0 after the first ``fixed`` points, which are always kept) of the points
+    at least ``sep_m`` from every point kept before them, in order."""
+    kept_at = [np.asarray(p, dtype=np.float64) for p in points[:fixed]]
+    out = []
+    for k, p in enumerate(points[fixed:]):
+        q = np.asarray(p, dtype=np.float64)
+        if all(float(np.linalg.norm(q - a)) >= sep_m for a in kept_at):
+            kept_at.append(q)
+            out.append(k)
+    return out
+
+
+def replay_at_drawing(x_m: float, y_m: float, z_m: float, heading_deg: float) -> Drawing:
+    """The replayed vehicle at the time slider's time (NED): a marker and a line along its
+    heading in :data:`REPLAY_AT_RGB`; no label (the page says what it was doing then).
+
+    Raises:
+        ValueError: a value that is not a finite number.
+    """
+    if not all(math.isfinite(v) for v in (x_m, y_m, z_m, heading_deg)):
+        raise ValueError("replay position: x_m, y_m, z_m and heading_deg must be finite")
+    h = math.radians(heading_deg)
+    at = ned_to_view(x_m, y_m, z_m)
+    nose = ned_to_view(
+        x_m + REPLAY_AT_NOSE_M * math.cos(h), y_m + REPLAY_AT_NOSE_M * math.sin(h), z_m
+    )
+
+    def draw(c: Canvas) -> list[LabelSpec]:
+        c.group("/replay_at")
+        c.points("/replay_at/vehicle", at.reshape(1, 3), REPLAY_AT_RGB, REPLAY_AT_M)
+        c.polyline("/replay_at/heading", np.stack([at, nose]), REPLAY_AT_RGB)
+        return []
 
     return draw

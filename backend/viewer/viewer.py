@@ -58,7 +58,7 @@ from backend.viewer.draw import (
     ned_to_view,
 )
 from backend.viewer.labels import LabelSpec, declutter
-from backend.viewer.paths import preview_drawing, replay_drawing, script_drawing
+from backend.viewer.paths import preview_drawing, replay_at_drawing, replay_drawing, script_drawing
 from backend.viewer.scene import VEHICLE_LABEL_UP_M, setup_scene
 from backend.viewer.track import Track
 from backend.viewer.views import Views
@@ -336,9 +336,17 @@ class Viewer:
         if view_id is not None:
             self._views.show(view_id, "/replay", drawing)
 
+    def show_replay_at(
+        self, view_id: str, x_m: float, y_m: float, z_m: float, heading_deg: float
+    ) -> None:
+        """Draw the replayed vehicle at the slider's time in view ``view_id`` (replaces it);
+        see :func:`backend.viewer.paths.replay_at_drawing`."""
+        self._views.show(view_id, "/replay_at", replay_at_drawing(x_m, y_m, z_m, heading_deg))
+
     def clear_replay(self, view_id: str) -> bool:
-        """Remove view ``view_id``'s replay (False: there was none)."""
-        return self._views.clear(view_id, "/replay")
+        """Remove view ``view_id``'s replay and its slider's marker (False: there was none)."""
+        marker = self._views.clear(view_id, "/replay_at")
+        return self._views.clear(view_id, "/replay") or marker
 
     # --- the shared scene: vehicle and track --------------------------------------------
 

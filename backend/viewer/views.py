@@ -30,7 +30,7 @@ from backend.viewer.paths import Drawing
 logger = logging.getLogger("backend.viewer.viewer")
 
 #: The per-view groups, in the order their labels are placed (first: kept when they clash).
-GROUPS: Final = ("/preview", "/script", "/replay")
+GROUPS: Final = ("/preview", "/script", "/replay", "/replay_at")
 #: Views drawn for before their page connected: at most this many, kept this long (s).
 MAX_PENDING_VIEWS: Final = 32
 PENDING_TTL_S: Final = 120.0
@@ -162,8 +162,10 @@ class Views:
             if view.client is None or view.canvas is None:
                 return  # drawn when the page's 3D view connects
             with view.client.atomic():
-                view.specs[group] = drawing(view.canvas)
-                self._place_labels(view)
+                specs = drawing(view.canvas)
+                if specs or view.specs.get(group):  # a drawing without labels moves none
+                    view.specs[group] = specs
+                    self._place_labels(view)
 
     def clear(self, view_id: str, group: str) -> bool:
         """Remove ``group`` from view ``view_id``; False when it held nothing."""

@@ -71,9 +71,9 @@ def test_telemetry_arrives_at_its_rate(make_client: MakeClient) -> None:
     telemetry = [m for m in got if is_telemetry(m)]
     assert 5 <= len(telemetry) <= 15, len(telemetry)  # 10 Hz, latest value wins
     for m in telemetry:
-        assert set(m) == {"type", "pose", "status", "age_s"}
+        assert set(m) == {"type", "pose", "status", "age_s", "dive"}
     posed = [m for m in telemetry if m["pose"] is not None]
-    assert posed
+    assert posed and posed[-1]["dive"] == 1  # the dive the first pose started
     assert {"t_s", "x_m", "y_m", "z_m", "heading_deg", "roll_deg"} <= set(posed[-1]["pose"])
     times = [m["pose"]["t_s"] for m in posed]
     assert times == sorted(times) and times[-1] > times[0]  # sim time runs (50x)

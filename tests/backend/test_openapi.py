@@ -190,9 +190,9 @@ def same_keys(api: Any, raw: Any, where: str = "") -> None:
 
 def interrupted_record(client: TestClient) -> int:
     """A retryable record, written to the log as a crash would leave it."""
-    log = console_of(client).log
-    assert log is not None
-    rec = log.insert_command(console_of(client).dive, command_fields())
+    log, dives = console_of(client).log, console_of(client).dives
+    assert log is not None and dives is not None
+    rec = log.insert_command(dives.ensure(), command_fields())
     log.update_command(rec["id"], state="interrupted")
     return int(rec["id"])
 
@@ -325,8 +325,11 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     wait_state(client, surface["id"])
     c.call("GET", "/api/dives")
     c.call("GET", "/api/dives/1")
+    c.call("GET", "/api/series")
+    c.call("GET", "/api/dives/1/timeline")
     view = {"X-Nemesys-View": "tour-view-0001"}  # a page's own 3D view (none in this app)
     c.call("POST", "/api/dives/1/replay", headers={**AUTH, **view})
+    c.call("PUT", "/api/replay/at", json={"dive": 1, "t_s": 0.0}, headers=view)
     c.call("DELETE", "/api/replay", headers=view)
     c.call("PUT", "/api/link", json={"delivery_target": 0.99}, headers=AUTH)
     c.call("GET", "/api/training")

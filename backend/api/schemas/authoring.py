@@ -60,7 +60,10 @@ class Session(BaseModel):
     bitrate_bps: float
     operator: str
     authenticated: bool = Field(description="the request carried the operator token")
-    dive: int
+    dive: int | None = Field(
+        description="the current dive; null: none yet (a dive starts when the vehicle is first "
+        "heard, at the first command or event before that, or at a training reset)"
+    )
     version: str
     limits: SessionLimits
     link: LinkCapability

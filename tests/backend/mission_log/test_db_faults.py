@@ -437,9 +437,9 @@ def test_surface_and_retry_the_log_cannot_record_are_503(
 ) -> None:
     client = make_client()
     console = console_of(client)
-    log = console.log
-    assert log is not None
-    old = log.insert_command(console.dive, command_fields())
+    log, dives = console.log, console.dives
+    assert log is not None and dives is not None
+    old = log.insert_command(dives.ensure(), command_fields())
     log.update_command(old["id"], state="interrupted", reason="an earlier run stopped")
     spy = spy_transmit(client, monkeypatch)
     with failing_writes(log, "INSERT", "UPDATE"):

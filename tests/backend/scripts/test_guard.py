@@ -9,8 +9,8 @@ from typing import Any
 import pytest
 
 from backend.commands.service import ORIGINS, Origin, SendOutcome, SendRequest
+from backend.dives import Dives
 from backend.mission_log.records import CommandRecord
-from backend.mission_log.store import MissionLog
 from backend.scripts.guard import RunGuard, RunOver, stop_reason
 from backend.scripts.operations import ScriptRunner
 from backend.telemetry import TelemetryHub
@@ -48,8 +48,7 @@ class Host:
 
     def __init__(self, run: ScriptRunner | None) -> None:
         self.runner = run
-        self.log: MissionLog | None = None
-        self.dive = 1
+        self.dives: Dives | None = None
         self.hub = TelemetryHub()
 
 

@@ -406,9 +406,10 @@ def test_show_replay(viewer: Viewer, page: In) -> None:
     markers = cloud(page, "/replay/commands")
     assert markers.points.dtype == np.float32 and tuple(markers.colors) == REPLAY_COMMAND_RGB
     np.testing.assert_array_equal(markers.points, [(2.0, 5.0, -3.0), (2.0, 20.0, -3.0)])
-    assert label(page, "/replay/cmd_000") == "square @ 5 s"
-    assert label(page, "/replay/cmd_001") == "surface @ 20 s"
-    assert label(page, "/replay/end") == "replay end, 29 s"
+    assert label(page, "/replay/cmd_000") == "square"
+    assert label(page, "/replay/cmd_001") == "surface"
+    assert label(page, "/replay/start") == "replay start"
+    assert label(page, "/replay/end") == "end, 29 s"
     viewer.show_replay(VIEW, track[:2])  # replaces: no commands this time
     assert page.node("/replay/commands") is None and page.node("/replay/cmd_000") is None
     assert viewer.clear_replay(VIEW) is True

@@ -1,0 +1,72 @@
+"""A dive read back from the mission log: ``GET /api/series`` (the plots after a reload) and
+``GET /api/dives/{dive}/timeline`` (the replay's time slider)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+from fastapi import APIRouter, HTTPException, Query
+
+from backend.api.deps import SQLITE_INT_MAX, ConsoleDep, IdPath
+from backend.api.schemas import errors
+from backend.api.schemas.dives import DiveSeries, DiveTimeline
+from backend.chart.reach import track_lat_lon
+from backend.console import Console
+from backend.mission_log.series import DEFAULT_MAX_POINTS, dive_series
+from backend.mission_log.timeline import dive_timeline
+
+router = APIRouter(prefix="/api", tags=["commands"])
+
+#: A dive's number as a query parameter: 1 and up (absent: the current dive).
+DiveQ = Annotated[
+    int | None,
+    Query(ge=1, le=SQLITE_INT_MAX, description="the dive (1 and up); absent: the current one"),
+]
+#: Most samples returned: 2 to a day at 1 Hz; a longer dive is thinned evenly.
+LimitQ = Annotated[int, Query(ge=2, le=86_400, description="most samples returned (2 to 86400)")]
+
+
+@router.get("/series", response_model=DiveSeries, responses=errors((404, 422)))
+def series(
+    console: ConsoleDep, dive: DiveQ = None, limit: LimitQ = DEFAULT_MAX_POINTS
+) -> DiveSeries:
+    """The dive's telemetry (depth, commanded depth, battery, speed) a sample a second of the
+    vehicle's clock, from its start: the plots load it, then append the live telemetry.
+    Without ``dive``, the current dive (``dive: null`` and no samples before one starts)."""
+    log = console.log
+    assert log is not None
+    chosen = console.dive if dive is None else dive
+    if chosen is None:
+        return DiveSeries.model_validate(
+            {"dive": None, "started_at": None, **dive_series([], limit)}
+        )
+    row = log.dive(chosen)
+    if row is None:
+        raise HTTPException(404, f"no dive {chosen}")
+    doc = dive_series(log.track_rows(chosen), limit)
+    return DiveSeries.model_validate({"dive": chosen, "started_at": row["started_at"], **doc})
+
+
+def timeline_of(console: Console, dive: int) -> dict[str, Any]:
+    """The dive's timeline document (404 when there is no such dive)."""
+    log = console.log
+    assert log is not None
+    row = log.dive(dive)
+    if row is None:
+        raise HTTPException(404, f"no dive {dive}")
+    commands = log.commands(dive=dive, limit=100_000, oldest_first=True)
+    doc = dive_timeline(log.track_rows(dive), commands, log.events(dive), row["started_at"])
+    track_lat_lon(doc["samples"], console.datum)
+    return {"dive": dive, "started_at": row["started_at"], **doc}
+
+
+@router.get(
+    "/dives/{dive}/timeline",
+    response_model=DiveTimeline,
+    responses=errors((404, 422)),
+)
+def timeline(dive: IdPath, console: ConsoleDep) -> DiveTimeline:
+    """The dive on its own clock, for the replay's time slider: every sample of the vehicle
+    (position, mode, the command it was running), its commands and the link's events (copies
+    sent, acknowledgements, rejections, timeouts, logged events), in time order."""
+    return DiveTimeline.model_validate(timeline_of(console, dive))

@@ -1,0 +1,125 @@
+"""The current dive: when one starts, and what the console records into it.
+
+A dive starts at the first of:
+
+- the vehicle heard (its first pose, status or acknowledgement since this console started);
+- the training vehicle reset (always a new dive, even if one is open);
+- the first record the console writes before the vehicle is heard: a command (on a one-way
+  modem the vehicle may never be heard, and every command still belongs to a dive) or an
+  event (a datum set from the chart).
+
+A console that starts and stops with none of these adds no dive (it used to add one at every
+start). The dive's start on the vehicle's clock is its first track point (the first pose
+heard in it): the plots' and the replay's zero.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Mapping
+from typing import Any
+
+from backend.commands.manager import CommandManager
+from backend.mission_log.store import LogWriteError, MissionLog
+from backend.telemetry import TelemetryHub
+
+logger = logging.getLogger("backend.console")
+
+#: The track is kept at this interval of the vehicle's clock (s).
+TRACK_INTERVAL_S = 1.0
+
+
+class Dives:
+    """The console's current dive in the mission log ``log`` (None until one starts), named
+    in ``hub``'s telemetry (every page's plots follow it)."""
+
+    def __init__(self, log: MissionLog, target: str, hub: TelemetryHub | None = None) -> None:
+        self.log = log
+        self.target = target
+        self.hub = hub
+        #: The current dive's number (None: none started since this console started).
+        self.current: int | None = None
+        self._last_track_s: float | None = None
+        self._echo_flagged = False  # an echo mismatch is logged once each time it begins
+
+    def ensure(self) -> int:
+        """The current dive, started now if there is none.
+
+        Raises:
+            LogWriteError: the new dive cannot be written (nothing changed).
+        """
+        if self.current is None:
+            self.current = self.log.new_dive(self.target)
+            self._last_track_s = None
+            logger.info("dive %d started", self.current)
+            self._started()
+        return self.current
+
+    def start_new(self) -> int:
+        """A new dive even if one is open (the training vehicle was reset).
+
+        Raises:
+            LogWriteError: the new dive cannot be written (the current one stays).
+        """
+        self.current = self.log.new_dive(self.target)
+        self._last_track_s = None
+        logger.info("dive %d started (vehicle reset)", self.current)
+        self._started()
+        return self.current
+
+    def _started(self) -> None:
+        if self.hub is not None:
+            self.hub.dive = self.current
+
+    def heard(self) -> int | None:
+        """The vehicle was heard: the current dive (started now if none); None when the log
+        cannot be written (logged: the telemetry path goes on)."""
+        try:
+            return self.ensure()
+        except LogWriteError as err:
+            logger.error("could not start a dive in the mission log: %s", err)
+            return None
+
+    def track(
+        self,
+        position: tuple[float, float, float, float, float],
+        status: Mapping[str, Any],
+    ) -> None:
+        """A pose heard, ``(t_s, x_m, y_m, z_m, heading_deg)``, with the status then: kept as
+        a track point at most every :data:`TRACK_INTERVAL_S` of the vehicle's clock (a clock
+        that went back, a vehicle restarted, starts the count again)."""
+        dive = self.heard()
+        if dive is None:
+            return
+        t_s, last = position[0], self._last_track_s
+        if last is not None and last <= t_s < last + TRACK_INTERVAL_S:
+            return
+        self._last_track_s = t_s
+        self.log.add_track(dive, *position, status=status)
+
+    def event(
+        self, kind: str, detail: str, data: Mapping[str, Any] | None = None
+    ) -> dict[str, Any]:
+        """Write an event into the current dive (started now if none); returns it.
+
+        Raises:
+            LogWriteError: it cannot be written.
+        """
+        return self.log.add_event(self.ensure(), kind, detail, data)
+
+    def echo_mismatch(self, commands: CommandManager) -> dict[str, Any] | None:
+        """Vehicle activity this console did not cause (an echo mismatch): written as an
+        event once each time it begins; returns the event when one was written."""
+        mismatch = commands.echo_mismatch
+        if not mismatch or self._echo_flagged:
+            self._echo_flagged = mismatch
+            return None
+        self._echo_flagged = True
+        detail, data = commands.vehicle.mismatch_event()
+        try:
+            event = self.event("echo_mismatch", detail, data)
+        except LogWriteError as err:
+            logger.error("could not log an echo mismatch: %s", err)
+            return None
+        logger.warning("echo mismatch: %s", detail)
+        return event

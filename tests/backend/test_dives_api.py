@@ -1,0 +1,145 @@
+"""A dive read back from the mission log: ``GET /api/series`` (the plots),
+``GET /api/dives/{dive}/timeline`` and ``PUT /api/replay/at`` (the replay's slider)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from fastapi.testclient import TestClient
+
+from planner import VehicleState
+from station.link import Capability
+from tests.agent_link import HOLDING, AgentLink
+from tests.backend.conftest import MakeLightClient, console_of, send, wait_state
+
+
+def test_before_any_dive_the_series_is_empty(make_light_client: MakeLightClient) -> None:
+    client = make_light_client(AgentLink(Capability.NONE))
+    assert client.get("/api/series").json() == {
+        "dive": None,
+        "started_at": None,
+        "start_t_s": None,
+        "interval_s": None,
+        "t_s": [],
+        "depth_m": [],
+        "commanded_depth_m": [],
+        "battery_pct": [],
+        "speed_mps": [],
+    }
+
+
+def test_the_series_is_the_dives_track_from_its_start(client: TestClient) -> None:
+    console = console_of(client)
+    assert console.log is not None and console.dive == 1  # the first pose started it
+    circle = {"pattern": "circle", "params": {"depth": 3.0}}
+    for k in range(1, 10):
+        status = {
+            "depth_m": 2.0 + k / 10,
+            "battery_pct": 100 - k,
+            "speed_mps": 0.3,
+            "active": circle,
+        }
+        console.log.add_track(1, HOLDING.t_s + k, 0.0, 0.0, 2.0, 0.0, status)
+    s = client.get("/api/series").json()
+    assert s["dive"] == 1 and s["started_at"] == client.get("/api/dives").json()[0]["started_at"]
+    assert s["start_t_s"] == HOLDING.t_s  # the first pose heard
+    assert s["t_s"] == [float(k) for k in range(10)]
+    assert s["depth_m"][0] == 2.0 and s["depth_m"][-1] == pytest.approx(2.9)
+    assert s["commanded_depth_m"] == [None] + [3.0] * 9
+    assert s["battery_pct"][1:] == [100 - k for k in range(1, 10)]
+    # the same dive named, thinned evenly to three samples (first and last kept)
+    thin = client.get("/api/series", params={"dive": 1, "limit": 3}).json()
+    assert thin["t_s"] == [0.0, 4.0, 9.0] and thin["interval_s"] == 4.5
+
+
+@pytest.mark.parametrize(
+    ("params", "where", "allowed"),
+    [
+        ({"dive": 0}, "dive", "greater than or equal to 1"),
+        ({"dive": "current"}, "dive", "valid integer"),
+        ({"limit": 1}, "limit", "greater than or equal to 2"),
+        ({"limit": 100_000}, "limit", "less than or equal to 86400"),
+        ({"limit": "all"}, "limit", "valid integer"),
+    ],
+)
+def test_bad_input_is_422_naming_what_is_allowed(
+    client: TestClient, params: dict[str, object], where: str, allowed: str
+) -> None:
+    r = client.get("/api/series", params=params)
+    assert r.status_code == 422, r.text
+    (item,) = r.json()["detail"]
+    assert item["loc"] == ["query", where]
+    assert allowed in item["msg"], item
+
+
+def test_a_dive_that_does_not_exist_is_404(client: TestClient) -> None:
+    r = client.get("/api/series", params={"dive": 99})
+    assert r.status_code == 404 and r.json() == {"detail": "no dive 99"}
+
+
+# --- the replay's timeline and its slider ----------------------------------------------------
+
+
+def moved(link: AgentLink, client: TestClient, dt_s: float, x_m: float) -> None:
+    """The in-memory vehicle reports itself ``dt_s`` later at ``x_m`` north: its pose, then
+    its status (a track point keeps the status before it: the circle from the next one)."""
+    link.state = VehicleState(x_m, 0.0, 2.0, heading_deg=0.0, t_s=HOLDING.t_s + dt_s)
+    client.portal.call(link.report)  # type: ignore[union-attr]
+
+
+def circle_flown(link: AgentLink, client: TestClient) -> dict[str, Any]:
+    """A circle sent and acknowledged, then the vehicle heard at 2 s (4 m) and 3 s (6 m)."""
+    sent = send(client)
+    wait_state(client, sent["id"], ("acknowledged",))
+    moved(link, client, 2.0, 4.0)
+    moved(link, client, 3.0, 6.0)
+    return sent
+
+
+def test_the_timeline_has_the_samples_the_command_running_and_the_link_events(
+    make_light_client: MakeLightClient,
+) -> None:
+    link = AgentLink()
+    client = make_light_client(link)
+    sent = circle_flown(link, client)
+    doc = client.get("/api/dives/1/timeline").json()
+    assert doc["dive"] == 1 and doc["start_t_s"] == HOLDING.t_s
+    assert [s["t_s"] for s in doc["samples"]] == [0.0, 2.0, 3.0]
+    assert [s["pattern"] for s in doc["samples"]] == [None, None, "circle"]
+    assert [s["command_id"] for s in doc["samples"]] == [None, None, sent["id"]]
+    assert doc["samples"][1]["lat_deg"] is None  # no datum on this console
+    # (in time order; this vehicle's clock stands still between reports, so the order of a
+    # copy and its acknowledgement here says nothing)
+    kinds = sorted((e["kind"], e["command_id"]) for e in doc["events"])
+    assert kinds == [("acknowledged", sent["id"]), ("sent", sent["id"])]
+    times = [e["t_s"] for e in doc["events"]]
+    assert times == sorted(times) and doc["from_t_s"] <= times[0]
+    assert doc["duration_s"] >= 2.0 and doc["unplaced_events"] == 0
+    assert [c["id"] for c in doc["commands"]] == [sent["id"]]
+    assert client.get("/api/dives/9/timeline").status_code == 404
+    assert client.get("/api/dives/0/timeline").status_code == 422
+
+
+def test_the_slider_gives_the_vehicle_at_a_time_and_refuses_one_outside_the_dive(
+    make_light_client: MakeLightClient,
+) -> None:
+    link = AgentLink()
+    client = make_light_client(link)
+    sent = circle_flown(link, client)
+    r = client.put("/api/replay/at", json={"dive": 1, "t_s": 1.5})
+    assert r.status_code == 200, r.text
+    at = r.json()
+    assert at["drawn"] is False  # no 3D view in this app, and no X-Nemesys-View
+    assert at["position"]["x_m"] == pytest.approx(3.0)  # 3/4 of the way from 0 to 4 m
+    assert at["position"]["command_id"] is None  # the sample before: not running it yet
+    at = client.put("/api/replay/at", json={"dive": 1, "t_s": 3.0}).json()
+    assert at["position"]["command_id"] == sent["id"] and at["position"]["x_m"] == 6.0
+    end = client.get("/api/dives/1/timeline").json()["duration_s"]
+    r = client.put("/api/replay/at", json={"dive": 1, "t_s": end + 1})
+    assert r.status_code == 422
+    (item,) = r.json()["detail"]
+    assert item["loc"] == ["body", "t_s"] and "t_s must be within" in item["msg"], item
+    assert client.put("/api/replay/at", json={"dive": 4, "t_s": 0}).status_code == 404
+    for bad in ({"dive": 1, "t_s": "1"}, {"dive": 1}, {"dive": True, "t_s": 0}):
+        assert client.put("/api/replay/at", json=bad).status_code == 422, bad
