@@ -22,6 +22,7 @@ import pytest
 from playwright.sync_api import Browser, Page, Request, sync_playwright
 from playwright.sync_api import Error as PlaywrightError
 
+from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
 
 REPO = Path(__file__).resolve().parents[2]
@@ -209,3 +210,14 @@ def watched(browser: Browser, request: pytest.FixtureRequest) -> Iterator[Watche
             context.close()
     # a page error after the test's own assert_clean() (e.g. while it was being closed)
     assert not w.errors, f"uncaught errors in the page: {w.errors}"
+
+
+@pytest.fixture
+def gateway() -> Iterator[FrameGateway]:
+    """A loopback ME modem gateway that decodes every frame it is given (a one-way link)."""
+    g = FrameGateway()
+    try:
+        yield g
+    finally:
+        g.close()
+        assert not g.rejected, f"frames the gateway could not decode: {g.rejected}"

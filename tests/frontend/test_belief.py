@@ -15,7 +15,7 @@ from __future__ import annotations
 import json
 import re
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 import pytest
@@ -58,16 +58,6 @@ def record(console: Console, command_id: int) -> dict[str, Any]:
 
 
 # --- one-way ------------------------------------------------------------------------------------
-
-
-@pytest.fixture
-def gateway() -> Iterator[FrameGateway]:
-    g = FrameGateway()
-    try:
-        yield g
-    finally:
-        g.close()
-        assert not g.rejected, f"frames the gateway could not decode: {g.rejected}"
 
 
 @pytest.fixture

@@ -13,7 +13,7 @@ import csv
 import io
 import re
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from typing import Any
 
 import pytest
@@ -27,16 +27,6 @@ CIRCLE = {"speed": "0.18", "depth": "2", "radius": "4"}
 #: Copies of the first circle: enough that it is still going out when Surface is pressed.
 MANY = 20
 TIMEOUT_S = 20.0
-
-
-@pytest.fixture
-def gateway() -> Iterator[FrameGateway]:
-    g = FrameGateway()
-    try:
-        yield g
-    finally:
-        g.close()
-        assert not g.rejected, f"frames the gateway could not decode: {g.rejected}"
 
 
 @pytest.fixture
