@@ -20,7 +20,16 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from backend.commands.lifecycle import ON_ITS_WAY, TERMINAL, Event, State, advance
+from backend.commands.lifecycle import ON_ITS_WAY, Event, State, advance
+from backend.mission_log.command_rows import (
+    FINAL_STATES,
+    STATES,
+    WIRE_ORDER,
+    checked_update,
+    column_value,
+    command_row,
+    commands_query,
+)
 from backend.mission_log.errors import LogWriteError
 from backend.mission_log.schema import create_or_migrate
 from backend.mission_log.track import (
@@ -48,33 +57,6 @@ __all__ = [
 
 #: How long a write waits for a lock another connection holds before it fails (s).
 BUSY_TIMEOUT_S = 1.0
-
-#: Columns holding JSON text.
-_JSON = ("params", "requested", "ack", "overrides")
-#: Columns holding booleans (SQLite integers).
-_BOOL = ("two_way",)
-#: Columns a command update may set.
-_UPDATABLE = frozenset(
-    {
-        "state",
-        "attempts",
-        "sent_at",
-        "acked_at",
-        "ack",
-        "reason",
-        "copies",
-        "copies_sent",
-        "p_delivered",
-        "ber",
-        "two_way",
-        "superseded_by",
-        "first_sent_at",
-    }
-)
-#: Wire order: by the time a command's first copy left (one never sent: when it was made).
-WIRE_ORDER = "COALESCE(first_sent_at, created_at) {0}, id {0}"
-STATES = tuple(State)
-FINAL_STATES = frozenset(str(s) for s in TERMINAL)
 
 
 @contextlib.contextmanager
@@ -234,7 +216,7 @@ class MissionLog:
             **record,
         }
         cols = list(row)
-        values = [json.dumps(row[c]) if c in _JSON else row[c] for c in cols]
+        values = [column_value(c, row[c]) for c in cols]
         with self._lock, _writing():
             cur = self._db.execute(
                 f"INSERT INTO commands ({', '.join(cols)}) VALUES ({', '.join('?' * len(cols))})",
@@ -246,17 +228,10 @@ class MissionLog:
 
     def update_command(self, command_id: int, **fields: Any) -> dict[str, Any]:
         """Set some fields of a command (one atomic statement); returns the new record."""
-        unknown = set(fields) - _UPDATABLE
-        if unknown:
-            raise ValueError(f"cannot update {sorted(unknown)}; allowed: {sorted(_UPDATABLE)}")
-        if "state" in fields:
-            if fields["state"] not in STATES:
-                allowed = ", ".join(STATES)
-                raise ValueError(f"unknown state {fields['state']!r}; allowed: {allowed}")
-            fields["state"] = str(fields["state"])
+        fields = checked_update(fields)
         fields["updated_at"] = now_iso()
         sets = ", ".join(f"{k} = ?" for k in fields)
-        values = [json.dumps(v) if k in _JSON else v for k, v in fields.items()]
+        values = [column_value(k, v) for k, v in fields.items()]
         with self._lock, _writing():
             self._db.execute(f"UPDATE commands SET {sets} WHERE id = ?", [*values, command_id])
             got = self._command(command_id)
@@ -271,7 +246,7 @@ class MissionLog:
     def _command(self, command_id: int) -> dict[str, Any] | None:
         """The record as written (under the lock: the row this call's statement left)."""
         row = self._db.execute("SELECT * FROM commands WHERE id = ?", (command_id,)).fetchone()
-        return _record(row) if row is not None else None
+        return command_row(row) if row is not None else None
 
     def commands(
         self,
@@ -285,24 +260,19 @@ class MissionLog:
         limit: int = 200,
         oldest_first: bool = False,
     ) -> list[dict[str, Any]]:
-        filters = (
-            ("state = ?", state),
-            ("pattern = ?", pattern),
-            ("target = ?", target),
-            ("dive = ?", dive),
-            ("created_at >= ?", since),
-            ("created_at <= ?", until),
+        sql, args = commands_query(
+            state=state,
+            pattern=pattern,
+            target=target,
+            dive=dive,
+            since=since,
+            until=until,
+            limit=limit,
+            oldest_first=oldest_first,
         )
-        where = [clause for clause, value in filters if value is not None]
-        args: list[Any] = [value for _, value in filters if value is not None]
-        sql = "SELECT * FROM commands"
-        if where:
-            sql += " WHERE " + " AND ".join(where)
-        sql += " ORDER BY " + WIRE_ORDER.format("ASC" if oldest_first else "DESC") + " LIMIT ?"
-        args.append(limit)
         with self._lock:
             rows = self._db.execute(sql, args).fetchall()
-        return [_record(r) for r in rows]
+        return [command_row(r) for r in rows]
 
     def last_sent(self) -> dict[str, Any] | None:
         """The command whose first copy left most recently (of any dive), as
@@ -390,14 +360,3 @@ class MissionLog:
         for row in out:
             row["active"] = None if row["active"] is None else json.loads(row["active"])
         return out
-
-
-def _record(row: sqlite3.Row) -> dict[str, Any]:
-    out = dict(row)
-    for col in _JSON:
-        if out.get(col) is not None:
-            out[col] = json.loads(out[col])
-    for col in _BOOL:
-        if out.get(col) is not None:
-            out[col] = bool(out[col])
-    return out
