@@ -147,7 +147,7 @@ def _static(app: FastAPI) -> None:
     @app.get("/viewer/", include_in_schema=False)
     def viewer_page() -> FileResponse:
         """viser's own client page, served same-origin; it connects to viser's port."""
-        from backend.viewer.viewer import client_html_path
+        from backend.viewer.client_page import client_html_path
 
         return FileResponse(client_html_path())
 

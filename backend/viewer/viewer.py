@@ -42,6 +42,7 @@ from types import TracebackType
 import numpy.typing as npt
 import viser
 
+from backend.viewer.client_page import client_html_path
 from backend.viewer.draw import (
     ACTIVE_RGB,
     PREVIEW_BODY_RGB,
@@ -73,20 +74,8 @@ __all__ = [
     "TRACK_RGB",
     "Viewer",
     "attitude_to_view_wxyz",
-    "client_html_path",
     "ned_to_view",
 ]
-
-
-def client_html_path() -> FilePath:
-    """Path of viser's bundled client page (``viser/client/build/index.html``).
-
-    Serve it same-origin (e.g. FastAPI ``FileResponse`` at ``/viewer``) and open it as
-    ``/viewer?websocket=ws://<host>:<port>/view/<view id>`` (see :attr:`Viewer.websocket_url`):
-    only the websocket then goes to viser's port. It must come from the installed viser, whose
-    server rejects clients of another version.
-    """
-    return FilePath(viser.__file__).resolve().parent / "client" / "build" / "index.html"
 
 
 class Viewer:
@@ -166,13 +155,14 @@ class Viewer:
 
     @property
     def websocket_url(self) -> str:
-        """``ws://host:port``: the ``websocket=`` parameter for :func:`client_html_path`
+        """``ws://host:port``: the ``websocket=`` parameter for
+        :func:`~backend.viewer.client_page.client_html_path`
         (a page appends ``/view/<its view id>``)."""
         return f"ws://{self._host}:{self.port}"
 
     @staticmethod
     def client_html_path() -> FilePath:
-        """See the module-level :func:`client_html_path`."""
+        """See :func:`backend.viewer.client_page.client_html_path`."""
         return client_html_path()
 
     def stop(self) -> None:

@@ -20,6 +20,7 @@ import pytest
 import viser
 import viser.transforms as vtf
 
+import backend.viewer.client_page
 import backend.viewer.draw
 import backend.viewer.labels
 import backend.viewer.paths
@@ -27,6 +28,7 @@ import backend.viewer.scene
 import backend.viewer.track
 import backend.viewer.viewer
 import backend.viewer.views
+from backend.viewer.client_page import client_html_path
 from backend.viewer.viewer import (
     ACTIVE_RGB,
     PREVIEW_BODY_RGB,
@@ -37,7 +39,6 @@ from backend.viewer.viewer import (
     TRACK_RGB,
     Viewer,
     attitude_to_view_wxyz,
-    client_html_path,
     ned_to_view,
 )
 from tests.backend.viewer.test_views import FakePage
@@ -446,7 +447,7 @@ def test_show_script(viewer: Viewer, page: In) -> None:
 
 VIEWER_MODULES = (
     backend.viewer.viewer, backend.viewer.draw, backend.viewer.labels, backend.viewer.paths,
-    backend.viewer.scene, backend.viewer.track, backend.viewer.views,
+    backend.viewer.scene, backend.viewer.track, backend.viewer.views, backend.viewer.client_page,
 )  # fmt: skip
 
 
