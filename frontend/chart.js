@@ -6,6 +6,7 @@
 
 import { api } from "./api.js";
 import { beliefLayers } from "./belief.js";
+import { buttonsControl, legendControl } from "./chart-controls.js";
 import { watchOperator } from "./chart-operator.js";
 import { drawGraticule } from "./graticule.js";
 import { $, el, on, num } from "./ui.js";
@@ -17,14 +18,6 @@ const FIT_MAX_ZOOM = 20;
 const TRACK_POINTS = 3600;
 const TRACK_MIN_DEG = 2e-6; // ~0.2 m: closer fixes are not added to the track
 const CHART_REFRESH_MS = 30000; // the station moves with a surface GPS
-// the buttons' icons (inline: no icon font to fetch)
-const ICON_CENTRE = '<circle cx="8" cy="8" r="4.5"/><path d="M8 0v4M8 12v4M0 8h4M12 8h4"/>';
-const ICON_FIT = '<path d="M1 5V1h4M11 1h4v4M15 11v4h-4M5 15H1v-4"/>';
-const REACH = {
-  in_range: "in range",
-  marginal: "marginal",
-  out_of_range: "out of range",
-};
 
 let L = null;
 let map = null;
@@ -80,50 +73,6 @@ function commandKey(cmd) {
 }
 
 // ---- controls ----
-
-function buttonsControl() {
-  const Buttons = L.Control.extend({
-    options: { position: "topright" },
-    onAdd() {
-      const box = el("div", { class: "leaflet-bar chart-buttons" });
-      const button = (svg, title, testid, fn) => {
-        const a = el("a", { href: "#", role: "button", title, "aria-label": title, testid, onclick: (e) => (e.preventDefault(), fn()) });
-        a.innerHTML = `<svg viewBox="0 0 16 16" width="16" height="16" aria-hidden="true">${svg}</svg>`;
-        return a;
-      };
-      box.append(
-        button(ICON_CENTRE, "centre on the vehicle", "chart-centre-vehicle", centreOnVehicle),
-        button(ICON_FIT, "fit the preview, the predicted track and the vehicle (and each new preview again)", "chart-fit", fitButton),
-      );
-      L.DomEvent.disableClickPropagation(box);
-      return box;
-    },
-  });
-  return new Buttons();
-}
-
-function legendControl() {
-  const Legend = L.Control.extend({
-    options: { position: "bottomright" },
-    onAdd() {
-      const item = (cls, text, title) => el("li", { title }, el("span", { class: `swatch ${cls}`, "aria-hidden": "true" }), text);
-      const box = el(
-        "ul",
-        { class: "chart-legend", testid: "chart-legend" },
-        item("reach-in_range", REACH.in_range),
-        item("reach-marginal", `${REACH.marginal} (> 75 %)`, "beyond 75 % of the ME link's range from the transmitter"),
-        item("reach-out_of_range", REACH.out_of_range),
-        item("predicted", "predicted", "what the twin predicts the vehicle will fly"),
-        item("active", "active", "the path the vehicle flies, as the console mirrors it"),
-        item("track", "track"),
-      );
-      L.DomEvent.disableClickPropagation(box);
-      layers.legendBox = box;
-      return box;
-    },
-  });
-  return new Legend();
-}
 
 function centreOnVehicle() {
   state.operatorMoved = true; // the operator chose this view
@@ -372,8 +321,8 @@ function createMap() {
   });
   map.setView([0, 0], 2);
   L.control.zoom({ position: "topright" }).addTo(map);
-  buttonsControl().addTo(map);
-  legendControl().addTo(map);
+  buttonsControl(L, { centre: centreOnVehicle, fit: fitButton }).addTo(map);
+  legendControl(L).addTo(map);
   watchOperator(map, () => {
     state.operatorMoved = true;
     $("chart").dataset.fit = "operator";
