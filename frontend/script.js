@@ -3,39 +3,17 @@
 // localStorage on every change and restored when the page loads.
 
 import { api } from "./api.js";
-import { dictionary, paramForm, fillPatternSelect, defaultParams, commandText } from "./form.js";
+import { paramForm, fillPatternSelect, defaultParams, commandText } from "./form.js";
 import { $, el, download, notify, notifyError, applyAuth, setOff, on } from "./ui.js";
+import { REPEATING, SCRIPT_FORMAT, SCRIPT_VERSION, TRIGGERS, completionRefusal, parseScript, triggerText } from "./script_format.js";
 import { drawScriptPlan } from "./script_plan.js";
 import { runStepText, timelineText } from "./script_text.js";
 
-export const SCRIPT_FORMAT = "nemesys-mission-script";
-export const SCRIPT_VERSION = 1;
-/** The triggers in the operator's words (backend/scripts/labels.py's TRIGGER_WORDS;
- * tests/backend/scripts/test_labels.py checks they agree). Every time of a script counts from
- * its run's start: a script is written ahead and run at any point of a dive. */
-const TRIGGERS = [
-  ["after_previous", "after the previous step completes"],
-  ["at", "at a time from the run's start"],
-  ["operator", "on the operator's go"],
-];
-
-/** Patterns that repeat until retasked, so never complete: the planner's REPEATING_PATTERNS
- * (backend/scripts/completion.py; tests/backend/scripts/test_completion.py checks they agree). */
-export const REPEATING = new Set(["square", "circle"]);
 /** localStorage key of the script being authored. */
 export const STORE_KEY = "nemesys.script";
 
 let steps = []; // [{pattern, params, trigger: {kind, t_s}}]
 let pollTimer = null;
-
-/** Why step i may not wait for the previous step to complete, or null (same text as the API). */
-export function completionRefusal(list, i) {
-  const step = list[i];
-  const prev = i > 0 ? list[i - 1] : null;
-  if (!step || !prev || step.trigger.kind !== "after_previous" || !REPEATING.has(prev.pattern)) return null;
-  const name = prev.pattern.replace(/_/g, " ");
-  return `step ${i + 1} waits for step ${i} (${name}) to complete, but a ${name} repeats until retasked, so it never completes: use a time ('at') or the operator's go`;
-}
 
 /** Keep the script in localStorage (best effort: a full or disabled storage only warns once). */
 let storeWarned = false;
@@ -271,27 +249,6 @@ function saveScript() {
   download(fileName(".nemesys-script.json"), JSON.stringify(scriptDocument(), null, 2) + "\n");
 }
 
-/** Parse a saved script; throws Error with a reason. */
-export function parseScript(text) {
-  let doc;
-  try {
-    doc = JSON.parse(text);
-  } catch {
-    throw new Error("not JSON");
-  }
-  if (!doc || typeof doc !== "object" || doc.format !== SCRIPT_FORMAT) throw new Error(`not a ${SCRIPT_FORMAT} file`);
-  if (doc.version !== SCRIPT_VERSION) throw new Error(`version ${doc.version} is not supported (expected ${SCRIPT_VERSION})`);
-  if (!Array.isArray(doc.steps)) throw new Error("steps must be a list");
-  const out = doc.steps.map((s, i) => {
-    if (!s || !dictionary.byName.has(s.pattern)) throw new Error(`step ${i + 1}: unknown pattern ${s && s.pattern}`);
-    const kind = s.trigger && s.trigger.kind;
-    if (!TRIGGERS.some(([k]) => k === kind)) throw new Error(`step ${i + 1}: unknown trigger ${kind}`);
-    if (s.params != null && (typeof s.params !== "object" || Array.isArray(s.params))) throw new Error(`step ${i + 1}: params must be an object`);
-    return { pattern: s.pattern, params: { ...(s.params || {}) }, trigger: { kind, t_s: kind === "at" ? Number(s.trigger.t_s) || 0 : null } };
-  });
-  return { name: String(doc.name || "mission").slice(0, 80), steps: out };
-}
-
 async function loadScript(event) {
   const file = event.target.files && event.target.files[0];
   event.target.value = "";
@@ -350,14 +307,6 @@ export async function pollRun() {
     if (err.status !== 404) notifyError("script run state", err);
     renderRun(null);
   }
-}
-
-/** A trigger in the operator's words ("at 60 s from the run's start"). */
-function triggerText(t) {
-  if (!t || typeof t !== "object") return "";
-  if (t.kind === "at") return `at ${Number(t.t_s ?? 0)} s from the run's start`;
-  const known = TRIGGERS.find(([k]) => k === t.kind);
-  return known ? known[1] : "";
 }
 
 function renderRun(run) {

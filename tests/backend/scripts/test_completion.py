@@ -80,9 +80,9 @@ def test_each_pattern_is_finite_or_repeats_as_the_planner_plans_it(pattern: str)
 
 
 def test_the_page_knows_the_same_repeating_patterns() -> None:
-    js = (REPO / "frontend" / "script.js").read_text()
+    js = (REPO / "frontend" / "script_format.js").read_text()
     found = re.search(r"export const REPEATING = new Set\(\[([^\]]*)\]\)", js)
-    assert found is not None, "frontend/script.js declares REPEATING"
+    assert found is not None, "frontend/script_format.js declares REPEATING"
     assert set(re.findall(r'"([a-z_]+)"', found.group(1))) == set(REPEATING)
 
 
