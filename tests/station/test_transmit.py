@@ -28,6 +28,7 @@ from station.transmit import (
     RosbridgeTransmitter,
     SendResult,
     SerialTransmitter,
+    TcpTransmitter,
     ack_match,
     failure_reason,
     open_transmitter,
@@ -148,7 +149,7 @@ def test_tcp_gateway_receives_exactly_the_bytes() -> None:
     thread.start()
     try:
         tx = open_transmitter(f"tcp://127.0.0.1:{port}")
-        assert isinstance(tx, SerialTransmitter) and tx.url == f"socket://127.0.0.1:{port}"
+        assert isinstance(tx, TcpTransmitter) and (tx.host, tx.port) == ("127.0.0.1", port)
         with tx:
             results = [tx.send(frame) for frame in FRAMES]
         thread.join(2)
@@ -233,7 +234,7 @@ def test_good_targets() -> None:
     assert isinstance(ser, SerialTransmitter)
     assert (ser.url, ser.baudrate, ser.target) == ("/dev/ttyUSB0", 115200, "serial:///dev/ttyUSB0")
     tcp = open_transmitter("tcp://[::1]:4001", bitrate_bps=18_000)
-    assert isinstance(tcp, SerialTransmitter) and tcp.url == "socket://[::1]:4001"
+    assert isinstance(tcp, TcpTransmitter) and (tcp.host, tcp.port) == ("::1", 4001)
     assert tcp.gap_s == pytest.approx(100 / 18_000)
     assert len(TARGET_FORMS) == 5
 
