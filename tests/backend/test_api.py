@@ -66,6 +66,7 @@ API_PATHS = {
     "/api/dives/{dive}/replay",
     "/api/vehicle",
     "/api/link",
+    "/api/link/test",
     "/api/training",
     "/api/training/channel",
     "/api/training/current",
