@@ -5,7 +5,7 @@ import { initAssumptions, setAssumptionsMode } from "./assumptions.js";
 import { initAuthoring, current } from "./authoring.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
 import { setDictionary } from "./form.js";
-import { renderLink, setSessionLink } from "./link.js";
+import { initLinkTest, renderLink, setSessionLink } from "./link.js";
 import { connectLive } from "./live.js";
 import { initLog, loadLog } from "./log.js";
 import { initChart } from "./chart.js";
@@ -174,6 +174,7 @@ async function main() {
   initCommands({ wsSurface: () => Boolean(live && live.send({ type: "surface" })) });
   initTraining();
   initAssumptions();
+  initLinkTest();
   startAgeTicker();
   renderSession(null);
 
