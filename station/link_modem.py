@@ -31,6 +31,8 @@ PROBE_S: Final = 1.0
 #: After a failed check the next comes this soon, doubling up to MAX_BACKOFF_S (s).
 BACKOFF_S: Final = 0.2
 MAX_BACKOFF_S: Final = 5.0
+#: How long :meth:`ModemLink.start` waits for the first check (s).
+FIRST_CHECK_S: Final = 1.0
 #: The forms ``telemetry`` (``NEMESYS_TELEMETRY``) takes.
 TELEMETRY_FORMS: Final = ("ws://host:port[/path]", "wss://host:port[/path]")
 
@@ -72,8 +74,8 @@ def parse_telemetry(url: str) -> str:
 class ModemLink(Link):
     """An ME modem on a serial port or TCP gateway: one-way, no acknowledgements.
 
-    ``connected`` is what the last check or frame found. :meth:`start` checks the modem, then
-    the watch checks it every ``probe_s`` while it passes, else again after a back-off
+    ``connected`` is what the last check or frame found. The watch (from :meth:`start`) checks
+    the modem at once, then every ``probe_s`` while it passes, else again after a back-off
     (``backoff_s`` doubling to ``max_backoff_s``); a frame that did not leave wakes it at once,
     and is named among the problems until one leaves.
     """
@@ -103,6 +105,7 @@ class ModemLink(Link):
         self.last_failure: str | None = None
         self._lock = asyncio.Lock()  # a check and a frame never overlap
         self._wake = asyncio.Event()
+        self._checked = asyncio.Event()  # set by the first check
         self._task: asyncio.Task[None] | None = None
 
     @property
@@ -119,10 +122,12 @@ class ModemLink(Link):
         self._capability_problems = value
 
     async def start(self) -> None:
-        """Check the modem once (so the link says at once what it found: at most the
-        transmitter's open timeout), then watch it in the background."""
-        await self._check()
+        """Start the watch; return once its first check is done (the link says at once what
+        it found), or after :data:`FIRST_CHECK_S` (a slow name lookup or connect goes on in the
+        background)."""
         self._task = asyncio.create_task(self._watch(), name=f"modem watch {self.target}")
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._checked.wait(), FIRST_CHECK_S)
 
     async def stop(self) -> None:
         if self._task is not None:
@@ -135,6 +140,7 @@ class ModemLink(Link):
     async def _watch(self) -> None:
         backoff_s = self.backoff_s
         while True:
+            await self._check()
             if self._connected:
                 backoff_s, wait_s = self.backoff_s, self.probe_s
             else:
@@ -142,13 +148,13 @@ class ModemLink(Link):
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._wake.wait(), wait_s)
             self._wake.clear()
-            await self._check()
 
     async def _check(self) -> LinkCheck:
         async with self._lock:
             check = await self.transmitter.check_async()
         was = self._connected
         self._connected = check.ok
+        self._checked.set()
         if check.ok:
             self.connection_problem = None
             if not was:

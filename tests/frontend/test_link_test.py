@@ -42,7 +42,8 @@ def test_test_link_checks_the_gateway_without_sending_a_frame(
 
     button.click()
     expect(result).to_have_text(f"link OK: modem {gateway.target} ok; no frame sent")
-    assert gateway.total() == 0 and gateway.connections == 1
+    gateway.wait_for("the console's connection", lambda: gateway.connections == 1)
+    assert gateway.total() == 0
 
     gateway.stop()
     button.click()

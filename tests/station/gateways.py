@@ -117,13 +117,13 @@ class Gateway:
         file, then connection refused)."""
         self._stop.set()
         self._listener.close()
+        for thread in self._threads:  # none accepts or reads any more
+            thread.join(2.0)
+        self._threads = []
         with self._cond:
             conns, self._conns = self._conns, []
         for conn in conns:
             conn.close()
-        for thread in self._threads:
-            thread.join(2.0)
-        self._threads = []
 
     def restart(self) -> None:
         """Come back on the same port."""

@@ -51,6 +51,7 @@ def test_the_health_follows_a_gateway_away_and_back_without_a_frame(gateway: Gat
         try:
             assert link.connected  # start checked it
             assert link.connection_problem is None and link.capability is Capability.NONE
+            await asyncio.to_thread(gateway.wait_for, "accepted", lambda: gateway.connections == 1)
             await asyncio.to_thread(gateway.stop)
             await until("the gateway seen gone", lambda: not link.connected)
             await until("refused", lambda: "connection refused" in (link.connection_problem or ""))
@@ -64,8 +65,8 @@ def test_the_health_follows_a_gateway_away_and_back_without_a_frame(gateway: Gat
             await link.stop()
 
     asyncio.run(scenario())
+    gateway.wait_for("the second connection accepted", lambda: gateway.connections == 2)
     assert gateway.total() == 0  # not one byte: the watch and the test send nothing
-    assert gateway.connections == 2
 
 
 def test_test_link_names_why_when_the_gateway_is_not_there(gateway: Gateway) -> None:

@@ -108,6 +108,7 @@ def test_the_health_clears_when_the_gateway_is_back_without_a_command(
     client, _link = console_on(make_light_client, g)
     link = link_of(client)
     assert link["connected"] is True and link["level"] == "amber"  # one-way, but there
+    g.wait_for("the link's connection", lambda: g.connections == 1)
     g.stop()
     gone = wait_until(
         lambda: (lk := link_of(client))["level"] == "red" and lk, what="the health red"
@@ -127,6 +128,7 @@ def test_test_link_checks_the_gateway_and_sends_no_frame(
     g = Gateway("read")
     gateways.append(g)
     client, _link = console_on(make_light_client, g)
+    g.wait_for("the link's connection", lambda: g.connections == 1)
     assert client.post("/api/link/test").status_code == 401
     assert client.post("/api/link/test", headers=WRONG_AUTH).status_code == 403
     r = client.post("/api/link/test", headers=AUTH)
