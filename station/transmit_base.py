@@ -200,6 +200,7 @@ _ERRNO_REASONS = {
     errno.EPERM: "permission denied",
     errno.EBUSY: "port busy",
     errno.ENOTTY: "not a serial port",
+    errno.EIO: "i/o error",
     errno.ECONNREFUSED: "connection refused",
     errno.ECONNRESET: "connection reset",
     errno.EPIPE: "connection closed",

@@ -160,6 +160,22 @@ def test_tcp_gateway_receives_exactly_the_bytes() -> None:
     assert bytes(received) == b"".join(f.to_bytes() for f in FRAMES)
 
 
+def test_a_serial_check_writes_nothing_and_sees_the_device_go() -> None:
+    """A pty whose other end closes stands for a USB adapter pulled out: the check (no byte
+    written) fails and the port is closed (the next check opens it again)."""
+    master, slave = os.openpty()
+    path = os.ttyname(slave)
+    with SerialTransmitter(path) as tx:
+        ok = tx.check()
+        assert ok.ok and ok.what == "modem" and tx.connected
+        assert "0 bytes waiting to go out" in ok.detail
+        assert not select.select([master], [], [], 0)[0]  # nothing was written
+        os.close(master)
+        os.close(slave)
+        gone = tx.check()
+        assert not gone.ok and gone.reason == "i/o error" and not tx.connected
+
+
 def test_missing_device_is_port_not_found(tmp_path: Any) -> None:
     path = tmp_path / "ttyNOPE"
     with open_transmitter(f"serial://{path}") as tx:
