@@ -44,7 +44,8 @@ from backend.telemetry import TelemetryHub
 from backend.viewer.draw_queue import PreviewDrawer
 from codec import Encoded, airtime_s
 from planner import Limits, Plan, VehicleState
-from station.link import Link, RosbridgeLink, open_link
+from station.link import Link, RosbridgeLink
+from station.link_modem import open_link
 from vehicle_contract.messages import pose_from_message
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
@@ -141,7 +142,7 @@ class Console:
             await self.bridge.start()
             link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}", auth_secret=secret)
         else:
-            link = open_link(s.target, s.bitrate_bps)
+            link = open_link(s.target, s.bitrate_bps, s.telemetry or None)
         self.link = link
         link.on_pose = self._on_pose
         link.on_status = self._on_status

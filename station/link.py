@@ -5,8 +5,8 @@
   status and mission, reconnects with backoff, hands every message to the console's callbacks.
   On every connection it asks ``/rosapi/topics`` what the vehicle publishes and so learns its
   :class:`Capability`.
-* :class:`ModemLink`: an ME transmitter on a serial port or behind a TCP gateway
-  (:class:`station.transmit.SerialTransmitter`): frames out, nothing back.
+* :mod:`station.link_modem`: an ME modem (frames out, nothing back), and the hybrid link
+  (frames over the modem, telemetry and acknowledgements over rosbridge); ``open_link``.
 
 Every link declares its :class:`Capability`: what the vehicle can report back over it.
 
@@ -43,7 +43,7 @@ from rosbridge.protocol import (
     same_type,
 )
 from rosbridge.transport import RosbridgeClient, TopicHandler
-from station.transmit import failure_reason, frame_msg, open_transmitter
+from station.transmit import LinkCheck, failure_reason, frame_msg
 
 logger = logging.getLogger("station.link")
 
@@ -119,11 +119,29 @@ class Link:
         self.on_status: Handler = lambda _m: None
         self.on_mission: Handler = lambda _m: None
         self.last_message_s: float | None = None  # time.monotonic() of the last message
-        #: What the vehicle can report back, and why not more (named problems).
-        self.capability = Capability.UNKNOWN
-        self.capability_problems: list[str] = []
+        self._capability = Capability.UNKNOWN
+        self._capability_problems: list[str] = []
         #: Why the link is down (None while connected, or before the first try).
         self.connection_problem: str | None = None
+
+    @property
+    def capability(self) -> Capability:
+        """What the vehicle can report back over this link: the one place the console's
+        delivery rules (copies, acknowledgements) read it from."""
+        return self._capability
+
+    @capability.setter
+    def capability(self, value: Capability) -> None:
+        self._capability = value
+
+    @property
+    def capability_problems(self) -> list[str]:
+        """Why the capability is not more (named problems)."""
+        return self._capability_problems
+
+    @capability_problems.setter
+    def capability_problems(self, value: list[str]) -> None:
+        self._capability_problems = value
 
     @property
     def acknowledges(self) -> bool:
@@ -149,6 +167,13 @@ class Link:
         """Send one frame; ``None`` when it left the station, else why it could not."""
         raise NotImplementedError
 
+    async def test(self) -> list[LinkCheck]:
+        """Check every path of the link now without sending a frame (here: what the link
+        knows of its connection; a modem opens and checks its port or gateway)."""
+        problem = None if self.connected else self.connection_problem or "not connected"
+        detail = f"connected; the vehicle reports: {self.capability.value}"
+        return [LinkCheck("rosbridge", self.target, problem is None, problem, problem or detail)]
+
 
 class RosbridgeLink(Link):
     """A persistent rosbridge connection: frames out, pose/status/mission in.
@@ -165,8 +190,13 @@ class RosbridgeLink(Link):
         open_timeout_s: float = 3.0,
         rosapi_timeout_s: float = ROSAPI_TIMEOUT_S,
         auth_secret: str | None = None,
+        *,
+        frames: bool = True,
     ) -> None:
         super().__init__(target)
+        #: Frames go out over this connection (False: telemetry and acknowledgements only, the
+        #: frames going by an ME modem: :class:`station.link_modem.HybridLink`).
+        self.frames = frames
         #: The training bridge's secret: the link authenticates first (``auth`` op).
         self.auth_secret = auth_secret
         self.open_timeout_s = open_timeout_s
@@ -175,7 +205,8 @@ class RosbridgeLink(Link):
         self._task: asyncio.Task[None] | None = None
         self._ready = asyncio.Event()
         self._protocol = ClientProtocol(
-            advertise=[FRAME_TOPIC], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC]
+            advertise=[FRAME_TOPIC] if frames else [],
+            subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC],
         )
         #: What each subscribed topic's messages go to.
         self._handlers: dict[str, TopicHandler] = {
@@ -317,6 +348,8 @@ class RosbridgeLink(Link):
 
     async def transmit(self, frame: Frame) -> str | None:
         client = self._client
+        if not self.frames:
+            return f"frames do not go over {self.target} (telemetry only)"
         if client is None:
             return "not connected to the vehicle"
         try:
@@ -324,42 +357,3 @@ class RosbridgeLink(Link):
         except (OSError, ConnectionClosed) as err:
             return failure_reason(err)
         return None
-
-
-class ModemLink(Link):
-    """An ME modem on a serial port or TCP gateway: one-way, no acknowledgements."""
-
-    def __init__(self, target: str, bitrate_bps: float) -> None:
-        super().__init__(target)
-        self._tx = open_transmitter(target, bitrate_bps=bitrate_bps)
-        self.capability = Capability.NONE
-        self.capability_problems = [
-            "an ME modem link is one-way: commands go out as repeated copies, with no "
-            "acknowledgement and no telemetry"
-        ]
-        self._lock = asyncio.Lock()
-
-    @property
-    def connected(self) -> bool:
-        """Until a frame fails to leave (the modem is only opened to send)."""
-        return self.connection_problem is None
-
-    async def stop(self) -> None:
-        await self._tx.aclose()
-
-    async def transmit(self, frame: Frame) -> str | None:
-        async with self._lock:
-            result = await self._tx.send_async(frame, wait_ack_s=0.0)
-        self.connection_problem = (
-            None
-            if result.sent
-            else f"the last frame did not reach the modem at {self.target}: {result.reason}"
-        )
-        return None if result.sent else (result.reason or "not sent")
-
-
-def open_link(target: str, bitrate_bps: float) -> Link:
-    """The link for a target: ``ws://`` -> rosbridge, anything else -> an ME modem."""
-    if target.startswith(("ws://", "wss://")):
-        return RosbridgeLink(target)
-    return ModemLink(target, bitrate_bps)

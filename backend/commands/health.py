@@ -39,7 +39,9 @@ __all__ = [
     "FrameLedger",
     "FrameTotals",
     "Level",
+    "LinkCheckView",
     "LinkHealth",
+    "LinkTestResult",
     "Outcome",
     "assess",
     "link_health_of",
@@ -84,6 +86,28 @@ class LinkHealth(BaseModel):
     copies: int
     #: Copies a Surface gets now; null: repeated until acknowledged (two-way link).
     surface_copies: int | None
+
+
+class LinkCheckView(BaseModel):
+    """One path of the link tested without sending a frame (``POST /api/link/test``)."""
+
+    #: "modem" (an ME modem: its port or gateway opened and checked), "rosbridge" (the
+    #: vehicle's rosbridge connection), "telemetry" (the hybrid link's rosbridge).
+    what: str
+    target: str
+    ok: bool
+    #: Why not, in a short phrase ("connection refused", "gateway not reading", ...).
+    reason: str | None
+    detail: str
+
+
+class LinkTestResult(BaseModel):
+    """``POST /api/link/test``: every path of the link checked now, no frame sent, and the
+    link's health after it."""
+
+    ok: bool
+    checks: list[LinkCheckView]
+    link: LinkHealth
 
 
 def _plural(n: int, word: str) -> str:
