@@ -90,6 +90,9 @@ class Settings(BaseSettings):
     viewer_port: Annotated[int, Field(ge=0, le=65535)] = 8080
     #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port.
     target: str = SIM_TARGET
+    #: The vehicle's ROS namespace: its topics are /<it>/nemesys/... (several vehicles in one
+    #: graph; the reference node's vehicle_namespace parameter). "": /nemesys/...
+    vehicle_namespace: str = ""
     #: Port of the embedded simulator's rosbridge (0: any free port), loopback only.
     sim_port: Annotated[int, Field(ge=0, le=65535)] = 0
     sim_seed: int = 0
@@ -170,6 +173,13 @@ class Settings(BaseSettings):
         # parse only (raises ValueError naming the allowed forms); nothing is opened here
         open_transmitter(value).close()
         return value
+
+    @field_validator("vehicle_namespace")
+    @classmethod
+    def _vehicle_namespace(cls, value: str) -> str:
+        from vehicle_contract.contract import check_namespace
+
+        return check_namespace(value)  # ValueError naming what a namespace may hold
 
     @field_validator("gps")
     @classmethod
