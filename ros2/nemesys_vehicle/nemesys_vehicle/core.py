@@ -126,6 +126,7 @@ class VehicleCore:
             return False
         self.odometry = odometry
         self._hold_first_pose()
+        self._check_navigation(odometry.t_s)  # valid from now: its going stale is a fault
         return True
 
     def on_navsatfix(self, t_s: float, lat_deg: float, lon_deg: float, fixed: bool) -> bool:
@@ -145,6 +146,7 @@ class VehicleCore:
             return False
         if placed:
             self._hold_first_pose()
+            self._check_navigation(t_s)
             self._publish_datum(t_s)
         return placed
 
