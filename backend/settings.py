@@ -95,6 +95,9 @@ class Settings(BaseSettings):
     #: With an ME modem target: the vehicle's rosbridge (ws://host:port) that telemetry and
     #: acknowledgements come over, the frames going by the modem (the hybrid link). "": none.
     telemetry: str = ""
+    #: The vehicle's ROS namespace: its topics are /<it>/nemesys/... (several vehicles in one
+    #: graph; the reference node's vehicle_namespace parameter). "": /nemesys/...
+    vehicle_namespace: str = ""
     #: Port of the embedded simulator's rosbridge (0: any free port), loopback only.
     sim_port: Annotated[int, Field(ge=0, le=65535)] = 0
     sim_seed: int = 0
@@ -198,6 +201,13 @@ class Settings(BaseSettings):
                 )
             )
         return self
+
+    @field_validator("vehicle_namespace")
+    @classmethod
+    def _vehicle_namespace(cls, value: str) -> str:
+        from vehicle_contract.contract import check_namespace
+
+        return check_namespace(value)  # ValueError naming what a namespace may hold
 
     @field_validator("gps")
     @classmethod

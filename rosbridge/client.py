@@ -23,13 +23,20 @@ from rosbridge.protocol import (
     MalformedMessage,
     to_json,
 )
+from vehicle_contract.contract import contract_topic_of
+
+
+def _type(topic: str) -> str:
+    """The type a client names for a contract topic, under a vehicle namespace or not."""
+    return TOPIC_TYPES[contract_topic_of(topic)]
 
 
 class ClientProtocol:
     """The messages a rosbridge client sends, shaped and numbered as roslibpy does (sans-IO).
 
     ``advertise`` are the topics the client publishes on, ``subscribe`` those it listens to,
-    each with its type from :data:`TOPIC_TYPES`. Each advertisement and subscription gets its
+    each with its type from :data:`TOPIC_TYPES` (a vehicle's topic under a namespace has its
+    contract topic's type). Each advertisement and subscription gets its
     id once, so every connection opens (:meth:`open_messages`) and closes
     (:meth:`close_messages`) with the same messages; each :meth:`publish` gets a new id.
     """
@@ -37,10 +44,10 @@ class ClientProtocol:
     def __init__(self, advertise: Iterable[str], subscribe: Iterable[str]) -> None:
         self._count = itertools.count(1)
         self._advertised = {
-            topic: (TOPIC_TYPES[topic], self._id("advertise", topic)) for topic in advertise
+            topic: (_type(topic), self._id("advertise", topic)) for topic in advertise
         }
         self._subscribed = {
-            topic: (TOPIC_TYPES[topic], self._id("subscribe", topic)) for topic in subscribe
+            topic: (_type(topic), self._id("subscribe", topic)) for topic in subscribe
         }
 
     def _id(self, op: str, topic: str) -> str:

@@ -2,7 +2,8 @@
 
 * :class:`RosbridgeLink`: a rosbridge v2 websocket (the simulated vehicle, or a real ROS 2
   vehicle running rosbridge_server): advertises ``/nemesys/frame``, subscribes to pose,
-  status and mission, reconnects with backoff, hands every message to the console's callbacks.
+  status, mission and datum (every name under the vehicle's namespace, if any), reconnects
+  with backoff, hands every message to the console's callbacks.
   On every connection it asks ``/rosapi/topics`` what the vehicle publishes and so learns its
   :class:`Capability`.
 * :mod:`station.link_modem`: an ME modem (frames out, nothing back), and the hybrid link
@@ -44,6 +45,7 @@ from rosbridge.protocol import (
 )
 from rosbridge.transport import RosbridgeClient, TopicHandler
 from station.transmit import LinkCheck, failure_reason, frame_msg
+from vehicle_contract.contract import TopicNames, topic_name, topic_names
 
 logger = logging.getLogger("station.link")
 
@@ -74,35 +76,45 @@ class Capability(StrEnum):
         return self in (Capability.ACKS_AND_TELEMETRY, Capability.TELEMETRY_ONLY)
 
 
-def capability_of(topics: dict[str, str]) -> tuple[Capability, list[str]]:
+def capability_of(
+    topics: dict[str, str], names: TopicNames | None = None
+) -> tuple[Capability, list[str]]:
     """What a vehicle publishing ``topics`` (``{name: type}``, either ROS type spelling) can
-    report back, and a named problem for every contract topic missing or of the wrong type."""
+    report back, and a named problem for every contract topic missing or of the wrong type.
+    ``names``: the contract's topics on this vehicle (its namespace; default none)."""
     problems: list[str] = []
+    namespace = names.namespace if names is not None else ""
 
-    def has(topic: str) -> bool:
+    def has(base: str) -> bool:
+        topic = topic_name(base, namespace)
         if topic not in topics:
             return False
-        if not same_type(topics[topic], TOPIC_TYPES[topic]):
+        if not same_type(topics[topic], TOPIC_TYPES[base]):
             problems.append(
-                f"{topic} is a {topics[topic]}, not a {canonical_type(TOPIC_TYPES[topic])}: "
+                f"{topic} is a {topics[topic]}, not a {canonical_type(TOPIC_TYPES[base])}: "
                 "it is ignored"
             )
             return False
         return True
 
     mission, pose, status = has(MISSION_TOPIC), has(POSE_TOPIC), has(STATUS_TOPIC)
-    if FRAME_TOPIC in topics:
+    if topic_name(FRAME_TOPIC, namespace) in topics:
         has(FRAME_TOPIC)  # a wrong type is named; absent is fine: the console advertises it
     if not mission:
         problems.insert(
             0,
-            f"no {MISSION_TOPIC} topic: the vehicle runs no onboard agent; commands are sent "
-            "without acknowledgement",
+            f"no {topic_name(MISSION_TOPIC, namespace)} topic: the vehicle runs no onboard "
+            "agent; commands are sent without acknowledgement",
         )
     if not pose:
-        problems.append(f"no {POSE_TOPIC} topic: the vehicle's position is not known")
+        problems.append(
+            f"no {topic_name(POSE_TOPIC, namespace)} topic: the vehicle's position is not known"
+        )
     if not status:
-        problems.append(f"no {STATUS_TOPIC} topic: no depth, battery or mode from the vehicle")
+        problems.append(
+            f"no {topic_name(STATUS_TOPIC, namespace)} topic: no depth, battery or mode from "
+            "the vehicle"
+        )
     if mission:
         return Capability.ACKS_AND_TELEMETRY, problems
     if pose or status:
@@ -118,6 +130,8 @@ class Link:
         self.on_pose: Handler = lambda _m: None
         self.on_status: Handler = lambda _m: None
         self.on_mission: Handler = lambda _m: None
+        #: The vehicle's datum message (contract schema ``datum``), when it sends one.
+        self.on_datum: Handler = lambda _m: None
         self.last_message_s: float | None = None  # time.monotonic() of the last message
         self._capability = Capability.UNKNOWN
         self._capability_problems: list[str] = []
@@ -190,10 +204,13 @@ class RosbridgeLink(Link):
         open_timeout_s: float = 3.0,
         rosapi_timeout_s: float = ROSAPI_TIMEOUT_S,
         auth_secret: str | None = None,
+        namespace: str = "",
         *,
         frames: bool = True,
     ) -> None:
         super().__init__(target)
+        #: The contract's topic names on this vehicle (``namespace``: its ROS namespace).
+        self.names = topic_names(namespace)
         #: Frames go out over this connection (False: telemetry and acknowledgements only, the
         #: frames going by an ME modem: :class:`station.link_modem.HybridLink`).
         self.frames = frames
@@ -204,15 +221,17 @@ class RosbridgeLink(Link):
         self._client: RosbridgeClient | None = None
         self._task: asyncio.Task[None] | None = None
         self._ready = asyncio.Event()
+        names = self.names
         self._protocol = ClientProtocol(
-            advertise=[FRAME_TOPIC] if frames else [],
-            subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC],
+            advertise=[names.frame] if frames else [],
+            subscribe=[names.pose, names.status, names.mission, names.datum],
         )
         #: What each subscribed topic's messages go to.
         self._handlers: dict[str, TopicHandler] = {
-            POSE_TOPIC: self._pose,
-            STATUS_TOPIC: self._status,
-            MISSION_TOPIC: self._mission,
+            names.pose: self._pose,
+            names.status: self._status,
+            names.mission: self._mission,
+            names.datum: self._datum,
         }
 
     @property
@@ -311,7 +330,7 @@ class RosbridgeLink(Link):
             self._set_capability(Capability.UNKNOWN, [f"{TOPICS_SERVICE}: {error.reason}"])
             self._ready.set()
             return
-        capability, problems = capability_of(topics)
+        capability, problems = capability_of(topics, self.names)
         self._set_capability(capability, problems)
         logger.info("link to %s: %s", self.target, capability)
 
@@ -324,19 +343,24 @@ class RosbridgeLink(Link):
 
     def _status(self, msg: object) -> None:
         self.last_message_s = time.monotonic()
-        body = self._json(STATUS_TOPIC, msg)
+        body = self._json(self.names.status, msg)
         if body is not None:
             self.on_status(body)
 
     def _mission(self, msg: object) -> None:
         self.last_message_s = time.monotonic()
-        body = self._json(MISSION_TOPIC, msg)
+        body = self._json(self.names.mission, msg)
         if body is None:
             return
         if not self.capability.acknowledges:
             # an acknowledgement is proof the onboard agent runs
             self._set_capability(Capability.ACKS_AND_TELEMETRY, [])
         self.on_mission(body)
+
+    def _datum(self, msg: object) -> None:
+        body = self._json(self.names.datum, msg)
+        if body is not None:
+            self.on_datum(body)
 
     @staticmethod
     def _json(topic: str, msg: object) -> dict[str, Any] | None:
@@ -353,7 +377,7 @@ class RosbridgeLink(Link):
         if client is None:
             return "not connected to the vehicle"
         try:
-            await client.publish(FRAME_TOPIC, frame_msg(frame))
+            await client.publish(self.names.frame, frame_msg(frame))
         except (OSError, ConnectionClosed) as err:
             return failure_reason(err)
         return None

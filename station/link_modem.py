@@ -199,6 +199,7 @@ class HybridLink(ModemLink):
         bitrate_bps: float,
         telemetry: str,
         *,
+        namespace: str = "",
         probe_s: float = PROBE_S,
         backoff_s: float = BACKOFF_S,
         max_backoff_s: float = MAX_BACKOFF_S,
@@ -210,10 +211,13 @@ class HybridLink(ModemLink):
             backoff_s=backoff_s,
             max_backoff_s=max_backoff_s,
         )
-        self.telemetry_link = RosbridgeLink(parse_telemetry(telemetry), frames=False)
+        self.telemetry_link = RosbridgeLink(
+            parse_telemetry(telemetry), namespace=namespace, frames=False
+        )
         # what it hears goes to this link's handlers, as the console sets them (later)
         tel = self.telemetry_link
         tel.on_pose, tel.on_status, tel.on_mission = self._pose, self._status, self._mission
+        tel.on_datum = self._datum
 
     def _pose(self, msg: dict[str, Any]) -> None:
         self.on_pose(msg)
@@ -223,6 +227,9 @@ class HybridLink(ModemLink):
 
     def _mission(self, msg: dict[str, Any]) -> None:
         self.on_mission(msg)
+
+    def _datum(self, msg: dict[str, Any]) -> None:
+        self.on_datum(msg)
 
     @property
     def telemetry_target(self) -> str:
@@ -273,9 +280,12 @@ class HybridLink(ModemLink):
         return [*modem, *tel]
 
 
-def open_link(target: str, bitrate_bps: float, telemetry: str | None = None) -> Link:
+def open_link(
+    target: str, bitrate_bps: float, telemetry: str | None = None, namespace: str = ""
+) -> Link:
     """The link for a target: ``ws://`` -> rosbridge, anything else -> an ME modem; with
-    ``telemetry`` (``ws://``) the hybrid link.
+    ``telemetry`` (``ws://``) the hybrid link. ``namespace``: the vehicle's ROS namespace (its
+    topics under ``/<namespace>/nemesys/...``) on whichever rosbridge the link reads.
 
     Raises:
         ValueError: ``telemetry`` with a rosbridge target, or a malformed ``telemetry``.
@@ -286,7 +296,7 @@ def open_link(target: str, bitrate_bps: float, telemetry: str | None = None) -> 
                 "telemetry is for an ME modem target (serial://, tcp://, loop://): a rosbridge "
                 f"target ({target}) carries telemetry and acknowledgements itself"
             )
-        return RosbridgeLink(target)
+        return RosbridgeLink(target, namespace=namespace)
     if telemetry:
-        return HybridLink(target, bitrate_bps, telemetry)
+        return HybridLink(target, bitrate_bps, telemetry, namespace=namespace)
     return ModemLink(target, bitrate_bps)

@@ -132,9 +132,12 @@ def _serial_baud(target: str, query: str) -> int:
     return int(text)
 
 
-def open_transmitter(target: str, *, bitrate_bps: float = DEFAULT_BITRATE_BPS) -> Transmitter:
+def open_transmitter(
+    target: str, *, bitrate_bps: float = DEFAULT_BITRATE_BPS, namespace: str = ""
+) -> Transmitter:
     """The transmitter for a target string (see :data:`TARGET_FORMS`). Nothing is opened
-    until the first send. ``bitrate_bps`` sets the serial inter-frame gap.
+    until the first send. ``bitrate_bps`` sets the serial inter-frame gap; ``namespace`` is
+    the vehicle's ROS namespace (rosbridge targets only).
 
     Raises:
         ValueError: the target is malformed or of an unknown kind (the message says which
@@ -153,7 +156,7 @@ def open_transmitter(target: str, *, bitrate_bps: float = DEFAULT_BITRATE_BPS) -
     scheme = split.scheme.lower()
     if scheme in ("ws", "wss"):
         _host_port(target, split, port_required=False)
-        return RosbridgeTransmitter(text)
+        return RosbridgeTransmitter(text, namespace=namespace)
     if scheme == "serial":
         if split.netloc:
             raise _bad_target(

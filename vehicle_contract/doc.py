@@ -14,6 +14,7 @@ from typing import Any, Final
 
 from vehicle_contract.contract import (
     CONTRACT_VERSION,
+    CONVENTIONS,
     OBLIGATIONS,
     TIME_BASE,
     TOPICS,
@@ -30,6 +31,7 @@ REGENERATE: Final = ".venv/bin/python scripts/gen_vehicle_doc.py"
 _TITLES: Final = {
     "ack": "The acknowledgement (`/nemesys/mission`)",
     "status": "The status (`/nemesys/status`)",
+    "datum": "The datum (`/nemesys/datum`)",
 }
 
 
@@ -138,9 +140,17 @@ def render_markdown() -> str:
         "|---|---|",
         *(f"| {k} | {_cell(v)} |" for k, v in TIME_BASE.items()),
         "",
+        "## Conventions",
+        "",
+        "| what | how |",
+        "|---|---|",
+        *(f"| {k} | {_cell(v)} |" for k, v in CONVENTIONS.items()),
+        "",
         "## Topics",
         "",
-        "Types are given in the ROS 2 spelling; `pkg/Name` denotes the same type.",
+        "Types are given in the ROS 2 spelling; `pkg/Name` denotes the same type. The names are",
+        "those of a vehicle without a namespace; under namespace `auv1` each is",
+        "`/auv1/nemesys/...`.",
         "",
         "| topic | type | direction | QoS (reliability, durability, history depth) | rate "
         "| frame_id | required |",

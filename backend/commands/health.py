@@ -123,10 +123,14 @@ def assess(
     telemetry_age_s: float | None,
     recent: FrameCounts,
     unknown_recent: int,
+    datum_problem: str | None = None,
 ) -> tuple[Level, list[str]]:
-    """The link's level and its problems, worst first."""
+    """The link's level and its problems, worst first (``datum_problem``: the vehicle's datum
+    differs from the console's, :mod:`backend.chart.vehicle_datum`)."""
     red: list[str] = []
     amber: list[str] = list(capability_problems)
+    if datum_problem is not None:
+        amber.append(datum_problem)
     if not connected:
         red.append(connection_problem or "not connected to the vehicle")
     if capability.telemetry and connected:
@@ -162,6 +166,7 @@ def link_health_of(
     target: str,
     ber: BerNow,
     copies_from: CopiesFrom,
+    datum_problem: str | None = None,
 ) -> LinkHealth:
     """What the station knows of its link to the vehicle (not the page's websocket): the
     link's own facts, the command ledger's and the telemetry's ages, and the assessment."""
@@ -176,6 +181,7 @@ def link_health_of(
         telemetry_age_s=telemetry_age_s,
         recent=totals.recent,
         unknown_recent=hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
+        datum_problem=datum_problem,
     )
     return LinkHealth(
         target=target,

@@ -21,6 +21,7 @@ from station.vehicle_check import url_problem
 from station.vehicle_report import probe_frame
 from tests.fake_vehicle import POSE_ONLY, Rosbridge
 from tests.rosbridge.helpers import LoopThread, free_port
+from vehicle_contract.contract import CONTRACT_VERSION
 
 CIRCLE = encode_frame("circle", speed=0.18, depth=3, radius=5, direction="cw")
 #: Short windows and timeouts: the rates hold over 1.5 s, and loopback answers at once.
@@ -104,7 +105,7 @@ def test_the_simulator_passes_and_nothing_is_sent_without_an_active_command(
     ):
         assert table[name][0] == "pass", (name, table[name])
     assert "information only" in table["pose age"][1]
-    assert out.splitlines()[0] == f"vehicle-check {served.url} (contract 1.0.0)"
+    assert out.splitlines()[0] == f"vehicle-check {served.url} (contract {CONTRACT_VERSION})"
     assert out.splitlines()[-1].startswith("PASS: ")
     assert served.sim.frames_in == 0  # the server got no frame
 
@@ -148,7 +149,7 @@ def test_json_output_has_the_rows(served: Served, capsys: pytest.CaptureFixture[
     assert status == 0
     doc = json.loads(out)
     assert doc["ok"] is True and doc["url"] == served.url
-    assert doc["contract_version"] == "1.0.0"
+    assert doc["contract_version"] == CONTRACT_VERSION
     checks: list[dict[str, Any]] = doc["checks"]
     assert all(set(c) == {"check", "result", "reason"} for c in checks)
     assert all(c["result"] in ("pass", "fail", "skipped") for c in checks)
