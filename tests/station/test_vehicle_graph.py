@@ -4,8 +4,19 @@ rosbridge's own node, which publishes and subscribes for its clients, is never t
 
 from __future__ import annotations
 
+import asyncio
+from collections.abc import Iterator
+
+import pytest
+
+from rosbridge.client import ClientProtocol
+from rosbridge.server import BridgeServer
+from rosbridge.transport import RosbridgeClient
+from sim.simulation import Simulation
 from station.link import Capability, capability_of
-from station.vehicle_graph import VehicleGraph, verdict_of
+from station.vehicle_graph import GraphUnknown, VehicleGraph, read_graph, verdict_of
+from tests.fake_vehicle import FRAME_TYPE, STRING_TYPE, WITH_AGENT, Rosbridge, observer
+from tests.rosbridge.helpers import LoopThread
 
 FRAME, POSE, MISSION, STATUS = (
     "/nemesys/frame",
@@ -116,3 +127,61 @@ def test_a_topic_nobody_lists_is_named_missing() -> None:
     assert verdict.findings[MISSION].reason == "no /nemesys/mission topic: no node publishes it"
     assert verdict.findings[FRAME].reason == "no /nemesys/frame topic: no node subscribes to it"
     assert capability_of(g)[0] is Capability.TELEMETRY_ONLY
+
+
+# --- asked over the wire ----------------------------------------------------------------------
+
+
+async def _ask(url: str) -> VehicleGraph | GraphUnknown:
+    """The graph as the console's link asks it, subscribed to what the console subscribes."""
+    listen = ClientProtocol(advertise=[FRAME], subscribe=[POSE, STATUS, MISSION])
+    client = await RosbridgeClient.connect(url, listen)
+    try:
+        await client.open()
+        return await read_graph(client, 2.0)
+    finally:
+        await client.close()
+
+
+@pytest.fixture
+def training() -> Iterator[str]:
+    """The console's own training bridge (the simulator behind rosbridge/server.py)."""
+    loop = LoopThread()
+    loop.start()
+    server = BridgeServer(Simulation(), "127.0.0.1", 0)
+    loop.run(server.start())
+    try:
+        yield f"ws://127.0.0.1:{server.port}"
+    finally:
+        loop.run(server.stop())
+        loop.stop()
+
+
+def test_the_training_bridge_answers_the_graph_as_a_real_one_does(training: str) -> None:
+    """rosbridge/server.py and the stand-in for a real rosbridge_server (tests/fake_vehicle.py,
+    written from rosbridge_suite apart from it) give the same answers for the same vehicle,
+    with an observer subscribed to the frame and mission topics."""
+    real = Rosbridge(WITH_AGENT).start()
+    try:
+        answers = []
+        for url in (training, real.url):
+            with observer(url, {FRAME: FRAME_TYPE, MISSION: STRING_TYPE}):
+                answers.append(asyncio.run(_ask(url)))
+    finally:
+        real.stop()
+    ours, theirs = answers
+    assert isinstance(ours, VehicleGraph) and isinstance(theirs, VehicleGraph)
+    assert (
+        ours.publishers
+        == theirs.publishers
+        == {
+            POSE: (VEHICLE,),
+            STATUS: (VEHICLE,),
+            MISSION: (VEHICLE,),
+        }
+    )
+    assert ours.subscribers == theirs.subscribers == {FRAME: (VEHICLE, BRIDGE)}
+    assert ours.bridges == theirs.bridges == frozenset({BRIDGE})
+    for topic in (FRAME, POSE, STATUS, MISSION):
+        assert ours.topics[topic] == theirs.topics[topic] == TYPES[topic]
+    assert capability_of(ours) == capability_of(theirs) == (Capability.ACKS_AND_TELEMETRY, [])
