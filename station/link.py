@@ -53,7 +53,7 @@ ROSAPI_TIMEOUT_S: Final = 3.0
 #: How often a connected link asks the graph again (s): a publisher that appears (the onboard
 #: agent started, or the pose publisher after the console subscribed) is seen within it.
 GRAPH_POLL_S: Final = 2.0
-#: Acknowledgements remembered to drop one delivered again (a transient-local replay).
+#: Acknowledgements remembered to drop one delivered again (recent_acks, a replay).
 _SEEN_ACKS: Final = 256
 
 
@@ -145,8 +145,10 @@ class RosbridgeLink(Link):
     that gained a publisher is subscribed again, since rosbridge fixed the subscription's QoS
     from the publishers there when it was made (RELIABLE unless a BEST_EFFORT one was there:
     a best-effort pose publisher that starts later is not heard until then). Every connection
-    subscribes afresh. An acknowledgement delivered twice (a transient-local replay after a
-    reconnect) goes to the console once.
+    subscribes afresh. Acknowledgements survive a short reconnect through the status's
+    ``recent_acks`` (the vehicle contract: the last ones, as published): those the link has
+    not delivered go to the console, and one delivered again (that, or a transient-local
+    replay) goes to it once.
     """
 
     def __init__(
@@ -175,11 +177,18 @@ class RosbridgeLink(Link):
             STATUS_TOPIC: self._status,
             MISSION_TOPIC: self._mission,
         }
+        #: Each contract topic -> its name on this vehicle (asked about, subscribed to).
+        self._names = {t: t for t in (FRAME_TOPIC, POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC)}
+        #: The contract topics subscribed to: subscribed again when they gain a publisher.
+        self._subscribed = (POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC)
         #: On this connection: the graph answered once; an acknowledgement arrived.
         self._graph_known = False
         self._acked = False
         self._unknown: GraphUnknown | None = None
+        #: The acknowledgements delivered (their :func:`_ack_key`), over every connection.
         self._seen: deque[str] = deque(maxlen=_SEEN_ACKS)
+        #: A status's recent_acks was read once (the first predates the console).
+        self._primed = False
 
     @property
     def connected(self) -> bool:
@@ -220,7 +229,7 @@ class RosbridgeLink(Link):
                 self._graph_known = self._acked = False
                 self._unknown = None
                 # asked before subscribing: the publishers each subscription is made with
-                graph = await read_graph(client, self.rosapi_timeout_s)
+                graph = await read_graph(client, self.rosapi_timeout_s, names=self._names)
                 await client.open()
                 self._client = client
                 self.connection_problem = None
@@ -251,9 +260,11 @@ class RosbridgeLink(Link):
             self._on_graph(graph)
             if isinstance(graph, VehicleGraph):
                 bridges = graph.bridges
-                now = {t: frozenset(graph.publishers.get(t, ())) for t in self._handlers}
+                now = {t: frozenset(graph.publishers.get(t, ())) for t in self._subscribed}
                 if subscribed_with is not None:
-                    grown = [t for t in now if now[t] - subscribed_with.get(t, frozenset())]
+                    grown = [
+                        self._names[t] for t in now if now[t] - subscribed_with.get(t, frozenset())
+                    ]
                     if grown:
                         logger.info(
                             "link to %s: new publishers on %s: subscribing again",
@@ -266,7 +277,7 @@ class RosbridgeLink(Link):
                 await asyncio.wait_for(client.wait_closed(), self.graph_poll_s)
             if client.closed:
                 return
-            graph = await read_graph(client, self.rosapi_timeout_s, bridges)
+            graph = await read_graph(client, self.rosapi_timeout_s, bridges, self._names)
 
     def _set_capability(self, capability: Capability, problems: list[str]) -> None:
         self.capability = capability
@@ -302,33 +313,52 @@ class RosbridgeLink(Link):
     def _status(self, msg: object) -> None:
         self.last_message_s = time.monotonic()
         body = self._json(STATUS_TOPIC, msg)
-        if body is not None:
-            self.on_status(body)
+        if body is None:
+            return
+        recent = body.get("recent_acks")
+        if isinstance(recent, list):
+            self._recent_acks([a for a in recent if isinstance(a, dict)])
+        self.on_status(body)
+
+    def _recent_acks(self, acks: list[dict[str, Any]]) -> None:
+        """The status's last acknowledgements (the vehicle contract's ``recent_acks``, oldest
+        first): those this link has not delivered go to the console, so an acknowledgement
+        published while the console reconnected is not lost. Those in the first status this
+        link sees predate the console and are only noted."""
+        for ack in acks:
+            key = _ack_key(ack)
+            if key is None:
+                continue  # without seq and t_s a repeat cannot be told from a new one
+            if not self._primed:
+                self._seen.append(key)
+            elif key not in self._seen:
+                logger.info(
+                    "link: acknowledgement seq=%s from the status's recent_acks", ack["seq"]
+                )
+                self._take_ack(ack)
+        self._primed = True
 
     def _mission(self, msg: object) -> None:
         self.last_message_s = time.monotonic()
         body = self._json(MISSION_TOPIC, msg)
-        if body is None or self._delivered(body):
-            return
+        if body is not None:
+            self._take_ack(body)
+
+    def _take_ack(self, ack: dict[str, Any]) -> None:
+        """One acknowledgement to the console, unless it went already (a repeat: a transient-
+        local replay, or the status's recent_acks)."""
+        key = _ack_key(ack)
+        if key is not None:
+            if key in self._seen:
+                logger.debug("link: acknowledgement seq=%s delivered already", ack["seq"])
+                return
+            self._seen.append(key)
         self._acked = True
         if not self._graph_known and not self.capability.acknowledges:
             # rosapi cannot tell: an acknowledgement is proof the onboard agent runs
             why = [] if self._unknown is None else [str(self._unknown)]
             self._set_capability(Capability.ACKS_AND_TELEMETRY, why)
-        self.on_mission(body)
-
-    def _delivered(self, ack: dict[str, Any]) -> bool:
-        """Whether this acknowledgement went to the console already (the vehicle's ``seq`` and
-        ``t_s`` tell one apart; one without them is always new)."""
-        seq, t_s = ack.get("seq"), ack.get("t_s")
-        if not isinstance(seq, int) or not isinstance(t_s, int | float):
-            return False
-        key = repr((seq, t_s, ack.get("frame_hex"), ack.get("outcome")))
-        if key in self._seen:
-            logger.debug("link: acknowledgement seq=%s delivered again, dropped", seq)
-            return True
-        self._seen.append(key)
-        return False
+        self.on_mission(ack)
 
     @staticmethod
     def _json(topic: str, msg: object) -> dict[str, Any] | None:
@@ -379,6 +409,15 @@ class ModemLink(Link):
             else f"the last frame did not reach the modem at {self.target}: {result.reason}"
         )
         return None if result.sent else (result.reason or "not sent")
+
+
+def _ack_key(ack: dict[str, Any]) -> str | None:
+    """What tells an acknowledgement apart from a repeat of it: the vehicle's ``seq`` and
+    ``t_s`` (with its frame and outcome); None when it has no integer seq and numeric t_s."""
+    seq, t_s = ack.get("seq"), ack.get("t_s")
+    if not isinstance(seq, int) or isinstance(seq, bool) or not isinstance(t_s, int | float):
+        return None
+    return repr((seq, t_s, ack.get("frame_hex"), ack.get("outcome")))
 
 
 def open_link(target: str, bitrate_bps: float) -> Link:

@@ -22,8 +22,8 @@ name); :func:`verdict_of` is the rule, with a finding per contract topic that na
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Mapping
-from dataclasses import dataclass
+from collections.abc import Awaitable, Callable, Mapping
+from dataclasses import dataclass, field
 from typing import Any, Final
 
 from rosbridge.bridge_node import PUBLISHERS_SERVICE, bridge_topics, is_bridge, node_names
@@ -41,21 +41,29 @@ from vehicle_contract.contract import (
     Direction,
 )
 
-#: The topics whose publishers are asked (the vehicle's), and the one whose subscribers are.
-PUBLISHED: Final = (POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC)
-SUBSCRIBED: Final = (FRAME_TOPIC,)
+#: The contract topics the vehicle publishes (their publishers are asked), and those it
+#: subscribes to (their subscribers are asked).
+PUBLISHED: Final = tuple(t.name for t in TOPICS if t.direction is Direction.TO_CONSOLE)
+SUBSCRIBED: Final = tuple(t.name for t in TOPICS if t.direction is Direction.TO_VEHICLE)
 
 
 @dataclass(frozen=True)
 class VehicleGraph:
-    """rosapi's answers: the listing (``{topic: type}``), the node names publishing each of
-    :data:`PUBLISHED` and subscribing to each of :data:`SUBSCRIBED` (bridge included, as
-    rosapi gives them), and the bridge's node names learnt on this connection."""
+    """rosapi's answers: the listing (``{topic: type}``, the names as the graph has them), the
+    node names publishing each of :data:`PUBLISHED` and subscribing to each of
+    :data:`SUBSCRIBED` (bridge included, as rosapi gives them; keyed by contract topic), the
+    bridge's node names learnt on this connection, and ``names``: each contract topic's name
+    on this vehicle (under its namespace, if any; absent: the contract's name)."""
 
     topics: Mapping[str, str]
     publishers: Mapping[str, tuple[str, ...]]
     subscribers: Mapping[str, tuple[str, ...]]
     bridges: frozenset[str] = frozenset()
+    names: Mapping[str, str] = field(default_factory=dict)
+
+    def name(self, topic: str) -> str:
+        """Contract topic ``topic``'s name on this vehicle."""
+        return self.names.get(topic, topic)
 
     def endpoints(self, topic: str) -> tuple[str, ...]:
         """Who is at the vehicle's end of a contract topic: its publishers for a topic the
@@ -112,21 +120,22 @@ class Verdict:
         return self.agent and not self.frames
 
 
-def _finding(graph: VehicleGraph, topic: str, kind: str, sends: bool) -> Finding:
+def _finding(graph: VehicleGraph, base: str, kind: str, sends: bool) -> Finding:
     role, verb, by = (
         ("publisher", "publishes", "published")
         if sends
         else ("subscriber", "subscribes to", "subscribed")
     )
+    topic = graph.name(base)
     listed = graph.topics.get(topic)
     if listed is None:
         return Finding(False, f"no {topic} topic: no node {verb} it")
     if not same_type(listed, kind):
         return Finding(False, f"{topic} is a {listed}, not a {canonical_type(kind)}: it is ignored")
-    nodes = graph.vehicle_nodes(topic)
+    nodes = graph.vehicle_nodes(base)
     if nodes:
         return Finding(True, f"{listed}, {by} by {', '.join(nodes)}")
-    bridge = graph.bridge_nodes(topic)
+    bridge = graph.bridge_nodes(base)
     if bridge:
         return Finding(
             False,
@@ -142,9 +151,13 @@ def _finding(graph: VehicleGraph, topic: str, kind: str, sends: bool) -> Finding
 
 def verdict_of(graph: VehicleGraph, *, frames_over_rosbridge: bool = True) -> Verdict:
     """THE rule (module doc). ``frames_over_rosbridge`` False: the console sends its frames
-    another way (an ME modem), so a missing frame subscriber is no problem."""
+    another way (an ME modem), so a missing frame subscriber is no problem. ``findings`` has
+    every required contract topic, and an optional one the graph lists; keyed by contract
+    topic."""
     findings = {
-        t.name: _finding(graph, t.name, t.type, t.direction is Direction.TO_CONSOLE) for t in TOPICS
+        t.name: _finding(graph, t.name, t.type, t.direction is Direction.TO_CONSOLE)
+        for t in TOPICS
+        if t.required or graph.name(t.name) in graph.topics  # an optional one only if there
     }
     ok = {name: f.ok for name, f in findings.items()}
     agent = ok[MISSION_TOPIC] and ok[STATUS_TOPIC]
@@ -189,15 +202,20 @@ def _failed(service: str, answer: Mapping[str, Any] | None, timeout_s: float) ->
 
 
 async def read_graph(
-    client: RosbridgeClient, timeout_s: float, bridges: frozenset[str] | None = None
+    client: RosbridgeClient,
+    timeout_s: float,
+    bridges: frozenset[str] | None = None,
+    names: Mapping[str, str] | None = None,
 ) -> VehicleGraph | GraphUnknown:
     """Ask rosapi for the listing and the contract topics' publishers and subscribers, each
     within ``timeout_s`` (all at once). ``bridges``: the bridge's node names learnt earlier on
-    this connection; None asks who publishes its ``connected_clients``.
+    this connection; None asks who publishes its ``connected_clients``. ``names``: contract
+    topic -> its name on this vehicle (a namespaced vehicle; default the contract's names).
 
     Raises:
         websockets.exceptions.ConnectionClosed: a request could not be sent.
     """
+    named = dict(names or {})
 
     async def call(service: str, topic: str | None = None) -> dict[str, Any] | None:
         args = None if topic is None else {"topic": topic}
@@ -205,8 +223,8 @@ async def read_graph(
 
     listing_answer, *answers = await asyncio.gather(
         call(TOPICS_SERVICE),
-        *(call(PUBLISHERS_SERVICE, t) for t in PUBLISHED),
-        *(call(SUBSCRIBERS_SERVICE, t) for t in SUBSCRIBED),
+        *(call(PUBLISHERS_SERVICE, named.get(t, t)) for t in PUBLISHED),
+        *(call(SUBSCRIBERS_SERVICE, named.get(t, t)) for t in SUBSCRIBED),
     )
     why = _failed(TOPICS_SERVICE, listing_answer, timeout_s)
     if why is not None:
@@ -221,19 +239,22 @@ async def read_graph(
     tables: dict[str, dict[str, tuple[str, ...]]] = {"publishers": {}, "subscribers": {}}
     for (service, key, topic), answer in zip(asked, answers, strict=True):
         why = _failed(service, answer, timeout_s)
-        names = None if answer is None else node_names(answer.get("values"), key)
-        if why is None and names is None:
+        nodes = None if answer is None else node_names(answer.get("values"), key)
+        if why is None and nodes is None:
             why = f"{service} answered without a list of {key}"
         if why is not None:
-            return GraphUnknown(service, f"{why} (asked about {topic})")
-        assert names is not None
-        tables[key][topic] = tuple(names)
+            return GraphUnknown(service, f"{why} (asked about {named.get(topic, topic)})")
+        assert nodes is not None
+        tables[key][topic] = tuple(nodes)
     if bridges is None:
         bridges = await _bridges(call, listing)
-    return VehicleGraph(listing, tables["publishers"], tables["subscribers"], bridges)
+    return VehicleGraph(listing, tables["publishers"], tables["subscribers"], bridges, named)
 
 
-async def _bridges(call: Any, listing: Mapping[str, str]) -> frozenset[str]:
+_Call = Callable[[str, str | None], Awaitable[dict[str, Any] | None]]
+
+
+async def _bridges(call: _Call, listing: Mapping[str, str]) -> frozenset[str]:
     """The nodes publishing a ``connected_clients`` topic: rosbridge servers, whatever their
     name (an unanswered question leaves the name rule alone)."""
     topics = bridge_topics(listing)

@@ -126,7 +126,7 @@ def graph_checks(graph: VehicleGraph | GraphUnknown, *, modem: str | None = None
         unknown = f"not known: {graph}"
         return [
             Check("rosapi", "fail", str(graph)),
-            *(Check(f"topic {t.name}", "skipped", unknown) for t in TOPICS),
+            *(Check(f"topic {t.name}", "skipped", unknown) for t in TOPICS if t.required),
             Check("onboard agent", "skipped", unknown),
         ]
     verdict = verdict_of(graph, frames_over_rosbridge=modem is None)
@@ -139,14 +139,17 @@ def graph_checks(graph: VehicleGraph | GraphUnknown, *, modem: str | None = None
         )
     ]
     for t in TOPICS:
-        found = verdict.findings[t.name]
+        found = verdict.findings.get(t.name)  # an optional topic the graph lacks: no row
+        row = f"topic {graph.name(t.name)}"
+        if found is None:
+            continue
         if found.ok:
-            out.append(Check(f"topic {t.name}", "pass", found.reason))
+            out.append(Check(row, "pass", found.reason))
         elif t.name == FRAME_TOPIC and modem is not None:
             why = f"frames go through the modem path ({modem}): {found.reason}"
-            out.append(Check(f"topic {t.name}", "skipped", why))
+            out.append(Check(row, "skipped", why))
         else:
-            out.append(Check(f"topic {t.name}", "fail", f"missing: {found.reason}"))
+            out.append(Check(row, "fail", f"missing: {found.reason}"))
     capability, _ = capability_of(graph, frames_over_rosbridge=modem is None)
     console = f"the console: {capability}"
     if verdict.agent:

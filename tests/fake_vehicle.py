@@ -176,6 +176,22 @@ class Rosbridge:
         with self._lock:
             self._nodes = tuple(nodes)
 
+    def publish(self, topic: str, msg: dict[str, Any]) -> int:
+        """A vehicle node publishes ``msg`` on ``topic``: sent to every client subscribed to it
+        whose bridge subscription hears it (module doc). Returns how many got it."""
+
+        async def send() -> int:
+            with self._lock:
+                heard = self._hears(topic)
+                clients = [c.ws for c in self._clients.values() if topic in c.subs]
+            text = json.dumps({"op": "publish", "topic": topic, "msg": msg})
+            for ws in clients if heard else []:
+                with contextlib.suppress(ConnectionClosed):
+                    await ws.send(text)
+            return len(clients) if heard else 0
+
+        return asyncio.run_coroutine_threadsafe(send(), self._loop).result(5)
+
     def ops(self) -> list[str]:
         with self._lock:
             return [str(m.get("op")) for m in self.received]
