@@ -166,7 +166,8 @@ def malformed_probe_check(
 ) -> Check:
     """The probe's row: ``ack`` is the acknowledgement of :data:`PROBE_FRAME` (None: none came
     within ``deadline_s`` of ``sent_s``); ``path`` says how it went; ``active`` is the active
-    command the last status reported before it (``...``: not known)."""
+    command the last status reported before it (``...``: not known). One the vehicle marks
+    ``late`` (made after the contract's deadline from the frame's reception) fails."""
     name = "ack path (probe)"
     what = f"a malformed frame ({PROBE_FRAME.hex}: codeword beyond correction) {path}"
     if ack is None:
@@ -177,6 +178,9 @@ def malformed_probe_check(
         return Check(name, "fail", f"{what}: {body.get('outcome')} {took}: it must be rejected")
     if body.get("reason") != PROBE_REASON:
         why = f"rejected as {body.get('reason')!r}, not {PROBE_REASON!r}: {body.get('detail')}"
+        return Check(name, "fail", f"{what}: {why}")
+    if body.get("late") is True:
+        why = "rejected, but late: the vehicle says it answered after the contract's deadline"
         return Check(name, "fail", f"{what}: {why}")
     if active is not ... and "active" in body and body["active"] != active:
         why = f"the active command changed from {active} to {body['active']}"

@@ -63,6 +63,9 @@ def test_anything_else_fails_naming_it() -> None:
     assert result == "fail" and "accepted in 0.25 s" in reason and "must be rejected" in reason
     result, reason = check(ack(reason="crc_mismatch"))
     assert result == "fail" and "rejected as 'crc_mismatch', not 'uncorrectable'" in reason
+    result, reason = check(ack(late=True))
+    assert result == "fail" and reason.endswith("answered after the contract's deadline")
+    assert check(ack(late=False))[0] == "pass"
     circle = {"pattern": "circle", "pattern_id": 3, "params": {}}
     result, reason = check(ack(active=None), active=circle)
     assert result == "fail" and "the active command changed" in reason
