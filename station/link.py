@@ -157,9 +157,14 @@ class RosbridgeLink(Link):
         open_timeout_s: float = 3.0,
         rosapi_timeout_s: float = ROSAPI_TIMEOUT_S,
         auth_secret: str | None = None,
+        *,
+        frames: bool = True,
         graph_poll_s: float = GRAPH_POLL_S,
     ) -> None:
         super().__init__(target)
+        #: Frames go out over this connection (False: telemetry and acknowledgements only, the
+        #: frames going by an ME modem: :class:`station.link_modem.HybridLink`).
+        self.frames = frames
         #: The training bridge's secret: the link authenticates first (``auth`` op).
         self.auth_secret = auth_secret
         self.open_timeout_s = open_timeout_s
@@ -169,7 +174,8 @@ class RosbridgeLink(Link):
         self._task: asyncio.Task[None] | None = None
         self._ready = asyncio.Event()
         self._protocol = ClientProtocol(
-            advertise=[FRAME_TOPIC], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC]
+            advertise=[FRAME_TOPIC] if frames else [],
+            subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC],
         )
         #: What each subscribed topic's messages go to.
         self._handlers: dict[str, TopicHandler] = {
@@ -288,7 +294,7 @@ class RosbridgeLink(Link):
     def _on_graph(self, graph: VehicleGraph | GraphUnknown) -> None:
         if isinstance(graph, VehicleGraph):
             self._graph_known = True
-            capability, problems = capability_of(graph)
+            capability, problems = capability_of(graph, frames_over_rosbridge=self.frames)
             if capability is not self.capability:
                 logger.info("link to %s: %s", self.target, capability)
             self._set_capability(capability, problems)
@@ -370,6 +376,8 @@ class RosbridgeLink(Link):
 
     async def transmit(self, frame: Frame) -> str | None:
         client = self._client
+        if not self.frames:
+            return f"frames do not go over {self.target} (telemetry only)"
         if client is None:
             return "not connected to the vehicle"
         try:

@@ -20,6 +20,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
+from codec import encode_frame
 from station.link import Capability, RosbridgeLink
 from tests.backend.conftest import CIRCLE, MakeClient, send, wait_state, wait_until
 from tests.fake_vehicle import (
@@ -28,6 +29,7 @@ from tests.fake_vehicle import (
     MISSION,
     POSE,
     POSE_ONLY,
+    RECEIVER_ONLY,
     ROS_EPOCH_S,
     STRING_TYPE,
     WITH_AGENT,
@@ -300,3 +302,31 @@ def test_the_console_says_rosapi_did_not_answer(make_client: MakeClient) -> None
         assert rec["state"] == "sent" and rec["copies_sent"] == rec["copies"], rec
     finally:
         silent.stop()
+
+
+def test_a_receiver_only_vehicle_acknowledges_only_frames_sent_another_way() -> None:
+    """No frame subscriber but rosbridge's: over rosbridge alone the frames reach nothing
+    (telemetry only, saying so); a link whose frames go by an ME modem (``frames=False``, the
+    hybrid link's telemetry half) gets its acknowledgements."""
+    vehicle = Rosbridge(RECEIVER_ONLY).start()
+
+    async def run(frames: bool) -> tuple[Capability, list[str], str | None]:
+        link = RosbridgeLink(vehicle.url, frames=frames)
+        await link.start()
+        try:
+            assert await link.wait_connected(5.0)
+            why = await link.transmit(encode_frame("surface").frame)
+            return link.capability, list(link.capability_problems), why
+        finally:
+            await link.stop()
+
+    try:
+        alone, problems, sent = asyncio.run(run(True))
+        hybrid, none, refused = asyncio.run(run(False))
+    finally:
+        vehicle.stop()
+    assert alone is Capability.TELEMETRY_ONLY and sent is None
+    assert problems[0].startswith("receiver-only: ") and "/nemesys/frame" in problems[0]
+    assert hybrid is Capability.ACKS_AND_TELEMETRY and none == []
+    assert refused is not None and "telemetry only" in refused
+    assert vehicle.frame_count() == 1  # the first link's frame, to nothing on the vehicle
