@@ -98,6 +98,8 @@ class Finding:
 
     ok: bool
     reason: str
+    #: What is wrong in a few words (empty when ``ok``).
+    short: str = ""
 
 
 @dataclass(frozen=True)
@@ -121,17 +123,18 @@ class Verdict:
 
 
 def _finding(graph: VehicleGraph, base: str, kind: str, sends: bool) -> Finding:
-    role, verb, by = (
-        ("publisher", "publishes", "published")
+    role, verb, by, other = (
+        ("publisher", "publishes", "published", "subscribes to")
         if sends
-        else ("subscriber", "subscribes to", "subscribed")
+        else ("subscriber", "subscribes to", "subscribed", "publishes")
     )
     topic = graph.name(base)
     listed = graph.topics.get(topic)
     if listed is None:
-        return Finding(False, f"no {topic} topic: no node {verb} it")
+        return Finding(False, f"no {topic} topic: no node {verb} it", f"no {topic} topic")
     if not same_type(listed, kind):
-        return Finding(False, f"{topic} is a {listed}, not a {canonical_type(kind)}: it is ignored")
+        wrong = f"{topic} is a {listed}, not a {canonical_type(kind)}: it is ignored"
+        return Finding(False, wrong, wrong)
     nodes = graph.vehicle_nodes(base)
     if nodes:
         return Finding(True, f"{listed}, {by} by {', '.join(nodes)}")
@@ -141,11 +144,13 @@ def _finding(graph: VehicleGraph, base: str, kind: str, sends: bool) -> Finding:
             False,
             f"{topic} has no {role} but rosbridge's own node ({', '.join(bridge)}), there for "
             "its clients: the topic exists only because a client uses it",
+            f"only rosbridge {verb} {topic}",
         )
     return Finding(
         False,
-        f"no node {verb} {topic}: it is listed because something "
-        f"{'subscribes to' if sends else 'publishes'} it (rosbridge, for its clients?)",
+        f"no node {verb} {topic} (it exists because something {other} it, such as rosbridge "
+        "for its clients)",
+        f"no node {verb} {topic}",
     )
 
 
@@ -163,7 +168,7 @@ def verdict_of(graph: VehicleGraph, *, frames_over_rosbridge: bool = True) -> Ve
     agent = ok[MISSION_TOPIC] and ok[STATUS_TOPIC]
     problems: list[str] = []
     if not agent:
-        missing = [findings[t].reason for t in (MISSION_TOPIC, STATUS_TOPIC) if not ok[t]]
+        missing = [findings[t].short for t in (MISSION_TOPIC, STATUS_TOPIC) if not ok[t]]
         problems.append(
             f"no onboard agent ({'; '.join(missing)}): commands are sent as repeated copies "
             "without acknowledgement"
