@@ -66,19 +66,31 @@ class ClientProtocol:
             }
             for topic, (type_name, op_id) in self._advertised.items()
         )
-        subscribe = (
-            {
-                "op": "subscribe",
-                "id": op_id,
-                "type": type_name,
-                "topic": topic,
-                "compression": "none",
-                "throttle_rate": 0,
-                "queue_length": 0,
-            }
-            for topic, (type_name, op_id) in self._subscribed.items()
-        )
+        subscribe = (self._subscribe(topic) for topic in self._subscribed)
         return tuple(to_json(message) for message in (*advertise, *subscribe))
+
+    def _subscribe(self, topic: str) -> JsonObject:
+        type_name, op_id = self._subscribed[topic]
+        return {
+            "op": "subscribe",
+            "id": op_id,
+            "type": type_name,
+            "topic": topic,
+            "compression": "none",
+            "throttle_rate": 0,
+            "queue_length": 0,
+        }
+
+    def resubscribe(self, topics: Iterable[str]) -> tuple[str, ...]:
+        """Unsubscribe and subscribe again to each of ``topics`` (with its id): a rosbridge
+        server makes a new ROS subscription, with the QoS that suits the publishers there now,
+        when this client was its last subscriber (a subscription another client holds keeps
+        the QoS it was made with)."""
+        out: list[JsonObject] = []
+        for topic in topics:
+            out.append({"op": "unsubscribe", "id": self._subscribed[topic][1], "topic": topic})
+            out.append(self._subscribe(topic))
+        return tuple(to_json(message) for message in out)
 
     def close_messages(self) -> tuple[str, ...]:
         """Every unsubscribe, then every unadvertise, with the ids they were opened with."""

@@ -295,6 +295,16 @@ class TopicNames:
     status: str
     datum: str
 
+    def by_topic(self) -> dict[str, str]:
+        """Each contract topic -> its name on this vehicle."""
+        return {
+            FRAME_TOPIC: self.frame,
+            POSE_TOPIC: self.pose,
+            MISSION_TOPIC: self.mission,
+            STATUS_TOPIC: self.status,
+            DATUM_TOPIC: self.datum,
+        }
+
 
 def topic_names(namespace: str = "") -> TopicNames:
     """Every contract topic's name under ``namespace`` (:func:`topic_name`).
