@@ -13,7 +13,10 @@ vehicle publishes it. So the listing says only the types; who is at the other en
   other than the bridge (with the contract's types);
 * frames reach it over rosbridge when ``/nemesys/frame`` has a subscriber other than the bridge
   (a vehicle without one takes frames over its own ME receiver: "receiver-only");
-* its telemetry is the pose and status that a node other than the bridge publishes.
+* its telemetry is the pose and status that a node other than the bridge publishes;
+* an optional contract topic (the datum) counts only when a node other than the bridge
+  publishes it: the console subscribes to it, so on a vehicle without it the bridge's own
+  subscription lists it.
 
 :func:`read_graph` asks (five calls at once, plus one per connection to learn the bridge's
 name); :func:`verdict_of` is the rule, with a finding per contract topic that names the nodes.
@@ -157,12 +160,12 @@ def _finding(graph: VehicleGraph, base: str, kind: str, sends: bool) -> Finding:
 def verdict_of(graph: VehicleGraph, *, frames_over_rosbridge: bool = True) -> Verdict:
     """THE rule (module doc). ``frames_over_rosbridge`` False: the console sends its frames
     another way (an ME modem), so a missing frame subscriber is no problem. ``findings`` has
-    every required contract topic, and an optional one the graph lists; keyed by contract
-    topic."""
+    every required contract topic, and an optional one a node other than the bridge is at the
+    vehicle's end of; keyed by contract topic."""
     findings = {
         t.name: _finding(graph, t.name, t.type, t.direction is Direction.TO_CONSOLE)
         for t in TOPICS
-        if t.required or graph.name(t.name) in graph.topics  # an optional one only if there
+        if t.required or graph.vehicle_nodes(t.name)  # an optional one only if the vehicle's
     }
     ok = {name: f.ok for name, f in findings.items()}
     agent = ok[MISSION_TOPIC] and ok[STATUS_TOPIC]

@@ -18,17 +18,19 @@ from station.vehicle_graph import GraphUnknown, VehicleGraph, read_graph, verdic
 from tests.fake_vehicle import FRAME_TYPE, STRING_TYPE, WITH_AGENT, Rosbridge, observer
 from tests.rosbridge.helpers import LoopThread
 
-FRAME, POSE, MISSION, STATUS = (
+FRAME, POSE, MISSION, STATUS, DATUM = (
     "/nemesys/frame",
     "/nemesys/pose",
     "/nemesys/mission",
     "/nemesys/status",
+    "/nemesys/datum",
 )
 TYPES = {
     FRAME: "std_msgs/msg/UInt8MultiArray",
     POSE: "geometry_msgs/msg/PoseStamped",
     MISSION: "std_msgs/msg/String",
     STATUS: "std_msgs/msg/String",
+    DATUM: "std_msgs/msg/String",
 }
 BRIDGE = "/rosbridge_websocket"
 VEHICLE = "/nemesys_vehicle"
@@ -126,6 +128,29 @@ def test_a_receiver_only_vehicle_needs_its_frames_another_way() -> None:
     assert capability_of(g, frames_over_rosbridge=False) == (Capability.ACKS_AND_TELEMETRY, [])
 
 
+def test_the_optional_datum_counts_only_when_a_node_publishes_it() -> None:
+    """The console subscribes to the datum, so rosbridge's own subscription lists it on a
+    vehicle that has none: no finding then; one published with the wrong type is named."""
+    agent = {POSE: (VEHICLE,), STATUS: (VEHICLE,), MISSION: (VEHICLE,)}
+    listed_by_the_bridge = graph({**agent, DATUM: ()}, (VEHICLE,), types={DATUM: TYPES[DATUM]})
+    assert DATUM not in verdict_of(listed_by_the_bridge).findings
+    assert capability_of(listed_by_the_bridge) == (Capability.ACKS_AND_TELEMETRY, [])
+    published = VehicleGraph(
+        {**TYPES}, {**agent, DATUM: (BRIDGE, VEHICLE)}, {FRAME: (VEHICLE,)}, frozenset()
+    )
+    assert verdict_of(published).findings[DATUM].reason == (
+        f"std_msgs/msg/String, published by {VEHICLE}"
+    )
+    wrong = VehicleGraph(
+        {**TYPES, DATUM: "std_msgs/msg/Int32"},
+        {**agent, DATUM: (VEHICLE,)},
+        {FRAME: (VEHICLE,)},
+        frozenset(),
+    )
+    assert not verdict_of(wrong).findings[DATUM].ok
+    assert verdict_of(wrong).agent  # optional: named, not the agent's
+
+
 def test_a_topic_nobody_lists_is_named_missing() -> None:
     g = VehicleGraph({POSE: TYPES[POSE]}, {POSE: (VEHICLE,)}, {}, frozenset())
     verdict = verdict_of(g)
@@ -183,6 +208,7 @@ def test_the_training_bridge_answers_the_graph_as_a_real_one_does(training: str)
             POSE: (VEHICLE,),
             STATUS: (VEHICLE,),
             MISSION: (VEHICLE,),
+            DATUM: (),  # the optional datum: asked about, published by nobody
         }
     )
     assert ours.subscribers == theirs.subscribers == {FRAME: (VEHICLE, BRIDGE)}
