@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from typing import TextIO
 
@@ -58,6 +59,13 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         "serial:///dev/...), for a vehicle that takes frames over its own ME receiver; the "
         "acknowledgements still come back over rosbridge",
     )
+    p.add_argument(
+        "--namespace",
+        metavar="NS",
+        default=os.environ.get("NEMESYS_VEHICLE_NAMESPACE", ""),
+        help="the vehicle's ROS namespace: its topics are /NS/nemesys/... (default: "
+        "NEMESYS_VEHICLE_NAMESPACE, else none)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--timeout",
@@ -92,15 +100,27 @@ def cmd_vehicle_check(args: argparse.Namespace, out: TextIO) -> int:
     import asyncio
 
     from station.vehicle_check import check_vehicle, modem_problem, url_problem
+    from vehicle_contract.contract import check_namespace
 
     problem = url_problem(args.url)
     if problem is None and args.modem is not None:
         problem = modem_problem(args.modem)
+    if problem is None:
+        try:
+            check_namespace(args.namespace)
+        except ValueError as err:
+            problem = f"--namespace: {err}"
     if problem is not None:
         print(f"nemesys vehicle-check: {problem}", file=sys.stderr)
         return EXIT_USAGE
     report = asyncio.run(
-        check_vehicle(args.url, timeout_s=args.timeout, window_s=args.window, modem=args.modem)
+        check_vehicle(
+            args.url,
+            timeout_s=args.timeout,
+            window_s=args.window,
+            modem=args.modem,
+            namespace=args.namespace,
+        )
     )
     if args.json:
         json.dump(report.as_json(), out, indent=2)

@@ -26,6 +26,10 @@ why):
   be another command) and expects an acknowledgement with ``duplicate: true`` (not replanned);
 * every acknowledgement against the ack schema.
 
+A vehicle under a ROS namespace (``namespace``: its topics ``/<it>/nemesys/...``, its node
+``/<it>/nemesys_vehicle``) is checked on those names; its nodes are found by the topics they
+publish and subscribe, whatever they are called.
+
 Those are the only frames the check sends. What each answer means is
 :mod:`station.vehicle_report`: a measured rate passes at
 :data:`~station.vehicle_report.RATE_TOLERANCE` of the minimum (timer jitter over a short
@@ -61,12 +65,7 @@ from station.vehicle_report import (
     probe_frame,
     status_checks,
 )
-from vehicle_contract.contract import (
-    FRAME_TOPIC,
-    MISSION_TOPIC,
-    POSE_TOPIC,
-    STATUS_TOPIC,
-)
+from vehicle_contract.contract import TopicNames, topic_names
 
 #: How long to wait for each answer (rosapi, the probe's acknowledgement) by default (s).
 DEFAULT_TIMEOUT_S: Final = 3.0
@@ -122,24 +121,28 @@ async def check_vehicle(
     timeout_s: float = DEFAULT_TIMEOUT_S,
     window_s: float = DEFAULT_WINDOW_S,
     modem: str | None = None,
+    namespace: str = "",
 ) -> Report:
     """Run every check against the vehicle at ``url`` (see the module doc); with ``modem``
-    the frames go through that ME modem and the acknowledgements come back over rosbridge.
+    the frames go through that ME modem and the acknowledgements come back over rosbridge;
+    ``namespace``: the vehicle's ROS namespace ("" for none).
 
     Raises:
-        ValueError: ``url`` is not a ws:// or wss:// URL, or ``modem`` not a modem target.
+        ValueError: ``url`` is not a ws:// or wss:// URL, ``modem`` not a modem target, or
+            ``namespace`` not a ROS namespace.
     """
     problem = url_problem(url)
     if problem is not None:
         raise ValueError(problem)
+    names = topic_names(namespace)
     tx = open_modem(modem) if modem is not None else None
-    listen = ClientProtocol(advertise=[], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC])
+    listen = ClientProtocol(advertise=[], subscribe=[names.pose, names.status, names.mission])
     try:
         try:
             client = await RosbridgeClient.connect(url, listen, open_timeout_s=timeout_s)
         except (OSError, WebSocketException, TimeoutError) as err:
             return Report(url, [Check("connect", "fail", f"{failure_reason(err)}: {url}")])
-        session = _Session(client, timeout_s, window_s, tx)
+        session = _Session(client, timeout_s, window_s, tx, names)
         session.checks.append(Check("connect", "pass", f"a rosbridge websocket at {url}"))
         try:
             await session.run()
@@ -172,12 +175,15 @@ class _Session:
         timeout_s: float,
         window_s: float,
         modem: Transmitter | None = None,
+        names: TopicNames | None = None,
     ) -> None:
         self.client = client
         self.timeout_s = timeout_s
         self.window_s = window_s
         self.modem = modem
-        self.talk = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[])
+        #: The contract's topics on this vehicle (under its namespace, if any).
+        self.names = names = names or topic_names()
+        self.talk = ClientProtocol(advertise=[names.frame], subscribe=[])
         self.record = _Record()
         self.checks: list[Check] = []
         self._ack_arrived = asyncio.Event()
@@ -185,9 +191,9 @@ class _Session:
         self._advertised_s: float | None = None
         client.handlers.update(
             {
-                POSE_TOPIC: self._pose,
-                STATUS_TOPIC: lambda msg: self._json(STATUS_TOPIC, msg),
-                MISSION_TOPIC: lambda msg: self._json(MISSION_TOPIC, msg),
+                names.pose: self._pose,
+                names.status: lambda msg: self._json(names.status, msg),
+                names.mission: lambda msg: self._json(names.mission, msg),
             }
         )
         client.on_close = self._closed
@@ -200,7 +206,7 @@ class _Session:
     def path(self) -> str:
         """How a frame goes to the vehicle, in words."""
         if self.modem is None:
-            return f"published on {FRAME_TOPIC}"
+            return f"published on {self.names.frame}"
         return f"sent through the modem path ({self.modem.target})"
 
     async def close(self) -> None:
@@ -226,7 +232,7 @@ class _Session:
             problem = None
         except InvalidData as error:
             body, problem = None, error.reason
-        if name == STATUS_TOPIC:
+        if name == self.names.status:
             self.record.statuses.append((now, body, problem))
             self._status_arrived.set()
         else:
@@ -239,8 +245,9 @@ class _Session:
         """Every check after ``connect``, appended to :attr:`checks` as it is made."""
         began = time.monotonic()
         await self.client.open()
-        graph = await read_graph(self.client, self.timeout_s)
-        self.checks += graph_checks(graph, modem=self.modem.target if self.modem else None)
+        graph = await read_graph(self.client, self.timeout_s, names=self.names.by_topic())
+        modem = self.modem.target if self.modem else None
+        self.checks += graph_checks(graph, modem=modem, names=self.names.by_topic())
         if self.modem is None:
             await self.client.send(*self.talk.open_messages())
             self._advertised_s = time.monotonic()
@@ -257,7 +264,7 @@ class _Session:
         if self.modem is None:
             settled_s = (self._advertised_s or 0.0) + ADVERTISE_SETTLE_S
             await asyncio.sleep(max(0.0, settled_s - time.monotonic()))
-            await self.client.send(self.talk.publish(FRAME_TOPIC, frame_msg(frame)))
+            await self.client.send(self.talk.publish(self.names.frame, frame_msg(frame)))
             return None
         result = await self.modem.send_async(frame, wait_ack_s=0.0)
         return None if result.sent else f"the modem did not take it: {result.reason}"
@@ -272,7 +279,7 @@ class _Session:
             if not verdict.frames and self.modem is None:
                 why = (
                     f"receiver-only: frames cannot be probed over rosbridge (no node but "
-                    f"rosbridge's own subscribes to {FRAME_TOPIC}); check through the modem "
+                    f"rosbridge's own subscribes to {self.names.frame}); check through the modem "
                     "path: nemesys vehicle-check URL --modem tcp://HOST:PORT; nothing was sent"
                 )
                 return Check(name, "fail", why)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Final, Literal
 
@@ -118,15 +119,26 @@ class Ack:
     problem: str | None = None
 
 
-def graph_checks(graph: VehicleGraph | GraphUnknown, *, modem: str | None = None) -> list[Check]:
+def graph_checks(
+    graph: VehicleGraph | GraphUnknown,
+    *,
+    modem: str | None = None,
+    names: Mapping[str, str] | None = None,
+) -> list[Check]:
     """The rosapi row, one row per contract topic and the onboard agent's, by the rule the
     console uses (:func:`station.vehicle_graph.verdict_of`: rosbridge's own node is not the
-    vehicle). ``modem``: frames go through that ME modem, not the frame topic."""
+    vehicle). ``modem``: frames go through that ME modem, not the frame topic. ``names``:
+    contract topic -> its name on this vehicle, for rows of a graph not known."""
     if isinstance(graph, GraphUnknown):
         unknown = f"not known: {graph}"
+        named = names or {}
         return [
             Check("rosapi", "fail", str(graph)),
-            *(Check(f"topic {t.name}", "skipped", unknown) for t in TOPICS if t.required),
+            *(
+                Check(f"topic {named.get(t.name, t.name)}", "skipped", unknown)
+                for t in TOPICS
+                if t.required
+            ),
             Check("onboard agent", "skipped", unknown),
         ]
     verdict = verdict_of(graph, frames_over_rosbridge=modem is None)
@@ -154,7 +166,8 @@ def graph_checks(graph: VehicleGraph | GraphUnknown, *, modem: str | None = None
     console = f"the console: {capability}"
     if verdict.agent:
         nodes = sorted({*graph.vehicle_nodes(MISSION_TOPIC), *graph.vehicle_nodes(STATUS_TOPIC)})
-        why = f"running: {', '.join(nodes)} publishes {MISSION_TOPIC} and {STATUS_TOPIC}"
+        said = f"{graph.name(MISSION_TOPIC)} and {graph.name(STATUS_TOPIC)}"
+        why = f"running: {', '.join(nodes)} publishes {said}"
         out.append(Check("onboard agent", "pass", f"{why}; {console}"))
     else:
         out.append(Check("onboard agent", "fail", f"{verdict.problems[0]}; {console}"))
