@@ -16,7 +16,9 @@ why):
 * the acknowledgement path, harmlessly, on any vehicle (a fresh one too): it sends a
   deliberately malformed frame (:data:`~station.vehicle_report.PROBE_FRAME`: synchronisable,
   its codeword beyond correction) and expects it acknowledged ``rejected``, reason
-  ``uncorrectable``, within the deadline, the active command unchanged. A vehicle that takes
+  ``uncorrectable``, its round trip within the contract's ack deadline
+  (:data:`~vehicle_contract.contract.ACK_DEADLINE_S`; one that comes later, up to the timeout,
+  is named late), the active command unchanged. A vehicle that takes
   its frames over its own ME receiver (no frame subscriber but rosbridge's: "receiver-only")
   is probed through the modem path (``modem``: an ME modem target, ``tcp://host:port`` or
   ``serial:///dev/...``), its acknowledgement still read over rosbridge; without one the row
@@ -65,7 +67,7 @@ from station.vehicle_report import (
     probe_frame,
     status_checks,
 )
-from vehicle_contract.contract import TopicNames, topic_names
+from vehicle_contract.contract import ACK_DEADLINE_S, TopicNames, topic_names
 
 #: How long to wait for each answer (rosapi, the probe's acknowledgement) by default (s).
 DEFAULT_TIMEOUT_S: Final = 3.0
@@ -290,9 +292,10 @@ class _Session:
         sent_s = time.monotonic()
         if problem is not None:
             return Check(name, "fail", f"a malformed frame {self.path}: {problem}")
-        ack = await self._ack_for(PROBE_FRAME, start)
+        waited_s = max(self.timeout_s, ACK_DEADLINE_S)  # never less than the deadline
+        ack = await self._ack_for(PROBE_FRAME, start, waited_s)
         return malformed_probe_check(
-            ack, sent_s=sent_s, deadline_s=self.timeout_s, path=self.path, active=active
+            ack, sent_s=sent_s, waited_s=waited_s, path=self.path, active=active
         )
 
     async def _next_status(self) -> None:
@@ -342,9 +345,10 @@ class _Session:
             return Check(name, "fail", f"{what}: {why}")
         return Check(name, "pass", f"{what}: a duplicate {took}, not replanned")
 
-    async def _ack_for(self, frame: Frame, start: int) -> Ack | None:
-        """The first acknowledgement from index ``start`` on that answers ``frame``."""
-        deadline = time.monotonic() + self.timeout_s
+    async def _ack_for(self, frame: Frame, start: int, wait_s: float | None = None) -> Ack | None:
+        """The first acknowledgement from index ``start`` on that answers ``frame``, within
+        ``wait_s`` (default the timeout)."""
+        deadline = time.monotonic() + (self.timeout_s if wait_s is None else wait_s)
         seen = start
         while True:
             for ack in self.record.acks[seen:]:

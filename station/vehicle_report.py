@@ -22,6 +22,7 @@ from codec import (
 from station.link import capability_of
 from station.vehicle_graph import GraphUnknown, VehicleGraph, verdict_of
 from vehicle_contract.contract import (
+    ACK_DEADLINE_S,
     CONTRACT_VERSION,
     FRAME_TOPIC,
     MISSION_TOPIC,
@@ -175,18 +176,29 @@ def graph_checks(
 
 
 def malformed_probe_check(
-    ack: Ack | None, *, sent_s: float, deadline_s: float, path: str, active: object = None
+    ack: Ack | None,
+    *,
+    sent_s: float,
+    waited_s: float,
+    path: str,
+    active: object = None,
+    deadline_s: float = ACK_DEADLINE_S,
 ) -> Check:
     """The probe's row: ``ack`` is the acknowledgement of :data:`PROBE_FRAME` (None: none came
-    within ``deadline_s`` of ``sent_s``); ``path`` says how it went; ``active`` is the active
-    command the last status reported before it (``...``: not known). One the vehicle marks
-    ``late`` (made after the contract's deadline from the frame's reception) fails."""
+    within ``waited_s`` of ``sent_s``); ``path`` says how it went; ``active`` is the active
+    command the last status reported before it (``...``: not known). Its round trip is held to
+    the contract's ack deadline (``deadline_s``; the round trip adds rosbridge's latency to
+    the vehicle's own time, so a pass proves the deadline is kept); one past it fails, as does
+    one the vehicle marks ``late`` (made after the deadline from the frame's reception)."""
     name = "ack path (probe)"
     what = f"a malformed frame ({PROBE_FRAME.hex}: codeword beyond correction) {path}"
+    deadline = f"the contract's deadline {deadline_s:g} s"
     if ack is None:
-        return Check(name, "fail", f"{what}: no acknowledgement within {deadline_s:g} s")
+        why = f"no acknowledgement within {waited_s:g} s ({deadline})"
+        return Check(name, "fail", f"{what}: {why}")
     body = ack.ack or {}
-    took = f"in {ack.arrival_s - sent_s:.2f} s (deadline {deadline_s:g} s)"
+    round_trip_s = ack.arrival_s - sent_s
+    took = f"in {round_trip_s:.2f} s ({deadline})"
     if body.get("outcome") != "rejected":
         return Check(name, "fail", f"{what}: {body.get('outcome')} {took}: it must be rejected")
     if body.get("reason") != PROBE_REASON:
@@ -194,6 +206,9 @@ def malformed_probe_check(
         return Check(name, "fail", f"{what}: {why}")
     if body.get("late") is True:
         why = "rejected, but late: the vehicle says it answered after the contract's deadline"
+        return Check(name, "fail", f"{what}: {why}")
+    if round_trip_s > deadline_s:
+        why = f"rejected as {PROBE_REASON} {took}: the round trip is past the deadline"
         return Check(name, "fail", f"{what}: {why}")
     if active is not ... and "active" in body and body["active"] != active:
         why = f"the active command changed from {active} to {body['active']}"

@@ -104,7 +104,7 @@ def test_the_simulator_passes_and_the_probe_runs_on_a_fresh_vehicle(
         f"a malformed frame ({PROBE_FRAME.hex}: codeword beyond correction) published on "
         "/nemesys/frame: rejected as uncorrectable in "
     )
-    assert reason.endswith("(deadline 2 s); nothing changed")
+    assert reason.endswith("(the contract's deadline 1 s); nothing changed")
     assert table["ack path (duplicate)"] == (
         "skipped",
         "the vehicle reports no active command; nothing was sent",
@@ -341,7 +341,10 @@ def test_rosapi_that_does_not_answer_fails_with_the_reason(
     assert table["onboard agent"][0] == "skipped"
     # rosapi cannot tell: the probe is sent all the same, and nothing answers it
     result, reason = table["ack path (probe)"]
-    assert result == "fail" and reason.endswith("no acknowledgement within 0.5 s")
+    # (the probe waits at least the contract's deadline, whatever --timeout says)
+    assert result == "fail" and reason.endswith(
+        "no acknowledgement within 1 s (the contract's deadline 1 s)"
+    )
 
 
 @pytest.mark.slow  # a probe's real listening window

@@ -8,7 +8,7 @@ from itertools import combinations
 from typing import Any
 
 from codec import CODE, CODEWORD_BITS, FRAME_BYTES, FrameReceiver, Rejected
-from station.vehicle_report import PROBE_FRAME, PROBE_REASON, Ack, malformed_probe_check
+from station.vehicle_report import PROBE_FRAME, PROBE_REASON, Ack, Check, malformed_probe_check
 
 
 def test_no_codeword_lies_within_the_correction_radius_of_the_probe() -> None:
@@ -41,7 +41,7 @@ def ack(**fields: Any) -> Ack:
 
 def check(answer: Ack | None, active: object = None) -> tuple[str, str]:
     row = malformed_probe_check(
-        answer, sent_s=10.0, deadline_s=3.0, path="published on /nemesys/frame", active=active
+        answer, sent_s=10.0, waited_s=3.0, path="published on /nemesys/frame", active=active
     )
     assert row.name == "ack path (probe)"
     return row.result, row.reason
@@ -50,14 +50,16 @@ def check(answer: Ack | None, active: object = None) -> tuple[str, str]:
 def test_a_rejection_with_the_reason_passes() -> None:
     result, reason = check(ack())
     assert result == "pass"
-    assert reason.endswith("rejected as uncorrectable in 0.25 s (deadline 3 s); nothing changed")
+    assert reason.endswith(
+        "rejected as uncorrectable in 0.25 s (the contract's deadline 1 s); nothing changed"
+    )
 
 
 def test_anything_else_fails_naming_it() -> None:
     assert check(None) == (
         "fail",
         f"a malformed frame ({PROBE_FRAME.hex}: codeword beyond correction) published on "
-        "/nemesys/frame: no acknowledgement within 3 s",
+        "/nemesys/frame: no acknowledgement within 3 s (the contract's deadline 1 s)",
     )
     result, reason = check(ack(outcome="accepted", reason=None))
     assert result == "fail" and "accepted in 0.25 s" in reason and "must be rejected" in reason
@@ -66,6 +68,14 @@ def test_anything_else_fails_naming_it() -> None:
     result, reason = check(ack(late=True))
     assert result == "fail" and reason.endswith("answered after the contract's deadline")
     assert check(ack(late=False))[0] == "pass"
+    slow = Ack(11.5, ack().ack)  # the vehicle did not say late, but the round trip was 1.5 s
+    assert malformed_probe_check(slow, sent_s=10.0, waited_s=3.0, path="p") == Check(
+        "ack path (probe)",
+        "fail",
+        f"a malformed frame ({PROBE_FRAME.hex}: codeword beyond correction) p: rejected as "
+        "uncorrectable in 1.50 s (the contract's deadline 1 s): the round trip is past the "
+        "deadline",
+    )
     circle = {"pattern": "circle", "pattern_id": 3, "params": {}}
     result, reason = check(ack(active=None), active=circle)
     assert result == "fail" and "the active command changed" in reason
