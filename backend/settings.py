@@ -205,7 +205,7 @@ class Settings(BaseSettings):
     @field_validator("vehicle_namespace")
     @classmethod
     def _vehicle_namespace(cls, value: str) -> str:
-        from vehicle_contract.contract import check_namespace
+        from vehicle_contract.names import check_namespace
 
         return check_namespace(value)  # ValueError naming what a namespace may hold
 

@@ -100,7 +100,7 @@ def cmd_vehicle_check(args: argparse.Namespace, out: TextIO) -> int:
     import asyncio
 
     from station.vehicle_check import check_vehicle, modem_problem, url_problem
-    from vehicle_contract.contract import check_namespace
+    from vehicle_contract.names import check_namespace
 
     problem = url_problem(args.url)
     if problem is None and args.modem is not None:

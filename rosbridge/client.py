@@ -23,7 +23,7 @@ from rosbridge.protocol import (
     MalformedMessage,
     to_json,
 )
-from vehicle_contract.contract import contract_topic_of
+from vehicle_contract.names import contract_topic_of
 
 
 def _type(topic: str) -> str:

@@ -43,7 +43,8 @@ from rosbridge.transport import RosbridgeClient, TopicHandler
 from station.link_acks import SeenAcks
 from station.transmit import LinkCheck, failure_reason, frame_msg
 from station.vehicle_graph import GraphUnknown, VehicleGraph, read_graph, verdict_of
-from vehicle_contract.contract import DATUM_TOPIC, topic_names
+from vehicle_contract.contract import DATUM_TOPIC
+from vehicle_contract.names import topic_names
 
 logger = logging.getLogger("station.link")
 

@@ -46,7 +46,7 @@ from station.transmit_base import (
     frame_msg,
     logger,
 )
-from vehicle_contract.contract import topic_names
+from vehicle_contract.names import topic_names
 
 DEFAULT_ROSBRIDGE_URL = "ws://127.0.0.1:9090"
 DEFAULT_OPEN_TIMEOUT_S = 5.0

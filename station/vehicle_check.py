@@ -67,7 +67,8 @@ from station.vehicle_report import (
     probe_frame,
     status_checks,
 )
-from vehicle_contract.contract import ACK_DEADLINE_S, TopicNames, topic_names
+from vehicle_contract.contract import ACK_DEADLINE_S
+from vehicle_contract.names import TopicNames, topic_names
 
 #: How long to wait for each answer (rosapi, the probe's acknowledgement) by default (s).
 DEFAULT_TIMEOUT_S: Final = 3.0

@@ -1,8 +1,8 @@
 """The vehicle contract: what the console and a NemeSys vehicle exchange, as the single source.
 
-Every topic with its ROS 2 type, QoS, rate and ``frame_id``, and its name under a vehicle
-namespace (:func:`topic_name`: the one place topic names are built); the time base and the
-acknowledgement deadline; the conventions (heading, depth, body frame, datum); the JSON
+Every topic with its ROS 2 type, QoS, rate and ``frame_id`` (its name under a vehicle
+namespace: :mod:`vehicle_contract.names`, the one place topic names are built); the time base
+and the acknowledgement deadline; the conventions (heading, depth, body frame, datum); the JSON
 Schemas (draft 2020-12) of the acknowledgement, status and datum messages
 (:mod:`vehicle_contract.payloads`); the reason codes and modes (:mod:`vehicle_contract.codes`);
 a version and the rule for changing it. ``nemesys contract`` prints it,
@@ -19,7 +19,6 @@ wording. A vehicle and a console built for the same major number work together.
 from __future__ import annotations
 
 import copy
-import re
 from dataclasses import dataclass
 from typing import Any, Final
 
@@ -40,7 +39,8 @@ ACK_DEADLINE_S: Final = codes.ACK_DEADLINE_S
 RECENT_ACKS_S: Final = codes.RECENT_ACKS_S
 RECENT_ACKS_MAX: Final = codes.RECENT_ACKS_MAX
 
-#: Topic names, without a vehicle namespace (:func:`topic_name` puts them under one).
+#: Topic names, without a vehicle namespace (:func:`vehicle_contract.names.topic_name` puts
+#: them under one).
 FRAME_TOPIC: Final = "/nemesys/frame"
 POSE_TOPIC: Final = "/nemesys/pose"
 MISSION_TOPIC: Final = "/nemesys/mission"
@@ -88,9 +88,6 @@ CONVENTIONS: Final = {
     "/<namespace>/nemesys/... (the console: its vehicle_namespace setting); no namespace: the "
     "names as listed",
 }
-
-#: One token of a ROS 2 namespace: a letter or an underscore, then letters, digits, underscores.
-_NAMESPACE_TOKEN: Final = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 
 
 class Direction(StrEnum):
@@ -217,7 +214,8 @@ TOPIC_TYPES: Final = {t.name: t.type for t in TOPICS}
 
 
 def topic(name: str) -> Topic:
-    """The contract's topic of that name (without a namespace: :func:`contract_topic_of`).
+    """The contract's topic of that name (without a namespace:
+    :func:`vehicle_contract.names.contract_topic_of`).
 
     Raises:
         KeyError: not a contract topic.
@@ -226,101 +224,6 @@ def topic(name: str) -> Topic:
         if t.name == name:
             return t
     raise KeyError(name)
-
-
-# --- names under a vehicle namespace --------------------------------------------------------
-
-
-def check_namespace(namespace: str) -> str:
-    """A vehicle namespace as topic names take it: ``""`` (none) or ``"/a"``, ``"/a/b"``.
-
-    ``"auv1"``, ``"/auv1"`` and ``"/auv1/"`` are the same namespace; ``"/"`` is none.
-
-    Raises:
-        ValueError: naming what is allowed, for a token that is not a ROS 2 name token.
-    """
-    inner = namespace.strip("/")
-    tokens = inner.split("/") if inner else []
-    for token in tokens:
-        if not _NAMESPACE_TOKEN.fullmatch(token):
-            raise ValueError(
-                f"vehicle namespace {namespace!r}: each part must be a letter or an underscore "
-                "followed by letters, digits or underscores (e.g. auv1 or fleet/auv1); empty "
-                "for none"
-            )
-    return "".join(f"/{t}" for t in tokens)
-
-
-def topic_name(base: str, namespace: str = "") -> str:
-    """The name of contract topic ``base`` on a vehicle under ``namespace``: the one place
-    topic names are built (the console, the transmitter and the node all call it).
-    ``/nemesys/pose`` under ``auv1`` is ``/auv1/nemesys/pose``; without a namespace it is
-    ``base``.
-
-    Raises:
-        KeyError: ``base`` is not a contract topic.
-        ValueError: a namespace :func:`check_namespace` refuses.
-    """
-    return check_namespace(namespace) + topic(base).name
-
-
-def contract_topic_of(name: str) -> str:
-    """The contract topic a vehicle's topic ``name`` is, without its namespace:
-    ``/auv1/nemesys/pose`` -> ``/nemesys/pose``.
-
-    Raises:
-        KeyError: ``name`` is no contract topic under any valid namespace.
-    """
-    for t in TOPICS:
-        if name == t.name:
-            return t.name
-        prefix = name.removesuffix(t.name)
-        if prefix != name and prefix.startswith("/"):
-            try:
-                if check_namespace(prefix) == prefix:
-                    return t.name
-            except ValueError:
-                pass
-    raise KeyError(name)
-
-
-@dataclass(frozen=True)
-class TopicNames:
-    """The contract's topic names on one vehicle (:func:`topic_names`)."""
-
-    namespace: str
-    frame: str
-    pose: str
-    mission: str
-    status: str
-    datum: str
-
-    def by_topic(self) -> dict[str, str]:
-        """Each contract topic -> its name on this vehicle."""
-        return {
-            FRAME_TOPIC: self.frame,
-            POSE_TOPIC: self.pose,
-            MISSION_TOPIC: self.mission,
-            STATUS_TOPIC: self.status,
-            DATUM_TOPIC: self.datum,
-        }
-
-
-def topic_names(namespace: str = "") -> TopicNames:
-    """Every contract topic's name under ``namespace`` (:func:`topic_name`).
-
-    Raises:
-        ValueError: a namespace :func:`check_namespace` refuses.
-    """
-    ns = check_namespace(namespace)
-    return TopicNames(
-        ns,
-        topic_name(FRAME_TOPIC, ns),
-        topic_name(POSE_TOPIC, ns),
-        topic_name(MISSION_TOPIC, ns),
-        topic_name(STATUS_TOPIC, ns),
-        topic_name(DATUM_TOPIC, ns),
-    )
 
 
 # --- the contract as a whole ----------------------------------------------------------------
@@ -335,7 +238,9 @@ VERSION_RULE: Final = (
 )
 
 #: The ROS 2 node that subscribes the frame topic on a NemeSys vehicle (the reference node in
-#: ros2/nemesys_vehicle, and the simulator's graph, are named so).
+#: ros2/nemesys_vehicle, and the simulator's graph, are named so; under a namespace it is
+#: /<namespace>/nemesys_vehicle). The console and vehicle-check never look for this name: they
+#: find the vehicle's nodes by the topics they publish and subscribe.
 VEHICLE_NODE: Final = "/nemesys_vehicle"
 
 #: What a NemeSys vehicle must do, beyond publishing and subscribing the topics.
@@ -350,11 +255,14 @@ OBLIGATIONS: Final = (
     "held without an acknowledgement: one the vehicle cannot act on now is rejected with the "
     "reason (no_navigation when it has no navigation to plan from), never kept for later. An "
     "acknowledgement made after the deadline says late: true (the console may have given up "
-    "on it).",
+    "on it). nemesys vehicle-check probes this path before a dive with a deliberately "
+    "malformed frame (right preamble and delimiter, its codeword beyond correction), on a "
+    "fresh vehicle too: it must come back rejected, reason uncorrectable, within the deadline "
+    "(round trip), the active command unchanged.",
     "A frame carrying the command the vehicle already runs is acknowledged accepted with "
     "duplicate true and is not replanned: the console repeats commands (Surface until "
-    "acknowledged), and nemesys vehicle-check re-sends the active command to probe the "
-    "acknowledgement path.",
+    "acknowledged), and while a command runs nemesys vehicle-check re-sends it once to "
+    "check this rule.",
     "The surface command (pattern 15) is executed whatever the limits, mode or battery, and "
     "with stale navigation (from the last known position); only a new command after it moves "
     "the vehicle again. Before the vehicle has had any navigation it is rejected "
@@ -369,7 +277,7 @@ OBLIGATIONS: Final = (
     f"(x north, y east, z down) in frame {POSE_FRAME_ID!r} about the datum, the heading from "
     "true north as a yaw quaternion, header.stamp the navigation solution's time (ROS time).",
     f"Publish the status on {STATUS_TOPIC} at 1 Hz or more (schema status), with 'active' (the "
-    "active command, or null: without it the acknowledgement path cannot be probed), "
+    "active command, or null; without it vehicle-check cannot check the duplicate rule), "
     f"nav_valid, and recent_acks: the acknowledgements of the last {RECENT_ACKS_S:g} s (at "
     f"most {RECENT_ACKS_MAX}, oldest first) exactly as published, so a console that "
     "reconnects takes those it missed from the next status (it knows one by t_s and seq).",
@@ -387,13 +295,20 @@ OBLIGATIONS: Final = (
     f"{FRAME_TOPIC}) says frame_input receiver in its status, acknowledges on {MISSION_TOPIC} "
     "every frame its receiver synchronises on, decoded or not (a false sync in noise shows as "
     "a rejection), with the same JSON and deadline, and publishes status, pose and datum the "
-    "same. It is checked through the modem path: frames go out over the ME modem and the "
-    "acknowledgements come back over rosbridge.",
+    "same. nemesys vehicle-check probes it through the modem path (--modem tcp://HOST:PORT "
+    "or serial:///dev/...): the malformed frame goes out over the ME modem and its rejection "
+    "comes back over rosbridge; without --modem the probe's row fails saying so. The console "
+    "drives it the same way: frames over the modem, telemetry and acknowledgements over "
+    "rosbridge (NEMESYS_TELEMETRY).",
     "A reference ROS 2 node that does all of this, wrapping the simulator's own onboard agent, "
     "is ros2/nemesys_vehicle (its README says how to build and launch it).",
-    "Run rosbridge_server with rosapi: the console lists the vehicle's topics through "
-    "/rosapi/topics, and a one-shot sender asks /rosapi/subscribers whether the frame topic "
-    "has its subscriber before publishing.",
+    "Run rosbridge_server with rosapi: the console and vehicle-check read the graph through "
+    "/rosapi/topics (the types), /rosapi/publishers and /rosapi/subscribers (the nodes): the "
+    "onboard agent runs when a node other than rosbridge's own publishes the mission and "
+    "status topics, and frames reach it when one subscribes to the frame topic (rosbridge "
+    "subscribes and publishes for its clients, so a topic can exist without the vehicle); a "
+    "one-shot sender asks /rosapi/subscribers whether the frame topic has its subscriber "
+    "before publishing.",
 )
 
 

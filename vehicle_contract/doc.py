@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any, Final
 
 from vehicle_contract.contract import (
+    ACK_DEADLINE_S,
     CONTRACT_VERSION,
     CONVENTIONS,
     OBLIGATIONS,
@@ -182,8 +183,9 @@ def render_markdown() -> str:
         "`/nemesys/mission` and `/nemesys/status` have such a publisher. Then the pose rate and",
         "age, the status rate and schema, and the acknowledgement path: a deliberately",
         "malformed frame (preamble and delimiter right, its codeword 3 bits from the all-zero",
-        "codeword, beyond BCH's reach) must come back `rejected`, reason `uncorrectable`, within",
-        "the deadline, with the active command unchanged; it runs on a fresh vehicle too. While",
+        "codeword, beyond BCH's reach) must come back `rejected`, reason `uncorrectable`, its",
+        f"round trip within the ack deadline ({ACK_DEADLINE_S:g} s), with the active command",
+        "unchanged; it runs on a fresh vehicle too. While",
         "a command runs, it is also re-sent once and must come back `duplicate: true`. Those are",
         "the only frames the check sends. A vehicle that takes frames over its own ME receiver",
         "(no frame subscriber but rosbridge's) fails that row unless `--modem tcp://HOST:PORT`",

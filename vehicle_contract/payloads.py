@@ -159,7 +159,8 @@ STATUS_SCHEMA: Final[dict[str, Any]] = {
         },
         "active": _command_or_null(
             "the active command, as in an acknowledgement's 'active'; null: none. Optional "
-            "(1.0), but without it vehicle-check cannot probe the acknowledgement path"
+            "(1.0); without it vehicle-check cannot check the duplicate rule (the "
+            "acknowledgement path is probed with a malformed frame all the same)"
         ),
         "nav_valid": {
             "type": "boolean",

@@ -28,8 +28,8 @@ from vehicle_contract.contract import (
     POSE_TOPIC,
     STATUS_TOPIC,
     topic,
-    topic_names,
 )
+from vehicle_contract.names import topic_names
 from vehicle_contract.payloads import validate_ack, validate_datum, validate_status
 
 NODE_PY = Path(nemesys_vehicle.__file__).parent / "node.py"

@@ -20,7 +20,7 @@ from station.transmit import RosbridgeTransmitter, open_transmitter
 from station.vehicle_graph import GraphUnknown, VehicleGraph, read_graph
 from tests.backend.conftest import wait_until
 from tests.fake_vehicle import AGENT, FRAME_TYPE, GraphNode, Rosbridge
-from vehicle_contract.contract import topic_names
+from vehicle_contract.names import topic_names
 
 NAMES = topic_names("auv1")
 #: The reference node launched under /auv1: its node and every contract topic in it.

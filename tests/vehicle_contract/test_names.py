@@ -15,11 +15,8 @@ from vehicle_contract.contract import (
     MISSION_TOPIC,
     POSE_TOPIC,
     STATUS_TOPIC,
-    check_namespace,
-    contract_topic_of,
-    topic_name,
-    topic_names,
 )
+from vehicle_contract.names import check_namespace, contract_topic_of, topic_name, topic_names
 
 
 @pytest.mark.parametrize(

@@ -15,7 +15,7 @@ from typing import Any, Final
 from nemesys_vehicle.geo import check_lat_lon
 from onboard.guidance import GuidanceConfig
 from planner import CircleFence, Limits
-from vehicle_contract.contract import check_namespace
+from vehicle_contract.names import check_namespace
 
 #: Where frames come from: the contract's frame topic, or a serial ME receiver.
 FRAME_INPUTS: Final = ("topic", "serial")

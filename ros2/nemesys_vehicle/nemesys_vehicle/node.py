@@ -46,8 +46,8 @@ from vehicle_contract.contract import (
     Durability,
     QoS,
     Reliability,
-    topic_names,
 )
+from vehicle_contract.names import topic_names
 
 _RELIABILITY = {
     Reliability.RELIABLE: ReliabilityPolicy.RELIABLE,
