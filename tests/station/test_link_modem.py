@@ -12,6 +12,7 @@ doubles (tests/station/gateways.py) and the rosbridge stand-in (tests/fake_vehic
 from __future__ import annotations
 
 import asyncio
+import json
 import time
 from collections.abc import Callable, Iterator
 
@@ -20,7 +21,7 @@ import pytest
 from codec import FRAME_BYTES, encode_frame
 from station.link import Capability
 from station.link_modem import HybridLink, ModemLink, open_link, parse_telemetry
-from tests.fake_vehicle import WITH_AGENT, Rosbridge
+from tests.fake_vehicle import AGENT, STRING_TYPE, WITH_AGENT, GraphNode, Rosbridge
 from tests.station.gateways import Gateway
 
 FRAME = encode_frame("circle", speed=0.5, depth=2, radius=5, direction="cw").frame
@@ -151,6 +152,46 @@ def test_the_hybrid_link_takes_its_capability_from_the_rosbridge(gateway: Gatewa
         stop_bridge()
     gateway.wait_for("the frame", lambda: gateway.total() == FRAME_BYTES)
     assert bridge.frame_count() == 0 and "advertise" not in bridge.ops()  # frames: modem only
+
+
+def test_the_hybrid_link_reads_a_receiver_only_vehicle_under_its_namespace(
+    gateway: Gateway,
+) -> None:
+    """The vehicle of the hybrid link takes its frames by its own ME receiver (no frame
+    subscriber) under /auv1: acknowledgements expected, no problem named, every topic read
+    under the namespace, the datum passed on to the console."""
+    node = GraphNode(
+        "/auv1/nemesys_vehicle",
+        {
+            **{f"/auv1{name}": kind for name, kind in AGENT.publishes.items()},
+            "/auv1/nemesys/datum": STRING_TYPE,
+        },
+        best_effort=frozenset({"/auv1/nemesys/pose"}),
+    )
+    bridge = Rosbridge((node,)).start()
+    datum = {"lat_deg": 43.1, "lon_deg": 5.9, "source": "settings"}
+    try:
+
+        async def scenario() -> None:
+            link = open_link(gateway.target, 36_000, bridge.url, namespace="auv1")
+            heard: list[dict[str, object]] = []
+            link.on_datum = heard.append
+            await link.start()
+            try:
+                await until("two-way", lambda: link.capability is Capability.ACKS_AND_TELEMETRY)
+                assert link.capability_problems == []
+                message = {"data": json.dumps(datum)}
+                await asyncio.to_thread(bridge.publish, "/auv1/nemesys/datum", message)
+                await until("the datum", lambda: heard)
+                assert heard == [datum]
+            finally:
+                await link.stop()
+
+        asyncio.run(scenario())
+    finally:
+        bridge.stop()
+    subscribed = {m["topic"] for m in bridge.received if m.get("op") == "subscribe"}
+    assert subscribed == {f"/auv1/nemesys/{t}" for t in ("pose", "status", "mission", "datum")}
 
 
 @pytest.mark.parametrize(
