@@ -33,6 +33,7 @@ from tests.fake_vehicle import (
     ROS_EPOCH_S,
     STRING_TYPE,
     WITH_AGENT,
+    GraphNode,
     Rosbridge,
     observer,
 )
@@ -151,6 +152,67 @@ def test_a_pose_publisher_that_starts_later_is_heard(make_client: MakeClient) ->
         assert ops[0]["id"] == ops[1]["id"] == ops[2]["id"]
     finally:
         vehicle.stop()
+
+
+def test_a_datum_publisher_that_starts_later_is_subscribed_again() -> None:
+    """The datum is optional: on a vehicle without it the console's subscription is there
+    (and lists the topic) with nothing to hear and no problem named; once a node publishes it
+    the link subscribes again (rosbridge made the first subscription with no publisher), and
+    the datum reaches the console. Nothing else is subscribed again."""
+    datum_topic = "/nemesys/datum"
+    vehicle = Rosbridge(WITH_AGENT).start()
+    (agent,) = WITH_AGENT
+    with_datum = GraphNode(
+        agent.name,
+        {**agent.publishes, datum_topic: STRING_TYPE},
+        agent.subscribes,
+        agent.best_effort,
+    )
+    heard: list[dict[str, Any]] = []
+
+    def polls() -> int:
+        """How many times the link asked /rosapi/topics."""
+        received = list(vehicle.received)
+        return sum(m.get("service") == "/rosapi/topics" for m in received)
+
+    async def run() -> tuple[Capability, list[str]]:
+        link = RosbridgeLink(vehicle.url, graph_poll_s=0.1)
+        link.on_datum = heard.append
+        await link.start()
+        try:
+            assert await link.wait_connected(5.0)
+            assert link.capability_problems == []
+            deadline = time.monotonic() + 10.0
+            while vehicle.subscriptions(datum_topic) < 1:
+                assert time.monotonic() < deadline, "the datum was not subscribed"
+                await asyncio.sleep(0.02)
+            # two more readings of the graph with no datum publisher: no new subscription
+            asked = polls() + 2
+            while polls() < asked:
+                assert time.monotonic() < deadline, "the graph was not asked again"
+                await asyncio.sleep(0.02)
+            assert vehicle.subscriptions(datum_topic) == 1
+            assert link.capability_problems == []
+            await asyncio.to_thread(vehicle.set_nodes, (with_datum,))
+            while vehicle.subscriptions(datum_topic) < 2:
+                assert time.monotonic() < deadline, "the datum was not subscribed again"
+                await asyncio.sleep(0.02)
+            body = {"data": '{"lat_deg": 43.1, "lon_deg": 5.9, "source": "fix"}'}
+            await asyncio.to_thread(vehicle.publish, datum_topic, body)
+            while not heard:
+                assert time.monotonic() < deadline, "the datum did not reach the console"
+                await asyncio.sleep(0.02)
+            return link.capability, list(link.capability_problems)
+        finally:
+            await link.stop()
+
+    try:
+        capability, problems = asyncio.run(run())
+    finally:
+        vehicle.stop()
+    assert capability is Capability.ACKS_AND_TELEMETRY and problems == []
+    assert heard == [{"lat_deg": 43.1, "lon_deg": 5.9, "source": "fix"}]
+    assert vehicle.subscriptions(POSE) == vehicle.subscriptions(MISSION) == 1
 
 
 @pytest.mark.slow  # a rosbridge vehicle on loopback
