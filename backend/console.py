@@ -26,6 +26,7 @@ from backend.chart.geo import Datum, initial_datum
 from backend.chart.gps import GpsFix, GpsReader, Station, parse_gps, station_of
 from backend.chart.reach import active_path_doc, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
+from backend.chart.vehicle_datum import DatumWatch
 from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.checks import SendViolation
 from backend.commands.health import LinkHealth, link_health_of
@@ -44,7 +45,8 @@ from backend.telemetry import TelemetryHub
 from backend.viewer.draw_queue import PreviewDrawer
 from codec import Encoded, airtime_s
 from planner import Limits, Plan, VehicleState
-from station.link import Link, RosbridgeLink, open_link
+from station.link import Link, RosbridgeLink
+from station.link_modem import open_link
 from vehicle_contract.messages import pose_from_message
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
@@ -77,6 +79,8 @@ class Console:
         self.limits = Limits(max_depth_m=settings.max_depth_m, max_speed_mps=settings.max_speed_mps)
         #: The NED origin's latitude and longitude (None: not known, positions in metres only).
         self.datum: Datum | None = initial_datum(settings)
+        #: The vehicle's own datum (the contract's datum topic) and its mismatch with ours.
+        self.datum_watch = DatumWatch()
         #: The process /api/predict's twins run in (started on first use).
         self.twin_worker = TwinWorker()
         #: The path the vehicle flies, as mirrored (NED and lat/lon), or None.
@@ -141,10 +145,13 @@ class Console:
             await self.bridge.start()
             link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}", auth_secret=secret)
         else:
-            link = open_link(s.target, s.bitrate_bps)
+            link = open_link(
+                s.target, s.bitrate_bps, s.telemetry or None, namespace=s.vehicle_namespace
+            )
         self.link = link
         link.on_pose = self._on_pose
         link.on_status = self._on_status
+        link.on_datum = self._on_datum
         self.commands = CommandManager(
             self.log,
             link,
@@ -233,6 +240,20 @@ class Console:
             event = self.dives.echo_mismatch(self.commands)
             if event is not None:
                 self.hub.publish(EventMessage(event=log_event(event)))
+
+    def _on_datum(self, msg: dict[str, Any]) -> None:
+        """The vehicle's datum: taken when the console has none, else compared (a mismatch is
+        a link health problem, and an event each time it begins)."""
+        event = self.datum_watch.on_message(msg, self.datum)
+        if self.datum is None and self.datum_watch.vehicle is not None:
+            self.datum = self.datum_watch.vehicle
+        if event is None or self.dives is None:
+            return
+        kind, detail, data = event
+        level = logging.WARNING if kind == "datum_mismatch" else logging.INFO
+        logged = self.dives.note(kind, detail, data, level=level)
+        if logged is not None:
+            self.hub.publish(EventMessage(event=log_event(logged)))
 
     def _on_fix(self, fix: GpsFix) -> None:
         if self.datum is None:  # a real vehicle without a datum setting: the first fix
@@ -325,6 +346,7 @@ class Console:
             self.settings.target,
             ber_now(self),
             self.ber_choice.copies_from,
+            datum_problem=self.datum_watch.problem(self.datum),
         )
 
     def set_link(

@@ -107,6 +107,19 @@ class Dives:
         """
         return self.log.add_event(self.ensure(), kind, detail, data)
 
+    def note(
+        self, kind: str, detail: str, data: Mapping[str, Any], *, level: int = logging.INFO
+    ) -> dict[str, Any] | None:
+        """:meth:`event`, said in the console's log at ``level``; a log that cannot be written
+        is said as an error instead (None: nothing was written)."""
+        try:
+            event = self.event(kind, detail, data)
+        except LogWriteError as err:
+            logger.error("could not log %s: %s", kind, err)
+            return None
+        logger.log(level, "%s", detail)
+        return event
+
     def echo_mismatch(self, commands: CommandManager) -> dict[str, Any] | None:
         """Vehicle activity this console did not cause (an echo mismatch): written as an
         event once each time it begins; returns the event when one was written."""

@@ -3,8 +3,10 @@
 Defaults are the embedded training set-up: a simulated NemeSys behind its own rosbridge on
 loopback, a local SQLite mission log, everything bound to 127.0.0.1. Point ``target`` at a
 real vehicle's rosbridge (``ws://host:9090``) or an ME transmitter (``serial:///dev/ttyUSB0``,
-``tcp://host:port``) instead. A settings file (``NEMESYS_SETTINGS=path``, ``KEY=value`` lines
-with the same ``NEMESYS_`` names) is read when given.
+``tcp://host:port``) instead, the latter with ``telemetry`` (``ws://host:9090``) when the
+vehicle reports over a rosbridge (the hybrid link). A settings file
+(``NEMESYS_SETTINGS=path``, ``KEY=value`` lines with the same ``NEMESYS_`` names) is read when
+given.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import secrets
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BeforeValidator, Field, WithJsonSchema, field_validator
+from pydantic import BeforeValidator, Field, WithJsonSchema, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from codec import ASCII_DIGITS, number_from_text
@@ -90,6 +92,12 @@ class Settings(BaseSettings):
     viewer_port: Annotated[int, Field(ge=0, le=65535)] = 8080
     #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port.
     target: str = SIM_TARGET
+    #: With an ME modem target: the vehicle's rosbridge (ws://host:port) that telemetry and
+    #: acknowledgements come over, the frames going by the modem (the hybrid link). "": none.
+    telemetry: str = ""
+    #: The vehicle's ROS namespace: its topics are /<it>/nemesys/... (several vehicles in one
+    #: graph; the reference node's vehicle_namespace parameter). "": /nemesys/...
+    vehicle_namespace: str = ""
     #: Port of the embedded simulator's rosbridge (0: any free port), loopback only.
     sim_port: Annotated[int, Field(ge=0, le=65535)] = 0
     sim_seed: int = 0
@@ -170,6 +178,36 @@ class Settings(BaseSettings):
         # parse only (raises ValueError naming the allowed forms); nothing is opened here
         open_transmitter(value).close()
         return value
+
+    @field_validator("telemetry")
+    @classmethod
+    def _telemetry(cls, value: str) -> str:
+        if not value.strip():
+            return ""
+        from station.link_modem import parse_telemetry
+
+        return parse_telemetry(value)  # raises ValueError naming the allowed forms
+
+    @model_validator(mode="after")
+    def _telemetry_with_a_modem(self) -> Settings:
+        if self.telemetry and (self.training or self.target.startswith(("ws://", "wss://"))):
+            raise ValueError(
+                f"telemetry {self.telemetry!r} is for an ME modem target (serial:///dev/..., "
+                f"tcp://host:port, loop://); target {self.target!r} "
+                + (
+                    "is the embedded simulator"
+                    if self.training
+                    else "is a rosbridge: it carries telemetry and acknowledgements itself"
+                )
+            )
+        return self
+
+    @field_validator("vehicle_namespace")
+    @classmethod
+    def _vehicle_namespace(cls, value: str) -> str:
+        from vehicle_contract.names import check_namespace
+
+        return check_namespace(value)  # ValueError naming what a namespace may hold
 
     @field_validator("gps")
     @classmethod

@@ -56,6 +56,9 @@ class TelemetryHub:
         self.status_s: float | None = None
         #: The dive the console records into (None: none yet), named in every telemetry.
         self.dive: int | None = None
+        #: The last status's ``recent_acks`` (the vehicle contract: its acknowledgements of
+        #: the last 30 s), kept apart from :attr:`status`.
+        self.recent_acks: list[Any] = []
         self.last_message_s: float | None = None  # monotonic arrival time
         #: Telemetry numbers that came unknown (null / NaN / missing) since the dive began,
         #: and the arrival times of the recent ones.
@@ -84,15 +87,20 @@ class TelemetryHub:
         self._touch()
 
     def set_status(self, msg: dict[str, Any]) -> None:
-        """A status message as the vehicle sent it (numbers may be null)."""
+        """A status message as the vehicle sent it (numbers may be null). Its
+        ``recent_acks`` (the vehicle's last acknowledgements, for a console that reconnected)
+        are kept apart in :attr:`recent_acks`, not sent on to the pages with the status."""
         self.status, unknown = status_from_message(msg)
         self.status_s = time.monotonic()
+        recent = self.status.pop("recent_acks", None)
+        self.recent_acks = recent if isinstance(recent, list) else []
         self._count_unknown(unknown)
         self._touch()
 
     def reset(self) -> None:
         """A new dive: no pose, no counts."""
         self.pose = self.known_pose = self.known_pose_s = None
+        self.recent_acks = []
         self.unknown_values = 0
         self._unknown_at.clear()
 

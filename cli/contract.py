@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from typing import TextIO
 
@@ -43,12 +44,28 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         "vehicle-check",
         help="check a running vehicle against the vehicle contract",
         description="Connect to a vehicle's rosbridge websocket as the console does and check "
-        "it against the contract: topics and types (rosapi), the frame topic's subscriber, pose "
-        "rate and age, status rate and schema, and the acknowledgement path (re-sends the "
-        "vehicle's active command and expects a duplicate; the only frame it sends). Exit "
-        "status 0 when no check failed, 1 otherwise, 2 for bad usage.",
+        "it against the contract: topics, types and the vehicle's nodes at their ends (rosapi; "
+        "rosbridge's own node does not count), whether the onboard agent runs, pose rate and "
+        "age, status rate and schema, and the acknowledgement path: a deliberately malformed "
+        "frame must come back rejected (harmless, on a fresh vehicle too), and with a command "
+        "running, a repeat of it must be a duplicate (the only frames it sends). Exit status 0 "
+        "when no check failed, 1 otherwise, 2 for bad usage.",
     )
     p.add_argument("url", metavar="URL", help="ws://host:port or wss://host:port")
+    p.add_argument(
+        "--modem",
+        metavar="TARGET",
+        help="send the probe frames through this ME modem (tcp://host:port, "
+        "serial:///dev/...), for a vehicle that takes frames over its own ME receiver; the "
+        "acknowledgements still come back over rosbridge",
+    )
+    p.add_argument(
+        "--namespace",
+        metavar="NS",
+        default=os.environ.get("NEMESYS_VEHICLE_NAMESPACE", ""),
+        help="the vehicle's ROS namespace: its topics are /NS/nemesys/... (default: "
+        "NEMESYS_VEHICLE_NAMESPACE, else none)",
+    )
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.add_argument(
         "--timeout",
@@ -82,13 +99,29 @@ def cmd_contract(args: argparse.Namespace, out: TextIO) -> int:
 def cmd_vehicle_check(args: argparse.Namespace, out: TextIO) -> int:
     import asyncio
 
-    from station.vehicle_check import check_vehicle, url_problem
+    from station.vehicle_check import check_vehicle, modem_problem, url_problem
+    from vehicle_contract.names import check_namespace
 
     problem = url_problem(args.url)
+    if problem is None and args.modem is not None:
+        problem = modem_problem(args.modem)
+    if problem is None:
+        try:
+            check_namespace(args.namespace)
+        except ValueError as err:
+            problem = f"--namespace: {err}"
     if problem is not None:
         print(f"nemesys vehicle-check: {problem}", file=sys.stderr)
         return EXIT_USAGE
-    report = asyncio.run(check_vehicle(args.url, timeout_s=args.timeout, window_s=args.window))
+    report = asyncio.run(
+        check_vehicle(
+            args.url,
+            timeout_s=args.timeout,
+            window_s=args.window,
+            modem=args.modem,
+            namespace=args.namespace,
+        )
+    )
     if args.json:
         json.dump(report.as_json(), out, indent=2)
     else:

@@ -3,7 +3,8 @@ send policy (:func:`backend.commands.service.decide`), run in this process.
 
 The command line does not know where the vehicle is: the checks plan the command from the
 surface at the NED origin (said in the output), with the limits and the vehicle profile of the
-settings (``NEMESYS_*``, as the console reads them). A hard violation is refused; a soft one
+settings (``NEMESYS_*``, as the console reads them); a rosbridge vehicle's topics are under the
+settings' ``vehicle_namespace``. A hard violation is refused; a soft one
 needs ``--override``; either way nothing is transmitted unless the policy allows it.
 """
 
@@ -100,10 +101,12 @@ def _ack_lines(result: SendResult) -> list[str]:
 
 
 def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
+    from backend.settings import Settings
     from station.transmit import open_transmitter
 
+    namespace = Settings().vehicle_namespace  # the vehicle's topics: /<it>/nemesys/...
     try:
-        transmitter = open_transmitter(args.to, bitrate_bps=args.bitrate)
+        transmitter = open_transmitter(args.to, bitrate_bps=args.bitrate, namespace=namespace)
     except ValueError as err:
         raise UsageError(f"--to: {err}") from None
     params = parse_assignments(args.params)

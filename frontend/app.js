@@ -6,7 +6,7 @@ import { initAuthoring, current } from "./authoring.js";
 import { renderBelief, setBeliefReachable } from "./belief.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
 import { setDictionary } from "./form.js";
-import { renderLink, setConsoleReachable, setSessionLink } from "./link.js";
+import { initLinkTest, renderLink, setConsoleReachable, setSessionLink } from "./link.js";
 import { connectLive } from "./live.js";
 import { initLog, loadLog } from "./log.js";
 import { initChart } from "./chart.js";
@@ -179,6 +179,7 @@ async function main() {
   initCommands({ wsSurface: () => Boolean(live && live.send({ type: "surface" })) });
   initTraining();
   initAssumptions();
+  initLinkTest();
   startAgeTicker();
   renderSession(null);
 

@@ -1,10 +1,12 @@
 // The vehicle link (not the page's websocket to the console): what it can do (acknowledgements,
 // telemetry) and how it is doing (green / amber / red with named problems). Shown in the header
 // indicator and the status panel's link row; other panels ask it whether acknowledgements come
-// and how many copies the console would choose.
+// and how many copies the console would choose. The row's "Test link" button checks the link
+// now without sending a frame (POST /api/link/test).
 
+import { api } from "./api.js";
 import { berText, age } from "./delivery.js";
-import { $, el, num, withUnit } from "./ui.js";
+import { $, canWrite, el, num, READ_ONLY_TIP, withUnit } from "./ui.js";
 
 const CAPABILITY = {
   acks_and_telemetry: "acks + telemetry",
@@ -234,4 +236,49 @@ function estimateNode(l) {
     `independent bit errors assumed${c.ber == null ? `; an estimate from ${c.min_frames} frames` : ""}`;
   return el("span", { class: "link-estimate", testid: "link-ber-estimate", title },
     `estimated: ${text}`);
+}
+
+// ---- "Test link" (POST /api/link/test: no frame is sent) ----
+
+let testing = false;
+
+export function initLinkTest() {
+  const button = $("link-test");
+  if (button) button.addEventListener("click", testLink);
+}
+
+function showTest(text, error = false) {
+  const node = $("link-test-result");
+  node.textContent = text;
+  node.className = error ? "error" : "hint";
+  node.hidden = !text;
+}
+
+/** "link OK: modem tcp://gw:4001 ok; no frame sent" or what failed and why. */
+export function linkTestText(result) {
+  const checks = result && Array.isArray(result.checks) ? result.checks : [];
+  const parts = checks.map((c) => c.ok
+    ? `${c.what} ${c.target} ok`
+    : `${c.what} ${c.target}: ${c.reason || "failed"}${c.detail ? ` (${c.detail})` : ""}`);
+  return `${result && result.ok ? "link OK" : "link FAILED"}: ${parts.join("; ") || "nothing to check"}; no frame sent`;
+}
+
+async function testLink() {
+  if (testing) return;
+  if (!canWrite()) {
+    showTest(READ_ONLY_TIP, true);
+    return;
+  }
+  testing = true;
+  showTest("testing…");
+  try {
+    const result = await api("/api/link/test", { method: "POST" });
+    if (result && result.link) renderLink(result.link);
+    showTest(linkTestText(result), !(result && result.ok));
+  } catch (err) {
+    if (err && err.name === "AbortError") return;
+    showTest(`not tested: ${(err && err.message) || err}`, true);
+  } finally {
+    testing = false;
+  }
 }

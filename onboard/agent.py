@@ -11,6 +11,15 @@ A frame carrying the command the vehicle already runs is acknowledged (``duplica
 not replanned, so the console may repeat a command (Surface repeats until acknowledged)
 without resetting the pattern.
 
+Navigation: a vehicle that cannot plan now (no navigation yet, or stale: the caller says so
+with :class:`NoNavigation`) still decodes and acknowledges every frame: a command that needs a
+plan is rejected with ``no_navigation``; Surface is planned from the last known state, when
+there is one. After a navigation fault the caller suspends the active command
+(:meth:`OnboardAgent.suspend`): it is no longer flown, so the same command sent again is
+replanned, not a duplicate. The agent keeps its recent acknowledgements
+(:meth:`OnboardAgent.recent_acks`) for the status: a console that reconnects takes those it
+missed from there.
+
 Latencies are wall-clock (``time.perf_counter``) on this machine, as the paper measured them:
 decode = receipt -> decoded and checked; replan = decoded -> plan built and the first new
 setpoint out of guidance. No I/O here: the simulation (or a real vehicle's node) feeds it.
@@ -32,7 +41,13 @@ from codec import (
 )
 from onboard.guidance import Guidance, Reference
 from planner import Limits, Plan, PlanError, VehicleState, plan, validate
-from vehicle_contract.codes import INVALID_PLAN, LIMIT_VIOLATION
+from vehicle_contract.codes import (
+    INVALID_PLAN,
+    LIMIT_VIOLATION,
+    NO_NAVIGATION,
+    RECENT_ACKS_MAX,
+    RECENT_ACKS_S,
+)
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:  # the onboard process imports no typing (~0.45 MiB): bench reconfig
@@ -52,6 +67,21 @@ def command_json(command: Command) -> dict[str, Any]:
     }
 
 
+class NoNavigation:
+    """Why the vehicle cannot plan now (:meth:`OnboardAgent.receive`'s ``navigation``).
+
+    ``detail``: the reason in words, for the acknowledgement. ``last_known``: the state handed
+    in is the last one the navigation gave (stale), so Surface is planned from it; False: the
+    vehicle never had navigation (the state carries the time only) and nothing is planned.
+    """
+
+    __slots__ = ("detail", "last_known")
+
+    def __init__(self, detail: str, last_known: bool) -> None:
+        self.detail = detail
+        self.last_known = last_known
+
+
 class OnboardAgent:
     """Decodes, validates and switches guidance. One instance per vehicle."""
 
@@ -59,18 +89,38 @@ class OnboardAgent:
         self.guidance = guidance
         self.limits = limits or Limits()
         self.active: Plan | None = None
+        #: The active command is no longer flown (a navigation fault): not a duplicate.
+        self.suspended = False
         self.seq = 0
         self.accepted = 0
         self.rejected = 0
+        self._recent: list[dict[str, Any]] = []  # the newest RECENT_ACKS_MAX, oldest first
+
+    def suspend(self) -> None:
+        """The active command stops being flown (the caller flies a fault action): the same
+        command, sent again, is replanned from where the vehicle is then."""
+        self.suspended = self.active is not None
+
+    def recent_acks(self, t_s: float) -> list[dict[str, Any]]:
+        """The acknowledgements made in the last ``RECENT_ACKS_S`` before ``t_s`` (at most
+        ``RECENT_ACKS_MAX``), oldest first: the very objects returned by :meth:`receive`."""
+        return [a for a in self._recent if t_s - a["t_s"] <= RECENT_ACKS_S]
 
     def receive(
-        self, bits: int | None, n_bits: int, state: VehicleState, receipt_s: float | None = None
+        self,
+        bits: int | None,
+        n_bits: int,
+        state: VehicleState,
+        receipt_s: float | None = None,
+        navigation: NoNavigation | None = None,
     ) -> tuple[dict[str, Any], Reference | None]:
         """Process one received frame: ``n_bits`` bits, first bit most significant.
 
         ``bits`` is ``None`` for a message that is not a frame at all (wrong length).
-        ``receipt_s`` is the ``perf_counter`` time the bits arrived (default: now). Returns
-        the acknowledgement and, when accepted, guidance's first new reference.
+        ``receipt_s`` is the ``perf_counter`` time the bits arrived (default: now).
+        ``navigation``: None when the vehicle's navigation is valid, else why not (a decoded
+        command needing a plan is then rejected with ``no_navigation``). Returns the
+        acknowledgement and, when accepted, guidance's first new reference.
         """
         t0 = time.perf_counter() if receipt_s is None else receipt_s
         self.seq += 1
@@ -101,8 +151,14 @@ class OnboardAgent:
         t1 = time.perf_counter()
         decode_ms = (t1 - t0) * 1e3
         command = decoded.command
+        if navigation is not None and (
+            command.pattern.name != SURFACE or not navigation.last_known
+        ):
+            return self._reject(
+                state, frame_hex, decoded, NO_NAVIGATION, navigation.detail, None, decode_ms
+            ), None
         current = self.active
-        if current is not None and current.command == command:
+        if current is not None and current.command == command and not self.suspended:
             return self._ack(state, frame_hex, decoded, decode_ms), None
         try:
             new = plan(command, state, current)
@@ -119,6 +175,7 @@ class OnboardAgent:
                     state, frame_hex, decoded, LIMIT_VIOLATION, detail, first.param, decode_ms
                 ), None
         self.active = new
+        self.suspended = False
         self.guidance.set_plan(new, state.t_s)
         ref = self.guidance.update(state.x_m, state.y_m, state.z_m, state.t_s)
         replan_ms = (time.perf_counter() - t1) * 1e3
@@ -173,8 +230,9 @@ class OnboardAgent:
         new: Plan | None = None,
         replan_ms: float | None = None,
     ) -> dict[str, Any]:
-        """The acknowledgement of frame ``seq``: ``reason`` is ``None`` when it was accepted."""
-        return {
+        """The acknowledgement of frame ``seq``: ``reason`` is ``None`` when it was accepted
+        (kept among the recent ones)."""
+        ack: dict[str, Any] = {
             "seq": self.seq,
             "t_s": state.t_s,
             "outcome": "accepted" if reason is None else "rejected",
@@ -194,3 +252,6 @@ class OnboardAgent:
             # very path the vehicle flies (same anchor, same join)
             "from": state.as_dict() if new is not None else None,
         }
+        self._recent.append(ack)
+        del self._recent[:-RECENT_ACKS_MAX]
+        return ack

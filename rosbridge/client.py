@@ -23,13 +23,20 @@ from rosbridge.protocol import (
     MalformedMessage,
     to_json,
 )
+from vehicle_contract.names import contract_topic_of
+
+
+def _type(topic: str) -> str:
+    """The type a client names for a contract topic, under a vehicle namespace or not."""
+    return TOPIC_TYPES[contract_topic_of(topic)]
 
 
 class ClientProtocol:
     """The messages a rosbridge client sends, shaped and numbered as roslibpy does (sans-IO).
 
     ``advertise`` are the topics the client publishes on, ``subscribe`` those it listens to,
-    each with its type from :data:`TOPIC_TYPES`. Each advertisement and subscription gets its
+    each with its type from :data:`TOPIC_TYPES` (a vehicle's topic under a namespace has its
+    contract topic's type). Each advertisement and subscription gets its
     id once, so every connection opens (:meth:`open_messages`) and closes
     (:meth:`close_messages`) with the same messages; each :meth:`publish` gets a new id.
     """
@@ -37,10 +44,10 @@ class ClientProtocol:
     def __init__(self, advertise: Iterable[str], subscribe: Iterable[str]) -> None:
         self._count = itertools.count(1)
         self._advertised = {
-            topic: (TOPIC_TYPES[topic], self._id("advertise", topic)) for topic in advertise
+            topic: (_type(topic), self._id("advertise", topic)) for topic in advertise
         }
         self._subscribed = {
-            topic: (TOPIC_TYPES[topic], self._id("subscribe", topic)) for topic in subscribe
+            topic: (_type(topic), self._id("subscribe", topic)) for topic in subscribe
         }
 
     def _id(self, op: str, topic: str) -> str:
@@ -59,19 +66,31 @@ class ClientProtocol:
             }
             for topic, (type_name, op_id) in self._advertised.items()
         )
-        subscribe = (
-            {
-                "op": "subscribe",
-                "id": op_id,
-                "type": type_name,
-                "topic": topic,
-                "compression": "none",
-                "throttle_rate": 0,
-                "queue_length": 0,
-            }
-            for topic, (type_name, op_id) in self._subscribed.items()
-        )
+        subscribe = (self._subscribe(topic) for topic in self._subscribed)
         return tuple(to_json(message) for message in (*advertise, *subscribe))
+
+    def _subscribe(self, topic: str) -> JsonObject:
+        type_name, op_id = self._subscribed[topic]
+        return {
+            "op": "subscribe",
+            "id": op_id,
+            "type": type_name,
+            "topic": topic,
+            "compression": "none",
+            "throttle_rate": 0,
+            "queue_length": 0,
+        }
+
+    def resubscribe(self, topics: Iterable[str]) -> tuple[str, ...]:
+        """Unsubscribe and subscribe again to each of ``topics`` (with its id): a rosbridge
+        server makes a new ROS subscription, with the QoS that suits the publishers there now,
+        when this client was its last subscriber (a subscription another client holds keeps
+        the QoS it was made with)."""
+        out: list[JsonObject] = []
+        for topic in topics:
+            out.append({"op": "unsubscribe", "id": self._subscribed[topic][1], "topic": topic})
+            out.append(self._subscribe(topic))
+        return tuple(to_json(message) for message in out)
 
     def close_messages(self) -> tuple[str, ...]:
         """Every unsubscribe, then every unadvertise, with the ids they were opened with."""

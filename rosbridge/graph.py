@@ -168,6 +168,8 @@ class Graph:
         for topic in (CLIENT_COUNT_TOPIC, CONNECTED_CLIENTS_TOPIC):
             self._static_pubs[topic] = {BRIDGE_NODE: SERVER_TOPIC_TYPES[topic]}
         for t in contract.TOPICS:
+            if not t.required:  # the simulator publishes no optional topic (no datum)
+                continue
             side = self._static_subs if t.direction is contract.Direction.TO_VEHICLE else None
             (side if side is not None else self._static_pubs).setdefault(t.name, {})[
                 vehicle_node

@@ -4,7 +4,9 @@ On a real rosbridge_server a client's ``advertise`` creates a new ROS publisher;
 subscriber that DDS has not matched to it yet misses what is published at once (ros2/ros2#698;
 ``docs/vehicle.md``). So a one-shot sender asks rosapi who subscribes to the topic
 (``/rosapi/subscribers``, args ``{"topic": ...}``, answer ``{"subscribers": [node names]}``)
-and publishes as soon as the list is not empty, asking again every :data:`POLL_S` while it is.
+and publishes as soon as it lists a node other than the bridge's own (a client's subscription
+makes the bridge a subscriber: :mod:`rosbridge.bridge_node`), asking again every
+:data:`POLL_S` while it does not.
 When rosapi cannot tell (the service fails, or does not answer), it waits out the bound after
 advertising. If rosapi keeps saying nobody subscribes, the bound ends the wait too and the
 sender publishes anyway, with :attr:`SubscriberWait.warning` set.
@@ -19,6 +21,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, Final
 
+from rosbridge.bridge_node import node_names, others
+
 #: The rosapi service listing a topic's subscribers (``rosapi_msgs/srv/Subscribers``).
 SUBSCRIBERS_SERVICE: Final = "/rosapi/subscribers"
 #: How long a one-shot sender waits for the subscriber after advertising, by default (s).
@@ -29,10 +33,7 @@ POLL_S: Final = 0.1
 
 def subscribers_of(values: object) -> list[str] | None:
     """The node names in a ``/rosapi/subscribers`` answer; None if it holds no such list."""
-    subscribers = values.get("subscribers") if isinstance(values, Mapping) else None
-    if not isinstance(subscribers, list) or not all(isinstance(s, str) for s in subscribers):
-        return None
-    return list(subscribers)
+    return node_names(values, "subscribers")
 
 
 class SubscriberWait:
@@ -51,7 +52,8 @@ class SubscriberWait:
 
     @property
     def present(self) -> bool:
-        return bool(self.subscribers)
+        """A node other than the bridge subscribes (the bridge only relays to its clients)."""
+        return bool(others(self.subscribers or ()))
 
     @property
     def request(self) -> tuple[str, dict[str, str]]:
@@ -83,7 +85,7 @@ class SubscriberWait:
             self.cannot_tell = f"{SUBSCRIBERS_SERVICE} answered without a list: {values!r:.120}"
             return
         self.subscribers = subscribers
-        if not subscribers:
+        if not self.present:
             self._ask_at_s = now_s + self.poll_s
 
     def timeout_s(self, now_s: float) -> float:

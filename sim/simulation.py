@@ -208,6 +208,10 @@ class Simulation:
             "pattern": active.pattern if active is not None else None,
             # the active command as the acknowledgements echo it (the contract's status schema)
             "active": command_json(active.command) if active is not None else None,
+            "nav_valid": True,  # the simulator always knows where it is
+            "frame_input": "topic",
+            # what a console that reconnected missed (the contract: the last 30 s of acks)
+            "recent_acks": self.agent.recent_acks(self.t_s),
             "link": {
                 "frames_in": self.frames_in,
                 "frames_lost": self.frames_lost,

@@ -2,11 +2,13 @@
 
 * :class:`RosbridgeLink`: a rosbridge v2 websocket (the simulated vehicle, or a real ROS 2
   vehicle running rosbridge_server): advertises ``/nemesys/frame``, subscribes to pose,
-  status and mission, reconnects with backoff, hands every message to the console's callbacks.
-  On every connection it asks ``/rosapi/topics`` what the vehicle publishes and so learns its
-  :class:`Capability`.
-* :class:`ModemLink`: an ME transmitter on a serial port or behind a TCP gateway
-  (:class:`station.transmit.SerialTransmitter`): frames out, nothing back.
+  status, mission and datum (every name under the vehicle's namespace, if any), reconnects
+  with backoff, hands every message to the console's callbacks.
+  On every connection, and every :data:`GRAPH_POLL_S` while connected, it asks rosapi who
+  publishes and subscribes the contract's topics (:mod:`station.vehicle_graph`: the one rule,
+  shared with ``vehicle-check``) and so learns its :class:`Capability`.
+* :mod:`station.link_modem`: an ME modem (frames out, nothing back), and the hybrid link
+  (frames over the modem, telemetry and acknowledgements over rosbridge); ``open_link``.
 
 Every link declares its :class:`Capability`: what the vehicle can report back over it.
 
@@ -30,27 +32,29 @@ from websockets.exceptions import ConnectionClosed, WebSocketException
 
 from codec import Frame
 from rosbridge.auth import auth_message
-from rosbridge.client import ClientProtocol, decode_json_string, topics_listing
+from rosbridge.client import ClientProtocol, decode_json_string
 from rosbridge.protocol import (
-    FRAME_TOPIC,
     MISSION_TOPIC,
     POSE_TOPIC,
     STATUS_TOPIC,
-    TOPIC_TYPES,
-    TOPICS_SERVICE,
     InvalidData,
-    canonical_type,
-    same_type,
 )
 from rosbridge.transport import RosbridgeClient, TopicHandler
-from station.transmit import failure_reason, frame_msg, open_transmitter
+from station.link_acks import SeenAcks
+from station.transmit import LinkCheck, failure_reason, frame_msg
+from station.vehicle_graph import GraphUnknown, VehicleGraph, read_graph, verdict_of
+from vehicle_contract.contract import DATUM_TOPIC
+from vehicle_contract.names import topic_names
 
 logger = logging.getLogger("station.link")
 
 Handler = Callable[[dict[str, Any]], None]
 
-#: How long to wait for the answer of ``/rosapi/topics`` after connecting (s).
+#: How long to wait for rosapi's answers (s).
 ROSAPI_TIMEOUT_S: Final = 3.0
+#: How often a connected link asks the graph again (s): a publisher that appears (the onboard
+#: agent started, or the pose publisher after the console subscribed) is seen within it.
+GRAPH_POLL_S: Final = 2.0
 
 
 class Capability(StrEnum):
@@ -74,38 +78,18 @@ class Capability(StrEnum):
         return self in (Capability.ACKS_AND_TELEMETRY, Capability.TELEMETRY_ONLY)
 
 
-def capability_of(topics: dict[str, str]) -> tuple[Capability, list[str]]:
-    """What a vehicle publishing ``topics`` (``{name: type}``, either ROS type spelling) can
-    report back, and a named problem for every contract topic missing or of the wrong type."""
-    problems: list[str] = []
-
-    def has(topic: str) -> bool:
-        if topic not in topics:
-            return False
-        if not same_type(topics[topic], TOPIC_TYPES[topic]):
-            problems.append(
-                f"{topic} is a {topics[topic]}, not a {canonical_type(TOPIC_TYPES[topic])}: "
-                "it is ignored"
-            )
-            return False
-        return True
-
-    mission, pose, status = has(MISSION_TOPIC), has(POSE_TOPIC), has(STATUS_TOPIC)
-    if FRAME_TOPIC in topics:
-        has(FRAME_TOPIC)  # a wrong type is named; absent is fine: the console advertises it
-    if not mission:
-        problems.insert(
-            0,
-            f"no {MISSION_TOPIC} topic: the vehicle runs no onboard agent; commands are sent "
-            "without acknowledgement",
-        )
-    if not pose:
-        problems.append(f"no {POSE_TOPIC} topic: the vehicle's position is not known")
-    if not status:
-        problems.append(f"no {STATUS_TOPIC} topic: no depth, battery or mode from the vehicle")
-    if mission:
+def capability_of(
+    graph: VehicleGraph, *, frames_over_rosbridge: bool = True
+) -> tuple[Capability, list[str]]:
+    """What a vehicle with this ROS graph can report back, by the one rule
+    (:func:`station.vehicle_graph.verdict_of`: rosbridge's own node is not the vehicle), and
+    a named problem for every contract topic that is missing, of the wrong type, or only
+    rosbridge's. ``frames_over_rosbridge`` False: frames go out another way (an ME modem)."""
+    verdict = verdict_of(graph, frames_over_rosbridge=frames_over_rosbridge)
+    problems = list(verdict.problems)
+    if verdict.agent and (verdict.frames or not frames_over_rosbridge):
         return Capability.ACKS_AND_TELEMETRY, problems
-    if pose or status:
+    if verdict.pose or verdict.status:
         return Capability.TELEMETRY_ONLY, problems
     return Capability.NONE, problems
 
@@ -118,12 +102,32 @@ class Link:
         self.on_pose: Handler = lambda _m: None
         self.on_status: Handler = lambda _m: None
         self.on_mission: Handler = lambda _m: None
+        #: The vehicle's datum message (contract schema ``datum``), when it sends one.
+        self.on_datum: Handler = lambda _m: None
         self.last_message_s: float | None = None  # time.monotonic() of the last message
-        #: What the vehicle can report back, and why not more (named problems).
-        self.capability = Capability.UNKNOWN
-        self.capability_problems: list[str] = []
+        self._capability = Capability.UNKNOWN
+        self._capability_problems: list[str] = []
         #: Why the link is down (None while connected, or before the first try).
         self.connection_problem: str | None = None
+
+    @property
+    def capability(self) -> Capability:
+        """What the vehicle can report back over this link: the one place the console's
+        delivery rules (copies, acknowledgements) read it from."""
+        return self._capability
+
+    @capability.setter
+    def capability(self, value: Capability) -> None:
+        self._capability = value
+
+    @property
+    def capability_problems(self) -> list[str]:
+        """Why the capability is not more (named problems)."""
+        return self._capability_problems
+
+    @capability_problems.setter
+    def capability_problems(self, value: list[str]) -> None:
+        self._capability_problems = value
 
     @property
     def acknowledges(self) -> bool:
@@ -149,14 +153,29 @@ class Link:
         """Send one frame; ``None`` when it left the station, else why it could not."""
         raise NotImplementedError
 
+    async def test(self) -> list[LinkCheck]:
+        """Check every path of the link now without sending a frame (here: what the link
+        knows of its connection; a modem opens and checks its port or gateway)."""
+        problem = None if self.connected else self.connection_problem or "not connected"
+        detail = f"connected; the vehicle reports: {self.capability.value}"
+        return [LinkCheck("rosbridge", self.target, problem is None, problem, problem or detail)]
+
 
 class RosbridgeLink(Link):
     """A persistent rosbridge connection: frames out, pose/status/mission in.
 
-    Ready (:meth:`wait_connected`) once connected and the capability is known: from the
-    answer of ``/rosapi/topics``, or :attr:`Capability.UNKNOWN` with the reason when it does
-    not answer within ``rosapi_timeout_s``. An acknowledgement that arrives anyway proves the
-    onboard agent runs.
+    Ready (:meth:`wait_connected`) once connected and the graph asked: the capability from it
+    (:func:`capability_of`), or :attr:`Capability.UNKNOWN` with the reason when rosapi does not
+    answer within ``rosapi_timeout_s``; then an acknowledgement that arrives anyway proves the
+    onboard agent runs. While connected the graph is asked again every ``graph_poll_s``: the
+    capability follows it (a failed question keeps the last answer), and a subscribed topic
+    that gained a publisher is subscribed again, since rosbridge fixed the subscription's QoS
+    from the publishers there when it was made (RELIABLE unless a BEST_EFFORT one was there:
+    a best-effort pose publisher that starts later is not heard until then). Every connection
+    subscribes afresh. Acknowledgements survive a short reconnect through the status's
+    ``recent_acks`` (the vehicle contract: the last ones, as published): those the link has
+    not delivered go to the console, and one delivered again (that, or a transient-local
+    replay) goes to it once.
     """
 
     def __init__(
@@ -165,24 +184,48 @@ class RosbridgeLink(Link):
         open_timeout_s: float = 3.0,
         rosapi_timeout_s: float = ROSAPI_TIMEOUT_S,
         auth_secret: str | None = None,
+        namespace: str = "",
+        *,
+        frames: bool = True,
+        graph_poll_s: float = GRAPH_POLL_S,
     ) -> None:
         super().__init__(target)
+        #: The contract's topic names on this vehicle (``namespace``: its ROS namespace).
+        self.names = topic_names(namespace)
+        #: Frames go out over this connection (False: telemetry and acknowledgements only, the
+        #: frames going by an ME modem: :class:`station.link_modem.HybridLink`).
+        self.frames = frames
         #: The training bridge's secret: the link authenticates first (``auth`` op).
         self.auth_secret = auth_secret
         self.open_timeout_s = open_timeout_s
         self.rosapi_timeout_s = rosapi_timeout_s
+        self.graph_poll_s = graph_poll_s
         self._client: RosbridgeClient | None = None
         self._task: asyncio.Task[None] | None = None
         self._ready = asyncio.Event()
+        names = self.names
         self._protocol = ClientProtocol(
-            advertise=[FRAME_TOPIC], subscribe=[POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC]
+            advertise=[names.frame] if frames else [],
+            subscribe=[names.pose, names.status, names.mission, names.datum],
         )
         #: What each subscribed topic's messages go to.
         self._handlers: dict[str, TopicHandler] = {
-            POSE_TOPIC: self._pose,
-            STATUS_TOPIC: self._status,
-            MISSION_TOPIC: self._mission,
+            names.pose: self._pose,
+            names.status: self._status,
+            names.mission: self._mission,
+            names.datum: self._datum,
         }
+        #: Each contract topic -> its name on this vehicle (asked about, subscribed to).
+        self._names = names.by_topic()
+        #: The contract topics subscribed to: subscribed again when they gain a publisher (the
+        #: optional datum only once a node publishes it).
+        self._subscribed = (POSE_TOPIC, STATUS_TOPIC, MISSION_TOPIC, DATUM_TOPIC)
+        #: On this connection: the graph answered once; an acknowledgement arrived.
+        self._graph_known = False
+        self._acked = False
+        self._unknown: GraphUnknown | None = None
+        #: The acknowledgements delivered, over every connection.
+        self._seen = SeenAcks()
 
     @property
     def connected(self) -> bool:
@@ -220,19 +263,16 @@ class RosbridgeLink(Link):
                         self.auth_secret, "nemesys-console", self.target, time.time()
                     )
                     await client.send(json.dumps(auth))
+                self._graph_known = self._acked = False
+                self._unknown = None
+                # asked before subscribing: the publishers each subscription is made with
+                graph = await read_graph(client, self.rosapi_timeout_s, names=self._names)
                 await client.open()
-                # what the vehicle publishes, asked again on every connection
-                self._set_capability(Capability.UNKNOWN, ["asking /rosapi/topics"])
                 self._client = client
                 self.connection_problem = None
                 backoff = 0.2
                 logger.info("link to %s up", self.target)
-                answer = await client.call_service(TOPICS_SERVICE, timeout_s=self.rosapi_timeout_s)
-                if answer is not None:
-                    self._on_topics(answer)
-                elif not client.closed:
-                    self._rosapi_silent()
-                await client.wait_closed()
+                await self._watch(client, graph)
             except asyncio.CancelledError:
                 raise
             except (OSError, WebSocketException, TimeoutError) as err:
@@ -249,40 +289,56 @@ class RosbridgeLink(Link):
             await asyncio.sleep(backoff)
             backoff = min(backoff * 2, 5.0)
 
+    async def _watch(self, client: RosbridgeClient, graph: VehicleGraph | GraphUnknown) -> None:
+        """Follow the graph until the connection closes (see the class doc)."""
+        bridges: frozenset[str] | None = None
+        subscribed_with: dict[str, frozenset[str]] | None = None
+        while True:
+            self._on_graph(graph)
+            if isinstance(graph, VehicleGraph):
+                bridges = graph.bridges
+                now = {t: frozenset(graph.publishers.get(t, ())) for t in self._subscribed}
+                if subscribed_with is not None:
+                    grown = [
+                        self._names[t] for t in now if now[t] - subscribed_with.get(t, frozenset())
+                    ]
+                    if grown:
+                        logger.info(
+                            "link to %s: new publishers on %s: subscribing again",
+                            self.target,
+                            ", ".join(grown),
+                        )
+                        await client.send(*self._protocol.resubscribe(grown))
+                subscribed_with = now
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(client.wait_closed(), self.graph_poll_s)
+            if client.closed:
+                return
+            graph = await read_graph(client, self.rosapi_timeout_s, bridges, self._names)
+
     def _set_capability(self, capability: Capability, problems: list[str]) -> None:
         self.capability = capability
         self.capability_problems = problems
         if self._client is not None and capability is not Capability.UNKNOWN:
             self._ready.set()
 
-    def _rosapi_silent(self) -> None:
-        self._set_capability(
-            Capability.UNKNOWN,
-            [
-                f"no answer from {TOPICS_SERVICE} in {self.rosapi_timeout_s:g} s (rosapi not "
-                "running?): acknowledgements are not expected; commands are sent as repeated "
-                "copies"
-            ],
-        )
+    def _on_graph(self, graph: VehicleGraph | GraphUnknown) -> None:
+        if isinstance(graph, VehicleGraph):
+            self._graph_known = True
+            capability, problems = capability_of(graph, frames_over_rosbridge=self.frames)
+            if capability is not self.capability:
+                logger.info("link to %s: %s", self.target, capability)
+            self._set_capability(capability, problems)
+        elif not self._graph_known:  # once known, a failed question keeps the last answer
+            self._unknown = graph
+            why = f"{graph}: acknowledgements are not expected; commands go as repeated copies"
+            if self._acked:
+                self._set_capability(Capability.ACKS_AND_TELEMETRY, [str(graph)])
+            else:
+                self._set_capability(Capability.UNKNOWN, [why])
+        else:
+            logger.warning("link to %s: %s (keeping the last answer)", self.target, graph)
         self._ready.set()
-
-    def _on_topics(self, message: dict[str, Any]) -> None:
-        if message.get("result") is False:
-            self._set_capability(
-                Capability.UNKNOWN,
-                [f"{TOPICS_SERVICE} failed: {str(message.get('values'))[:120]}"],
-            )
-            self._ready.set()
-            return
-        try:
-            topics = topics_listing(message.get("values"))
-        except InvalidData as error:
-            self._set_capability(Capability.UNKNOWN, [f"{TOPICS_SERVICE}: {error.reason}"])
-            self._ready.set()
-            return
-        capability, problems = capability_of(topics)
-        self._set_capability(capability, problems)
-        logger.info("link to %s: %s", self.target, capability)
 
     # --- what the vehicle publishes (called by the client, on the event loop) ---------------
 
@@ -293,19 +349,43 @@ class RosbridgeLink(Link):
 
     def _status(self, msg: object) -> None:
         self.last_message_s = time.monotonic()
-        body = self._json(STATUS_TOPIC, msg)
-        if body is not None:
-            self.on_status(body)
+        body = self._json(self.names.status, msg)
+        if body is None:
+            return
+        recent = body.get("recent_acks")
+        if isinstance(recent, list):
+            # the vehicle's last acknowledgements: one published while the console
+            # reconnected is not lost (those in the first status read predate the console)
+            for ack in self._seen.missed(recent):
+                logger.info(
+                    "link: acknowledgement seq=%s from the status's recent_acks", ack["seq"]
+                )
+                self._take_ack(ack)
+        self.on_status(body)
 
     def _mission(self, msg: object) -> None:
         self.last_message_s = time.monotonic()
-        body = self._json(MISSION_TOPIC, msg)
-        if body is None:
+        body = self._json(self.names.mission, msg)
+        if body is not None:
+            self._take_ack(body)
+
+    def _take_ack(self, ack: dict[str, Any]) -> None:
+        """One acknowledgement to the console, unless it went already (a repeat: a transient-
+        local replay, or the status's recent_acks)."""
+        if not self._seen.first(ack):
+            logger.debug("link: acknowledgement seq=%s delivered already", ack.get("seq"))
             return
-        if not self.capability.acknowledges:
-            # an acknowledgement is proof the onboard agent runs
-            self._set_capability(Capability.ACKS_AND_TELEMETRY, [])
-        self.on_mission(body)
+        self._acked = True
+        if not self._graph_known and not self.capability.acknowledges:
+            # rosapi cannot tell: an acknowledgement is proof the onboard agent runs
+            why = [] if self._unknown is None else [str(self._unknown)]
+            self._set_capability(Capability.ACKS_AND_TELEMETRY, why)
+        self.on_mission(ack)
+
+    def _datum(self, msg: object) -> None:
+        body = self._json(self.names.datum, msg)
+        if body is not None:
+            self.on_datum(body)
 
     @staticmethod
     def _json(topic: str, msg: object) -> dict[str, Any] | None:
@@ -317,49 +397,12 @@ class RosbridgeLink(Link):
 
     async def transmit(self, frame: Frame) -> str | None:
         client = self._client
+        if not self.frames:
+            return f"frames do not go over {self.target} (telemetry only)"
         if client is None:
             return "not connected to the vehicle"
         try:
-            await client.publish(FRAME_TOPIC, frame_msg(frame))
+            await client.publish(self.names.frame, frame_msg(frame))
         except (OSError, ConnectionClosed) as err:
             return failure_reason(err)
         return None
-
-
-class ModemLink(Link):
-    """An ME modem on a serial port or TCP gateway: one-way, no acknowledgements."""
-
-    def __init__(self, target: str, bitrate_bps: float) -> None:
-        super().__init__(target)
-        self._tx = open_transmitter(target, bitrate_bps=bitrate_bps)
-        self.capability = Capability.NONE
-        self.capability_problems = [
-            "an ME modem link is one-way: commands go out as repeated copies, with no "
-            "acknowledgement and no telemetry"
-        ]
-        self._lock = asyncio.Lock()
-
-    @property
-    def connected(self) -> bool:
-        """Until a frame fails to leave (the modem is only opened to send)."""
-        return self.connection_problem is None
-
-    async def stop(self) -> None:
-        await self._tx.aclose()
-
-    async def transmit(self, frame: Frame) -> str | None:
-        async with self._lock:
-            result = await self._tx.send_async(frame, wait_ack_s=0.0)
-        self.connection_problem = (
-            None
-            if result.sent
-            else f"the last frame did not reach the modem at {self.target}: {result.reason}"
-        )
-        return None if result.sent else (result.reason or "not sent")
-
-
-def open_link(target: str, bitrate_bps: float) -> Link:
-    """The link for a target: ``ws://`` -> rosbridge, anything else -> an ME modem."""
-    if target.startswith(("ws://", "wss://")):
-        return RosbridgeLink(target)
-    return ModemLink(target, bitrate_bps)

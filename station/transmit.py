@@ -8,9 +8,14 @@ get one) or failed with a short reason ("connection refused", "timeout", "port n
 * :class:`RosbridgeTransmitter`: a rosbridge v2 endpoint (the simulated vehicle, or a real
   vehicle behind a rosbridge). Publishes the frame on ``/nemesys/frame`` and waits for the
   vehicle's acknowledgement on ``/nemesys/mission``.
-* :class:`SerialTransmitter`: a real ME transmitter (modem) on a serial port, or behind a TCP
-  gateway; any URL :func:`serial.serial_for_url` opens (``/dev/ttyUSB0``, ``socket://h:p``,
-  ``loop://``). The modem gives no acknowledgement.
+* :class:`SerialTransmitter`: a real ME transmitter (modem) on a serial port; any URL
+  :func:`serial.serial_for_url` opens (``/dev/ttyUSB0``, ``loop://``). The modem gives no
+  acknowledgement.
+* :class:`TcpTransmitter`: an ME modem behind a TCP gateway; a copy counts only when the
+  gateway took its bytes and had not closed (:mod:`station.transmit_tcp`).
+
+The modems (:class:`ModemTransmitter`) can also be checked without sending a frame
+(:meth:`ModemTransmitter.check`, a :class:`LinkCheck`).
 
 :func:`open_transmitter` picks one from a target string (``ws://``, ``wss://``,
 ``serial:///dev/...``, ``tcp://host:port``, ``loop://``).
@@ -20,6 +25,7 @@ This module is the public face: import everything from here. The code lives in
 * :mod:`station.transmit_base`: :class:`SendResult`, the :class:`Transmitter` interface,
   failure reasons;
 * :mod:`station.transmit_serial`: :class:`SerialTransmitter` and the serial/TCP wire format;
+* :mod:`station.transmit_tcp`: :class:`TcpTransmitter`, what counts as sent on a TCP gateway;
 * :mod:`station.transmit_rosbridge`: :class:`RosbridgeTransmitter` and its wait for the
   vehicle's subscriber;
 * :mod:`station.transmit_acks`: what comes back over rosbridge, and how an acknowledgement is
@@ -37,6 +43,8 @@ from station.transmit_acks import ACK_SETTLE_S, ack_match
 from station.transmit_base import (
     DEFAULT_ACK_TIMEOUT_S,
     AckMatch,
+    LinkCheck,
+    ModemTransmitter,
     SendResult,
     Transmitter,
     failure_reason,
@@ -52,19 +60,24 @@ from station.transmit_serial import (
     DEFAULT_WRITE_TIMEOUT_S,
     SerialTransmitter,
 )
+from station.transmit_tcp import DEFAULT_DRAIN_TIMEOUT_S, TcpTransmitter
 
 __all__ = [
     "ACK_SETTLE_S",
     "DEFAULT_ACK_TIMEOUT_S",
     "DEFAULT_BAUDRATE",
+    "DEFAULT_DRAIN_TIMEOUT_S",
     "DEFAULT_OPEN_TIMEOUT_S",
     "DEFAULT_ROSBRIDGE_URL",
     "DEFAULT_WRITE_TIMEOUT_S",
     "TARGET_FORMS",
     "AckMatch",
+    "LinkCheck",
+    "ModemTransmitter",
     "RosbridgeTransmitter",
     "SendResult",
     "SerialTransmitter",
+    "TcpTransmitter",
     "Transmitter",
     "ack_match",
     "failure_reason",
@@ -119,9 +132,12 @@ def _serial_baud(target: str, query: str) -> int:
     return int(text)
 
 
-def open_transmitter(target: str, *, bitrate_bps: float = DEFAULT_BITRATE_BPS) -> Transmitter:
+def open_transmitter(
+    target: str, *, bitrate_bps: float = DEFAULT_BITRATE_BPS, namespace: str = ""
+) -> Transmitter:
     """The transmitter for a target string (see :data:`TARGET_FORMS`). Nothing is opened
-    until the first send. ``bitrate_bps`` sets the serial inter-frame gap.
+    until the first send. ``bitrate_bps`` sets the serial inter-frame gap; ``namespace`` is
+    the vehicle's ROS namespace (rosbridge targets only).
 
     Raises:
         ValueError: the target is malformed or of an unknown kind (the message says which
@@ -140,7 +156,7 @@ def open_transmitter(target: str, *, bitrate_bps: float = DEFAULT_BITRATE_BPS) -
     scheme = split.scheme.lower()
     if scheme in ("ws", "wss"):
         _host_port(target, split, port_required=False)
-        return RosbridgeTransmitter(text)
+        return RosbridgeTransmitter(text, namespace=namespace)
     if scheme == "serial":
         if split.netloc:
             raise _bad_target(
@@ -154,8 +170,8 @@ def open_transmitter(target: str, *, bitrate_bps: float = DEFAULT_BITRATE_BPS) -
         _host_port(target, split, port_required=True)
         if split.path not in ("", "/") or split.query:
             raise _bad_target(target, "a tcp target is only host:port")
-        url = f"socket://{split.netloc}"
-        return SerialTransmitter(url, bitrate_bps=bitrate_bps, name=text)
+        assert split.hostname is not None and split.port is not None  # _host_port said so
+        return TcpTransmitter(split.hostname, split.port, bitrate_bps=bitrate_bps, name=text)
     if scheme == "loop":
         if split.netloc or split.path or split.query:
             raise _bad_target(target, "loop:// takes nothing after it")

@@ -75,6 +75,21 @@ class SendResult:
         return asdict(self)
 
 
+@dataclass(frozen=True, slots=True)
+class LinkCheck:
+    """A test of one path to the vehicle that sends nothing: could a frame leave now?
+
+    ``what`` names the path ("modem", "rosbridge", "telemetry"); on failure ``reason`` is a
+    short phrase as :attr:`SendResult.reason`, and ``detail`` the longer story either way.
+    """
+
+    what: str
+    target: str
+    ok: bool
+    reason: str | None = None
+    detail: str = ""
+
+
 class Transmitter(abc.ABC):
     """Sends frames to the vehicle. Use as a (sync or async) context manager, or call close."""
 
@@ -146,6 +161,35 @@ class Transmitter(abc.ABC):
         )
 
 
+class ModemTransmitter(Transmitter):
+    """An ME modem (a serial port, a TCP gateway): frames out, nothing back, so what it can
+    say is what the OS took. The connection is kept between frames; :meth:`check` opens it
+    when it is not open and tells whether a frame could leave now, without sending one."""
+
+    @property
+    @abc.abstractmethod
+    def connected(self) -> bool:
+        """The port or connection is open (a failed write or check closes it)."""
+
+    @abc.abstractmethod
+    def check(self) -> LinkCheck:
+        """Open the port or connection if it is not open and check that a frame could be
+        written now (the peer is still there, nothing of an earlier frame is stuck); nothing
+        is written. Kept open when it passes, closed when it does not. Blocking,
+        thread-safe, never raises for a transport problem."""
+
+    async def check_async(self) -> LinkCheck:
+        """:meth:`check` without blocking the event loop."""
+        return await asyncio.to_thread(self.check)
+
+    def _passed(self, detail: str) -> LinkCheck:
+        return LinkCheck("modem", self.target, True, None, detail)
+
+    def _check_failed(self, reason: str, detail: str) -> LinkCheck:
+        logger.info("%s %s: check failed: %s (%s)", self.transport, self.target, reason, detail)
+        return LinkCheck("modem", self.target, False, reason, detail)
+
+
 # --- failure reasons ----------------------------------------------------------------------
 
 _ERRNO_REASONS = {
@@ -156,6 +200,7 @@ _ERRNO_REASONS = {
     errno.EPERM: "permission denied",
     errno.EBUSY: "port busy",
     errno.ENOTTY: "not a serial port",
+    errno.EIO: "i/o error",
     errno.ECONNREFUSED: "connection refused",
     errno.ECONNRESET: "connection reset",
     errno.EPIPE: "connection closed",

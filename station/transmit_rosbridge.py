@@ -46,7 +46,7 @@ from station.transmit_base import (
     frame_msg,
     logger,
 )
-from vehicle_contract.contract import FRAME_TOPIC, MISSION_TOPIC
+from vehicle_contract.names import topic_names
 
 DEFAULT_ROSBRIDGE_URL = "ws://127.0.0.1:9090"
 DEFAULT_OPEN_TIMEOUT_S = 5.0
@@ -96,11 +96,12 @@ class _LoopThread:
 class RosbridgeTransmitter(Transmitter):
     """Publishes frames to a rosbridge v2 endpoint and waits for the vehicle's acknowledgement.
 
-    On connecting it advertises :data:`FRAME_TOPIC` (``std_msgs/UInt8MultiArray``) and
-    subscribes to :data:`MISSION_TOPIC` (``std_msgs/String`` whose ``data`` is a JSON object);
+    On connecting it advertises the frame topic (``std_msgs/UInt8MultiArray``) and
+    subscribes to the mission topic (``std_msgs/String`` whose ``data`` is a JSON object);
     each frame is published as ``{"data": [13 ints]}``. The connection is opened on the first
     send and kept; a connection found closed is reopened once. Acknowledgements are matched as
-    :mod:`station.transmit_acks` says.
+    :mod:`station.transmit_acks` says. ``namespace``: the vehicle's ROS namespace (both topics
+    under ``/<namespace>/nemesys/...``; "" for none).
     """
 
     transport = "rosbridge"
@@ -112,9 +113,12 @@ class RosbridgeTransmitter(Transmitter):
         open_timeout_s: float = DEFAULT_OPEN_TIMEOUT_S,
         settle_s: float = ACK_SETTLE_S,
         subscriber_wait_s: float = DEFAULT_SUBSCRIBER_WAIT_S,
+        namespace: str = "",
     ) -> None:
         super().__init__(url)
         self.url = url
+        #: The contract's topic names on this vehicle (ValueError for a bad namespace).
+        self.names = topic_names(namespace)
         self.open_timeout_s = open_timeout_s
         self.settle_s = settle_s
         #: On a new connection, the most the first publish waits for the vehicle's subscriber
@@ -122,7 +126,9 @@ class RosbridgeTransmitter(Transmitter):
         self.subscriber_wait_s = subscriber_wait_s
         #: What the wait on the newest connection found, until a send reports it.
         self._wait: SubscriberWait | None = None
-        self._protocol = ClientProtocol(advertise=[FRAME_TOPIC], subscribe=[MISSION_TOPIC])
+        self._protocol = ClientProtocol(
+            advertise=[self.names.frame], subscribe=[self.names.mission]
+        )
         self._lock = threading.Lock()
         self._thread: _LoopThread | None = None
         self._client: RosbridgeClient | None = None
@@ -172,7 +178,7 @@ class RosbridgeTransmitter(Transmitter):
         client = await RosbridgeClient.connect(
             self.url,
             self._protocol,
-            {MISSION_TOPIC: on_mission},
+            {self.names.mission: on_mission},
             open_timeout_s=self.open_timeout_s,
             logger=logger,
         )
@@ -192,7 +198,7 @@ class RosbridgeTransmitter(Transmitter):
         """Wait until the frame topic has a subscriber or the bound (module docstring)."""
         if self.subscriber_wait_s <= 0:
             return None
-        wait = SubscriberWait(FRAME_TOPIC, self.subscriber_wait_s, time.monotonic())
+        wait = SubscriberWait(self.names.frame, self.subscriber_wait_s, time.monotonic())
         while not wait.done(time.monotonic()) and not client.closed:
             if wait.ask(time.monotonic()):
                 service, args = wait.request
@@ -245,7 +251,7 @@ class RosbridgeTransmitter(Transmitter):
 
     async def _send(self, frame: Frame, wait_ack_s: float) -> SendResult:
         # made before connecting: the publish keeps its id whatever the connection asks first
-        message = self._protocol.publish(FRAME_TOPIC, frame_msg(frame))
+        message = self._protocol.publish(self.names.frame, frame_msg(frame))
         try:
             await self._publish(message)
         except (OSError, WebSocketException, TimeoutError) as exc:

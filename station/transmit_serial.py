@@ -1,5 +1,6 @@
-"""The serial and TCP transmitter: a real ME transmitter (modem) on a serial port, or behind a
-TCP gateway. Import it from :mod:`station.transmit`.
+"""The serial transmitter: a real ME transmitter (modem) on a serial port, and the wire format
+it shares with a TCP gateway (:mod:`station.transmit_tcp`). Import it from
+:mod:`station.transmit`.
 
 Serial and TCP wire format
 --------------------------
@@ -26,8 +27,9 @@ import serial
 from codec import DEFAULT_BITRATE_BPS, FRAME_BYTES, Frame, airtime_s
 from station.transmit_base import (
     DEFAULT_ACK_TIMEOUT_S,
+    LinkCheck,
+    ModemTransmitter,
     SendResult,
-    Transmitter,
     _message,
     failure_reason,
     logger,
@@ -37,9 +39,9 @@ DEFAULT_BAUDRATE = 115_200
 DEFAULT_WRITE_TIMEOUT_S = 2.0
 
 
-class SerialTransmitter(Transmitter):
-    """A real ME transmitter on a serial port or behind a TCP gateway (see the wire format in
-    the module docstring). ``url`` is anything :func:`serial.serial_for_url` opens. The port is
+class SerialTransmitter(ModemTransmitter):
+    """A real ME transmitter on a serial port (see the wire format in the module docstring).
+    ``url`` is anything :func:`serial.serial_for_url` opens. The port is
     opened on the first send and kept open; after a write error it is closed and reopened on the
     next send. Thread-safe."""
 
@@ -64,6 +66,10 @@ class SerialTransmitter(Transmitter):
         self._port: serial.SerialBase | None = None
         self._next_t = 0.0  # time.monotonic() before which the next frame must not start
         self._lock = threading.Lock()
+
+    @property
+    def connected(self) -> bool:
+        return self._port is not None
 
     @property
     def port(self) -> serial.SerialBase | None:
@@ -118,6 +124,21 @@ class SerialTransmitter(Transmitter):
             sent_t=sent_t,
             detail=f"wrote {FRAME_BYTES} bytes; the modem gives no acknowledgement",
         )
+
+    def check(self) -> LinkCheck:
+        """Open the port if it is not open and ask it how many bytes wait to go out (a device
+        that went away, e.g. a USB adapter pulled out, fails here). Nothing is written. A serial
+        port cannot tell whether a modem is at the other end (no flow control, no carrier)."""
+        with self._lock:
+            try:
+                port = self._ensure_open()
+                # pyserial's ports have it (TIOCOUTQ on a tty), its base class does not
+                waiting = getattr(port, "out_waiting", None)
+            except (serial.SerialException, OSError, ValueError) as exc:
+                self._close_port()
+                return self._check_failed(failure_reason(exc), _message(exc))
+        queue = "" if waiting is None else f"; {waiting} bytes waiting to go out"
+        return self._passed(f"{self.url} is open{queue}")
 
     def _close_port(self) -> None:
         port, self._port = self._port, None

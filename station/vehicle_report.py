@@ -5,22 +5,31 @@ from __future__ import annotations
 
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Final, Literal
 
-from codec import CodecError, Encoded, encode_frame
-from rosbridge.client import topics_listing
-from rosbridge.protocol import TOPICS_SERVICE, InvalidData, same_type
-from rosbridge.subscriber_wait import SUBSCRIBERS_SERVICE, subscribers_of
+from codec import (
+    CODEWORD_BITS,
+    GUARD_BITS,
+    SYNC_WORD,
+    CodecError,
+    Encoded,
+    Frame,
+    RejectReason,
+    encode_frame,
+)
 from station.link import capability_of
+from station.vehicle_graph import GraphUnknown, VehicleGraph, verdict_of
 from vehicle_contract.contract import (
+    ACK_DEADLINE_S,
     CONTRACT_VERSION,
     FRAME_TOPIC,
+    MISSION_TOPIC,
     POSE_FRAME_ID,
     POSE_TOPIC,
     STATUS_TOPIC,
     TOPICS,
-    Direction,
     topic,
 )
 from vehicle_contract.messages import pose_from_message
@@ -30,6 +39,19 @@ Result = Literal["pass", "fail", "skipped"]
 
 #: A measured rate passes at this fraction of the contract's minimum.
 RATE_TOLERANCE: Final = 0.95
+
+#: The pre-dive probe: a deliberately malformed frame. Its preamble and delimiter are right, so
+#: a receiver synchronises on it (over rosbridge or through an ME modem alike), but its codeword
+#: is the all-zero codeword with 3 bits flipped (the first, the middle and the last): more
+#: errors than BCH corrects (t = 2), and no codeword lies within 2 bits of it, so every
+#: decoder rejects it as ``uncorrectable`` and, by the contract, acknowledges it and changes
+#: nothing (tests/station/test_vehicle_report.py checks both).
+PROBE_FRAME: Final = Frame(
+    (SYNC_WORD << (CODEWORD_BITS + GUARD_BITS))
+    | (((1 << (CODEWORD_BITS - 1)) | (1 << (CODEWORD_BITS // 2)) | 1) << GUARD_BITS)
+)
+#: The reason the probe's rejection must give.
+PROBE_REASON: Final = RejectReason.UNCORRECTABLE.value
 #: A pose that arrived longer ago than this is stale (s).
 POSE_STALE_S: Final = 1.0
 
@@ -98,55 +120,100 @@ class Ack:
     problem: str | None = None
 
 
-def topic_checks(answer: dict[str, Any] | None, timeout_s: float) -> list[Check]:
-    """The rosapi row and one row per contract topic, from the ``/rosapi/topics`` answer
-    (None: no answer within ``timeout_s``)."""
-    name = f"rosapi {TOPICS_SERVICE}"
-    unknown = f"not known: {TOPICS_SERVICE} did not list the topics"
-    rows = [Check(f"topic {t.name}", "skipped", unknown) for t in TOPICS]
-    if answer is None:
-        why = f"no answer in {timeout_s:g} s (is rosapi running?)"
-        return [Check(name, "fail", why), *rows]
-    if answer.get("result") is False:
-        return [Check(name, "fail", f"failed: {str(answer.get('values'))[:160]}"), *rows]
-    try:
-        listing = topics_listing(answer.get("values"))
-    except InvalidData as error:
-        return [Check(name, "fail", error.reason), *rows]
-    _, problems = capability_of(listing)
-    out = [Check(name, "pass", f"{len(listing)} topics listed")]
+def graph_checks(
+    graph: VehicleGraph | GraphUnknown,
+    *,
+    modem: str | None = None,
+    names: Mapping[str, str] | None = None,
+) -> list[Check]:
+    """The rosapi row, one row per contract topic and the onboard agent's, by the rule the
+    console uses (:func:`station.vehicle_graph.verdict_of`: rosbridge's own node is not the
+    vehicle). ``modem``: frames go through that ME modem, not the frame topic. ``names``:
+    contract topic -> its name on this vehicle, for rows of a graph not known."""
+    if isinstance(graph, GraphUnknown):
+        unknown = f"not known: {graph}"
+        named = names or {}
+        return [
+            Check("rosapi", "fail", str(graph)),
+            *(
+                Check(f"topic {named.get(t.name, t.name)}", "skipped", unknown)
+                for t in TOPICS
+                if t.required
+            ),
+            Check("onboard agent", "skipped", unknown),
+        ]
+    verdict = verdict_of(graph, frames_over_rosbridge=modem is None)
+    out = [
+        Check(
+            "rosapi",
+            "pass",
+            f"{len(graph.topics)} topics listed; the contract topics' publishers and "
+            "subscribers named",
+        )
+    ]
     for t in TOPICS:
-        row = f"topic {t.name}"
-        said = next((p for p in problems if t.name in p), None)
-        if t.name not in listing:
-            why = (
-                "nothing on the vehicle subscribes to it"
-                if t.direction is Direction.TO_VEHICLE
-                else said or "the vehicle does not publish it"
-            )
-            out.append(Check(row, "fail", f"missing: {why}"))
-        elif not same_type(listing[t.name], t.type):
-            out.append(Check(row, "fail", f"is a {listing[t.name]}, not a {t.type}"))
+        found = verdict.findings.get(t.name)  # an optional topic the graph lacks: no row
+        row = f"topic {graph.name(t.name)}"
+        if found is None:
+            continue
+        if found.ok:
+            out.append(Check(row, "pass", found.reason))
+        elif t.name == FRAME_TOPIC and modem is not None:
+            why = f"frames go through the modem path ({modem}): {found.reason}"
+            out.append(Check(row, "skipped", why))
         else:
-            out.append(Check(row, "pass", listing[t.name]))
+            out.append(Check(row, "fail", f"missing: {found.reason}"))
+    capability, _ = capability_of(graph, frames_over_rosbridge=modem is None)
+    console = f"the console: {capability}"
+    if verdict.agent:
+        nodes = sorted({*graph.vehicle_nodes(MISSION_TOPIC), *graph.vehicle_nodes(STATUS_TOPIC)})
+        said = f"{graph.name(MISSION_TOPIC)} and {graph.name(STATUS_TOPIC)}"
+        why = f"running: {', '.join(nodes)} publishes {said}"
+        out.append(Check("onboard agent", "pass", f"{why}; {console}"))
+    else:
+        out.append(Check("onboard agent", "fail", f"{verdict.problems[0]}; {console}"))
     return out
 
 
-def subscriber_check(answer: dict[str, Any] | None, timeout_s: float) -> Check:
-    """The frame topic's subscriber, from the ``/rosapi/subscribers`` answer."""
-    name = f"{FRAME_TOPIC} subscriber"
-    if answer is None:
-        why = f"rosapi cannot tell: no answer from {SUBSCRIBERS_SERVICE} in {timeout_s:g} s"
-        return Check(name, "skipped", why)
-    if answer.get("result") is False:
-        why = f"rosapi cannot tell: {SUBSCRIBERS_SERVICE} failed: {str(answer.get('values'))[:120]}"
-        return Check(name, "skipped", why)
-    subscribers = subscribers_of(answer.get("values"))
-    if subscribers is None:
-        return Check(name, "fail", f"{SUBSCRIBERS_SERVICE} answered without a list")
-    if not subscribers:
-        return Check(name, "fail", "no node subscribes to it: frames would be lost")
-    return Check(name, "pass", "subscribed by " + ", ".join(subscribers))
+def malformed_probe_check(
+    ack: Ack | None,
+    *,
+    sent_s: float,
+    waited_s: float,
+    path: str,
+    active: object = None,
+    deadline_s: float = ACK_DEADLINE_S,
+) -> Check:
+    """The probe's row: ``ack`` is the acknowledgement of :data:`PROBE_FRAME` (None: none came
+    within ``waited_s`` of ``sent_s``); ``path`` says how it went; ``active`` is the active
+    command the last status reported before it (``...``: not known). Its round trip is held to
+    the contract's ack deadline (``deadline_s``; the round trip adds rosbridge's latency to
+    the vehicle's own time, so a pass proves the deadline is kept); one past it fails, as does
+    one the vehicle marks ``late`` (made after the deadline from the frame's reception)."""
+    name = "ack path (probe)"
+    what = f"a malformed frame ({PROBE_FRAME.hex}: codeword beyond correction) {path}"
+    deadline = f"the contract's deadline {deadline_s:g} s"
+    if ack is None:
+        why = f"no acknowledgement within {waited_s:g} s ({deadline})"
+        return Check(name, "fail", f"{what}: {why}")
+    body = ack.ack or {}
+    round_trip_s = ack.arrival_s - sent_s
+    took = f"in {round_trip_s:.2f} s ({deadline})"
+    if body.get("outcome") != "rejected":
+        return Check(name, "fail", f"{what}: {body.get('outcome')} {took}: it must be rejected")
+    if body.get("reason") != PROBE_REASON:
+        why = f"rejected as {body.get('reason')!r}, not {PROBE_REASON!r}: {body.get('detail')}"
+        return Check(name, "fail", f"{what}: {why}")
+    if body.get("late") is True:
+        why = "rejected, but late: the vehicle says it answered after the contract's deadline"
+        return Check(name, "fail", f"{what}: {why}")
+    if round_trip_s > deadline_s:
+        why = f"rejected as {PROBE_REASON} {took}: the round trip is past the deadline"
+        return Check(name, "fail", f"{what}: {why}")
+    if active is not ... and "active" in body and body["active"] != active:
+        why = f"the active command changed from {active} to {body['active']}"
+        return Check(name, "fail", f"{what}: rejected, but {why}")
+    return Check(name, "pass", f"{what}: rejected as {PROBE_REASON} {took}; nothing changed")
 
 
 def probe_frame(active: object) -> tuple[Encoded | None, str | None]:

@@ -137,6 +137,7 @@ def test_pytest_vehicle_side_collects_that() -> None:
     assert modules == {
         "tests/onboard/test_agent.py",
         "tests/onboard/test_imports.py",
+        "tests/vehicle_contract/test_names.py",
     }
 
 

@@ -1,4 +1,6 @@
-"""The contract's words: the reason a rejection gives and the mode a status reports.
+"""The contract's words: the reason a rejection gives and the mode a status reports; and the
+numbers the onboard path needs: the acknowledgement deadline and how many recent
+acknowledgements a status carries.
 
 The vehicle contract (:mod:`vehicle_contract.contract`) owns them; the onboard agent and
 guidance (:mod:`onboard`), which a real vehicle installs, import them from here. So this module
@@ -16,10 +18,13 @@ from codec.compat import StrEnum
 INVALID_PLAN = "invalid_plan"
 #: A frame that decoded to a plan beyond the vehicle's limits.
 LIMIT_VIOLATION = "limit_violation"
+#: A frame that decoded, but the vehicle has no navigation to plan from (none yet, or stale).
+NO_NAVIGATION = "no_navigation"
 
 #: Every ``reason`` a rejection may give: the codec's (the frame did not decode) and the
-#: agent's (it decoded but is no flyable plan within the vehicle's limits).
-REJECT_REASONS = (*(r.value for r in RejectReason), INVALID_PLAN, LIMIT_VIOLATION)
+#: agent's (it decoded but is no flyable plan within the vehicle's limits, or there is no
+#: navigation to plan it from).
+REJECT_REASONS = (*(r.value for r in RejectReason), INVALID_PLAN, LIMIT_VIOLATION, NO_NAVIGATION)
 
 
 class Mode(StrEnum):
@@ -31,7 +36,20 @@ class Mode(StrEnum):
     SURFACING = "surfacing"
     SURFACED = "surfaced"
     BATTERY_EMPTY = "battery_empty"
+    #: Navigation went stale: the vehicle holds or surfaces (its setting) from where it last
+    #: knew it was, until a new command is accepted with navigation valid again.
+    NAV_FAULT = "nav_fault"
 
 
 #: The words of ``mode`` in the status (what guidance is doing).
 MODES = tuple(m.value for m in Mode)
+
+#: A vehicle acknowledges a frame within this long of receiving it (s): reception is the
+#: message reaching the vehicle's node (or its own ME receiver synchronising on the frame).
+#: One made later carries ``late: true``.
+ACK_DEADLINE_S = 1.0
+
+#: The status carries the acknowledgements of this long (s, ROS time), at most
+#: :data:`RECENT_ACKS_MAX` of them: a console that reconnects within it loses none.
+RECENT_ACKS_S = 30.0
+RECENT_ACKS_MAX = 10

@@ -13,7 +13,9 @@ from pathlib import Path
 from typing import Any, Final
 
 from vehicle_contract.contract import (
+    ACK_DEADLINE_S,
     CONTRACT_VERSION,
+    CONVENTIONS,
     OBLIGATIONS,
     TIME_BASE,
     TOPICS,
@@ -30,6 +32,7 @@ REGENERATE: Final = ".venv/bin/python scripts/gen_vehicle_doc.py"
 _TITLES: Final = {
     "ack": "The acknowledgement (`/nemesys/mission`)",
     "status": "The status (`/nemesys/status`)",
+    "datum": "The datum (`/nemesys/datum`)",
 }
 
 
@@ -138,9 +141,17 @@ def render_markdown() -> str:
         "|---|---|",
         *(f"| {k} | {_cell(v)} |" for k, v in TIME_BASE.items()),
         "",
+        "## Conventions",
+        "",
+        "| what | how |",
+        "|---|---|",
+        *(f"| {k} | {_cell(v)} |" for k, v in CONVENTIONS.items()),
+        "",
         "## Topics",
         "",
-        "Types are given in the ROS 2 spelling; `pkg/Name` denotes the same type.",
+        "Types are given in the ROS 2 spelling; `pkg/Name` denotes the same type. The names are",
+        "those of a vehicle without a namespace; under namespace `auv1` each is",
+        "`/auv1/nemesys/...`.",
         "",
         "| topic | type | direction | QoS (reliability, durability, history depth) | rate "
         "| frame_id | required |",
@@ -159,14 +170,28 @@ def render_markdown() -> str:
     lines += [
         "## Checking a vehicle",
         "",
-        "`nemesys vehicle-check ws://HOST:PORT [--json] [--timeout S] [--window S]` connects as",
-        "the console does and prints one row per check (pass, fail or skipped, and why): the",
-        "topics listed by `/rosapi/topics` with their types, a subscriber on the frame topic",
-        "(`/rosapi/subscribers`), the pose rate and age, the status rate and schema, and the",
-        "acknowledgement path. That last check waits for the next status, re-sends at once the",
-        "command it reports as `active` and expects an acknowledgement with `duplicate: true`;",
-        "it is the only frame the check sends, and with no active command it sends nothing. Exit",
-        "status 0 when no check failed, 1 otherwise, 2 for bad usage.",
+        "`nemesys vehicle-check ws://HOST:PORT [--modem TARGET] [--namespace NS] [--json]",
+        "[--timeout S] [--window S]` connects as the console does and prints one row per check",
+        "(pass, fail or skipped, and why); a vehicle under a namespace is checked on",
+        "`/NS/nemesys/...` (default `NEMESYS_VEHICLE_NAMESPACE`), its nodes found by the topics",
+        "they publish and subscribe, whatever their names. The graph is read by the console's",
+        "own rule: each contract topic",
+        "with its type (`/rosapi/topics`) and the node at the vehicle's end of it",
+        "(`/rosapi/publishers`, and `/rosapi/subscribers` for the frame topic), leaving out",
+        "rosbridge's own node, which subscribes and publishes for its clients (so a topic an",
+        "observer subscribes to exists without the vehicle); the onboard agent runs when",
+        "`/nemesys/mission` and `/nemesys/status` have such a publisher. Then the pose rate and",
+        "age, the status rate and schema, and the acknowledgement path: a deliberately",
+        "malformed frame (preamble and delimiter right, its codeword 3 bits from the all-zero",
+        "codeword, beyond BCH's reach) must come back `rejected`, reason `uncorrectable`, its",
+        f"round trip within the ack deadline ({ACK_DEADLINE_S:g} s), with the active command",
+        "unchanged; it runs on a fresh vehicle too. While",
+        "a command runs, it is also re-sent once and must come back `duplicate: true`. Those are",
+        "the only frames the check sends. A vehicle that takes frames over its own ME receiver",
+        "(no frame subscriber but rosbridge's) fails that row unless `--modem tcp://HOST:PORT`",
+        "(or `serial:///dev/...`) sends the probe through the ME modem; its acknowledgement is",
+        "still read over rosbridge. Exit status 0 when no check failed, 1 otherwise, 2 for bad",
+        "usage.",
         "",
     ]
     return "\n".join(lines)

@@ -1,5 +1,5 @@
 """The vehicle contract's JSON payloads (:mod:`vehicle_contract.contract`): the JSON Schemas
-(draft 2020-12) of the acknowledgement and the status, each the ``data`` of a
+(draft 2020-12) of the acknowledgement, the status and the datum, each the ``data`` of a
 ``std_msgs/String``, and their validators (one line per problem, naming the field).
 
 The reason codes and the modes they list are :mod:`vehicle_contract.codes`; the command and
@@ -12,7 +12,13 @@ import functools
 from typing import TYPE_CHECKING, Any, Final
 
 from codec import describe_dictionary
-from vehicle_contract.codes import MODES, REJECT_REASONS
+from vehicle_contract.codes import (
+    ACK_DEADLINE_S,
+    MODES,
+    RECENT_ACKS_MAX,
+    RECENT_ACKS_S,
+    REJECT_REASONS,
+)
 from vehicle_contract.schema import command_schema, problems, vehicle_state_schema
 
 if TYPE_CHECKING:
@@ -33,7 +39,7 @@ def _command_or_null(description: str) -> dict[str, Any]:
 #: of a ``std_msgs/String`` on ``/nemesys/mission``.
 ACK_SCHEMA: Final[dict[str, Any]] = {
     "$schema": SCHEMA_DIALECT,
-    "$id": "urn:nemesys:vehicle-contract:1:ack",
+    "$id": "urn:nemesys:vehicle-contract:2:ack",
     "title": "NemeSys acknowledgement",
     "description": "the onboard agent's verdict on one received frame",
     "type": "object",
@@ -87,6 +93,11 @@ ACK_SCHEMA: Final[dict[str, Any]] = {
             "anyOf": [{"$ref": "#/$defs/vehicle_state"}, {"type": "null"}],
             "description": "the state the new plan was made from; null unless it replanned",
         },
+        "late": {
+            "type": "boolean",
+            "description": f"made more than the contract's deadline ({ACK_DEADLINE_S:g} s) "
+            "after the frame was received; absent: not late",
+        },
         "channel_flipped_bits": {
             "type": "integer",
             "minimum": 0,
@@ -117,7 +128,7 @@ ACK_SCHEMA: Final[dict[str, Any]] = {
 #: ``/nemesys/status``. A number the vehicle does not know is ``null``, never left out.
 STATUS_SCHEMA: Final[dict[str, Any]] = {
     "$schema": SCHEMA_DIALECT,
-    "$id": "urn:nemesys:vehicle-contract:1:status",
+    "$id": "urn:nemesys:vehicle-contract:2:status",
     "title": "NemeSys status",
     "description": "what the vehicle is doing; unknown numbers are null",
     "type": "object",
@@ -139,7 +150,8 @@ STATUS_SCHEMA: Final[dict[str, Any]] = {
             "enum": list(MODES),
             "description": "what guidance is doing: running while it flies the command (a "
             "finite path's last depth change included); holding once a finite command is done, "
-            "at its end and its depth (a hover: its time up and at its depth)",
+            "at its end and its depth (a hover: its time up and at its depth); nav_fault: "
+            "navigation went stale",
         },
         "pattern": {
             "enum": [*(p["name"] for p in describe_dictionary()), None],
@@ -147,8 +159,31 @@ STATUS_SCHEMA: Final[dict[str, Any]] = {
         },
         "active": _command_or_null(
             "the active command, as in an acknowledgement's 'active'; null: none. Optional "
-            "(1.0), but without it vehicle-check cannot probe the acknowledgement path"
+            "(1.0); without it vehicle-check cannot check the duplicate rule (the "
+            "acknowledgement path is probed with a malformed frame all the same)"
         ),
+        "nav_valid": {
+            "type": "boolean",
+            "description": "the navigation is fresh (absent: a 1.x vehicle, taken as true); "
+            "false: the pose is not sent and the position fields are null",
+        },
+        "nav_age_s": {
+            **_NUMBER_OR_NULL,
+            "minimum": 0,
+            "description": "age of the latest navigation solution (s); null: none yet",
+        },
+        "frame_input": {
+            "enum": ["topic", "receiver"],
+            "description": "where the vehicle takes frames from: the frame topic, or only its "
+            "own ME receiver (no frame subscriber); absent: the topic",
+        },
+        "recent_acks": {
+            "type": "array",
+            "maxItems": RECENT_ACKS_MAX,
+            "items": {"$ref": "#/$defs/ack"},
+            "description": f"the acknowledgements of the last {RECENT_ACKS_S:g} s, oldest "
+            "first, as published: what a reconnecting console missed",
+        },
         "link": {
             "type": "object",
             "description": "the simulator only: its emulated ME channel",
@@ -165,11 +200,57 @@ STATUS_SCHEMA: Final[dict[str, Any]] = {
             },
         },
     },
-    "$defs": {"command": command_schema()},
+    "$defs": {
+        "command": command_schema(),
+        "vehicle_state": vehicle_state_schema(),
+        # the acknowledgement as an item of recent_acks (its own $defs are the ones above)
+        "ack": {k: v for k, v in ACK_SCHEMA.items() if k not in ("$schema", "$id", "$defs")},
+    },
+}
+
+#: The datum: one JSON object, the ``data`` of a ``std_msgs/String`` on ``/nemesys/datum``.
+DATUM_SCHEMA: Final[dict[str, Any]] = {
+    "$schema": SCHEMA_DIALECT,
+    "$id": "urn:nemesys:vehicle-contract:2:datum",
+    "title": "NemeSys datum",
+    "description": "where map_ned's origin is on the Earth (WGS84, at the water surface)",
+    "type": "object",
+    "required": ["t_s", "lat_deg", "lon_deg", "source"],
+    "properties": {
+        "t_s": {**_NUMBER_OR_NULL, "description": "ROS time the datum was set (s)"},
+        "lat_deg": {
+            "type": "number",
+            "minimum": -90,
+            "maximum": 90,
+            "description": "latitude of the origin (deg, north positive)",
+        },
+        "lon_deg": {
+            "type": "number",
+            "minimum": -180,
+            "maximum": 180,
+            "description": "longitude of the origin (deg, east positive)",
+        },
+        "source": {
+            "enum": ["parameters", "navsatfix"],
+            "description": "set on the vehicle, or its first GPS fix at the surface",
+        },
+        "odometry_origin": {
+            "anyOf": [
+                {
+                    "type": "object",
+                    "required": ["north_m", "east_m"],
+                    "properties": {"north_m": {"type": "number"}, "east_m": {"type": "number"}},
+                },
+                {"type": "null"},
+            ],
+            "description": "where the vehicle's own navigation frame has its origin, in "
+            "map_ned (m); null: not known yet",
+        },
+    },
 }
 
 #: The schemas by name.
-SCHEMAS: Final = {"ack": ACK_SCHEMA, "status": STATUS_SCHEMA}
+SCHEMAS: Final = {"ack": ACK_SCHEMA, "status": STATUS_SCHEMA, "datum": DATUM_SCHEMA}
 
 
 def required_fields(schema: dict[str, Any]) -> list[str]:
@@ -190,6 +271,12 @@ def validate_ack(obj: object) -> list[str]:
     """Problems of an acknowledgement under :data:`ACK_SCHEMA`, one line each naming the field
     (empty: valid)."""
     return problems(_validator("ack"), obj)
+
+
+def validate_datum(obj: object) -> list[str]:
+    """Problems of a datum under :data:`DATUM_SCHEMA`, one line each naming the field
+    (empty: valid)."""
+    return problems(_validator("datum"), obj)
 
 
 def validate_status(obj: object) -> list[str]:

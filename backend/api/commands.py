@@ -28,7 +28,8 @@ from backend.api.schemas import (
 from backend.api.schemas.records import TrackPoint
 from backend.api.view import ViewHeader
 from backend.chart.reach import track_lat_lon
-from backend.commands.health import LinkHealth
+from backend.commands.health import LinkHealth, LinkTestResult
+from backend.commands.link_settings import test_link
 from backend.commands.service import SendRequest
 from backend.mission_log.export import csv_rows
 from backend.mission_log.records import command_record
@@ -274,3 +275,12 @@ def set_link(body: LinkIn, console: ConsoleDep, operator: OperatorDep) -> LinkHe
         return console.set_link(operator, body.link_ber, body.delivery_target, body.copies_from)
     except ValueError as err:
         raise HTTPException(409, str(err)) from None
+
+
+@router.post("/link/test", response_model=LinkTestResult, responses=errors(OPERATOR))
+async def link_test(console: ConsoleDep, _op: OperatorDep) -> LinkTestResult:
+    """Test the vehicle link now without sending a frame: an ME modem's port or TCP gateway is
+    opened if it is not open and checked (the gateway still there, nothing of an earlier frame
+    waiting, writable); a rosbridge link says whether it is connected; the hybrid link checks
+    both. Returns each check and the link's health after them."""
+    return await test_link(console)

@@ -39,7 +39,9 @@ __all__ = [
     "FrameLedger",
     "FrameTotals",
     "Level",
+    "LinkCheckView",
     "LinkHealth",
+    "LinkTestResult",
     "Outcome",
     "assess",
     "link_health_of",
@@ -86,6 +88,28 @@ class LinkHealth(BaseModel):
     surface_copies: int | None
 
 
+class LinkCheckView(BaseModel):
+    """One path of the link tested without sending a frame (``POST /api/link/test``)."""
+
+    #: "modem" (an ME modem: its port or gateway opened and checked), "rosbridge" (the
+    #: vehicle's rosbridge connection), "telemetry" (the hybrid link's rosbridge).
+    what: str
+    target: str
+    ok: bool
+    #: Why not, in a short phrase ("connection refused", "gateway not reading", ...).
+    reason: str | None
+    detail: str
+
+
+class LinkTestResult(BaseModel):
+    """``POST /api/link/test``: every path of the link checked now, no frame sent, and the
+    link's health after it."""
+
+    ok: bool
+    checks: list[LinkCheckView]
+    link: LinkHealth
+
+
 def _plural(n: int, word: str) -> str:
     return f"{n} {word}{'' if n == 1 else 's'}"
 
@@ -99,10 +123,14 @@ def assess(
     telemetry_age_s: float | None,
     recent: FrameCounts,
     unknown_recent: int,
+    datum_problem: str | None = None,
 ) -> tuple[Level, list[str]]:
-    """The link's level and its problems, worst first."""
+    """The link's level and its problems, worst first (``datum_problem``: the vehicle's datum
+    differs from the console's, :mod:`backend.chart.vehicle_datum`)."""
     red: list[str] = []
     amber: list[str] = list(capability_problems)
+    if datum_problem is not None:
+        amber.append(datum_problem)
     if not connected:
         red.append(connection_problem or "not connected to the vehicle")
     if capability.telemetry and connected:
@@ -138,6 +166,7 @@ def link_health_of(
     target: str,
     ber: BerNow,
     copies_from: CopiesFrom,
+    datum_problem: str | None = None,
 ) -> LinkHealth:
     """What the station knows of its link to the vehicle (not the page's websocket): the
     link's own facts, the command ledger's and the telemetry's ages, and the assessment."""
@@ -152,6 +181,7 @@ def link_health_of(
         telemetry_age_s=telemetry_age_s,
         recent=totals.recent,
         unknown_recent=hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
+        datum_problem=datum_problem,
     )
     return LinkHealth(
         target=target,

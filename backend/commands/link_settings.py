@@ -1,10 +1,11 @@
-"""``PUT /api/link`` and the BER the console's copies follow now (what they are:
-:mod:`backend.commands.link_ber`)."""
+"""``PUT /api/link``, ``POST /api/link/test`` and the BER the console's copies follow now
+(what they are: :mod:`backend.commands.link_ber`)."""
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from backend.commands.health import LinkCheckView, LinkTestResult
 from backend.commands.link_ber import COPIES_FROM_WORDS, BerNow, CopiesFrom
 from backend.messages import EventMessage
 from backend.mission_log.records import log_event
@@ -65,3 +66,14 @@ def change_link(
     if delivery_target is not None:
         cm.delivery_target = delivery_target
     return console.link_health()
+
+
+async def test_link(console: Console) -> LinkTestResult:
+    """Check every path of the link now, sending no frame (a modem's port or gateway is opened
+    if it is not open, and checked: :meth:`station.link.Link.test`); the health follows."""
+    assert console.link is not None
+    checks = [
+        LinkCheckView(what=c.what, target=c.target, ok=c.ok, reason=c.reason, detail=c.detail)
+        for c in await console.link.test()
+    ]
+    return LinkTestResult(ok=all(c.ok for c in checks), checks=checks, link=console.link_health())

@@ -31,7 +31,8 @@ the same reading of the step it waits for:
   telemetry period and a delivery time after the completion, and arrives after it, never
   before: a vehicle slower than its estimate (a head current) is not retasked early. A status
   saying the step will not complete (another command newer than its acceptance, an empty
-  battery) stops the run with the reason;
+  battery, a navigation fault: the vehicle holds or surfaces from where it last knew it was
+  and reports ``nav_fault`` until it accepts a command again) stops the run with the reason;
 * on a link that reports nothing (an ME modem), at the step's send plus its estimated
   completion, and the run says the completion is *estimated*;
 * a last step that repeats (square, circle) never completes: once it is on its way the run
@@ -76,7 +77,8 @@ def after_repeating(index: int, previous: str) -> str:
 
 
 #: What the vehicle's verdict on a step it was sent is, from one status.
-#: ``ended``: the step will not complete (the vehicle was retasked, or its battery is empty).
+#: ``ended``: the step will not complete (the vehicle was retasked, its battery is empty, or
+#: its navigation went stale).
 Verdict = Literal["complete", "running", "ended", "unknown"]
 
 
@@ -94,7 +96,7 @@ def vehicle_verdict(
     only ``pattern`` does, which cannot tell two commands of the same pattern apart, so it
     counts only from a status newer than the acceptance. A status naming another command ends
     the step (retasked) only when newer than the acceptance (an older one still shows the
-    command before); so does an empty battery.
+    command before); so does an empty battery, and a navigation fault.
     """
     if not status:
         return "unknown", "no status from the vehicle yet"
@@ -112,6 +114,8 @@ def vehicle_verdict(
     if ours:
         if mode == Mode.BATTERY_EMPTY.value:
             return "ended", f"the vehicle's battery is empty during the {_name(pattern)}"
+        if mode == Mode.NAV_FAULT.value:
+            return "ended", _nav_fault(status, pattern)
         if mode == done_mode(pattern).value:
             return "complete", f"the vehicle reports the {_name(pattern)} complete ({mode})"
         return "running", f"the vehicle reports the {_name(pattern)} {mode}"
@@ -120,6 +124,17 @@ def vehicle_verdict(
     if theirs == "None":
         return "ended", f"the vehicle reports no active command ({mode})"
     return "ended", f"the vehicle runs {_name(theirs)} ({mode}), not this step's command"
+
+
+def _nav_fault(status: Mapping[str, Any], pattern: str) -> str:
+    """A navigation fault during ``pattern``, in words."""
+    age_s = number(status.get("nav_age_s"))
+    age = "" if age_s is None else f", its last navigation {age_s:.0f} s old"
+    return (
+        f"the vehicle's navigation went stale during the {_name(pattern)} (nav_fault{age}): it "
+        "holds or surfaces from where it last knew it was, and cannot report the step complete "
+        "until navigation is back and it accepts a command again"
+    )
 
 
 def _name(pattern: str) -> str:

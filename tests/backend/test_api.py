@@ -68,6 +68,7 @@ API_PATHS = {
     "/api/series",
     "/api/vehicle",
     "/api/link",
+    "/api/link/test",
     "/api/training",
     "/api/training/channel",
     "/api/training/current",

@@ -59,6 +59,7 @@ OPERATOR_OPS = {
     ("POST", "/api/surface"),
     ("POST", "/api/dives/{}/replay"),
     ("PUT", "/api/link"),
+    ("POST", "/api/link/test"),
     ("PUT", "/api/datum"),
     ("PUT", "/api/training/channel"),
     ("PUT", "/api/training/current"),
@@ -332,6 +333,7 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     c.call("PUT", "/api/replay/at", json={"dive": 1, "t_s": 0.0}, headers=view)
     c.call("DELETE", "/api/replay", headers=view)
     c.call("PUT", "/api/link", json={"delivery_target": 0.99}, headers=AUTH)
+    c.call("POST", "/api/link/test", headers=AUTH)
     c.call("GET", "/api/training")
     c.call("PUT", "/api/training/channel", json={"range_m": None}, headers=AUTH)
     c.call("PUT", "/api/training/current", json={"north_mps": 0.1}, headers=AUTH)

@@ -28,6 +28,8 @@ MODULES = (
     "geometry_msgs.msg",
     "nav_msgs",
     "nav_msgs.msg",
+    "sensor_msgs",
+    "sensor_msgs.msg",
 )
 
 
@@ -69,6 +71,22 @@ class OdometryMsg(Message):
                 )
             ),
         )
+
+
+class NavSatFix(Message):
+    def __init__(self, latitude: float = 0.0, longitude: float = 0.0, status: int = -1) -> None:
+        super().__init__(
+            header=SimpleNamespace(stamp=SimpleNamespace(sec=0, nanosec=0), frame_id="gps"),
+            status=SimpleNamespace(status=status, service=1),
+            latitude=latitude,
+            longitude=longitude,
+            altitude=0.0,
+        )
+
+
+class BatteryState(Message):
+    def __init__(self, percentage: float = float("nan")) -> None:
+        super().__init__(voltage=float("nan"), percentage=percentage)
 
 
 class Publisher:
@@ -178,6 +196,8 @@ def installed(monkeypatch: MonkeyPatch) -> Iterator[SimpleNamespace]:
     geometry.PoseStamped = PoseStamped
     nav: Any = mods["nav_msgs.msg"]
     nav.Odometry = OdometryMsg
+    sensor: Any = mods["sensor_msgs.msg"]
+    sensor.NavSatFix, sensor.BatteryState = NavSatFix, BatteryState
     for name, mod in mods.items():
         monkeypatch.setitem(sys.modules, name, mod)
     monkeypatch.delitem(sys.modules, "nemesys_vehicle.node", raising=False)

@@ -9,12 +9,22 @@ from typing import Any
 
 from codec import GUARD_BITS, ParamValue, encode_frame
 from nemesys_vehicle.config import VehicleConfig
-from nemesys_vehicle.core import Odometry, Recorder, VehicleCore, frame_bits
+from nemesys_vehicle.core import VehicleCore
+from nemesys_vehicle.messages import Odometry, Recorder, frame_bits
 from vehicle_contract.payloads import validate_ack
 
 CIRCLE: dict[str, ParamValue] = {"speed": 0.2, "depth": 2, "radius": 3, "direction": "cw"}
 #: The agent's wall-clock measurements: present or not, never equal between two runs.
 LATENCY_KEYS = ("decode_latency_ms", "replan_latency_ms")
+#: A datum for the tests (Lake Wauburg, the console's training site).
+DATUM = (29.5316, -82.3031)
+#: The navigation starts at the datum: map_ned is the odometry's axes (no fix needed).
+AT_DATUM: dict[str, Any] = {
+    "datum_source": "parameters",
+    "datum_lat_deg": DATUM[0],
+    "datum_lon_deg": DATUM[1],
+    "odometry_origin_at_datum": True,
+}
 
 
 def odometry(
@@ -53,7 +63,8 @@ def bytes_of(frame_value: int) -> bytes:
 
 
 def without_latencies(ack: dict[str, Any]) -> dict[str, Any]:
-    return {k: v for k, v in ack.items() if k not in LATENCY_KEYS}
+    """The ack less the latencies and the node's own ``late`` (the agent has none)."""
+    return {k: v for k, v in ack.items() if k not in (*LATENCY_KEYS, "late")}
 
 
 def same_ack(got: dict[str, Any], want: dict[str, Any]) -> bool:
@@ -67,9 +78,10 @@ T0_S = 1_700_000_000.0  # ROS time on a real robot: epoch seconds
 
 
 def make_core(**config: Any) -> tuple[VehicleCore, Recorder]:
-    """A core with that configuration, its outputs recorded."""
+    """A core with that configuration (by default geo-referenced at once: the navigation
+    starts at :data:`DATUM`), its outputs recorded."""
     rec = Recorder()
-    return VehicleCore(VehicleConfig(**config), rec.sinks()), rec
+    return VehicleCore(VehicleConfig(**{**AT_DATUM, **config}), rec.sinks()), rec
 
 
 def circle_codes() -> tuple[int, ...]:
@@ -102,6 +114,7 @@ def receive_checked(core: VehicleCore, rec: Recorder, data: bytes, t_s: float) -
     bits, n_bits = frame_bits(data)
     want, _ = twin.receive(bits, n_bits, state)
     assert same_ack(ack, want), (ack, want)
+    assert ack["late"] is False
     assert validate_ack(ack) == []
     json.dumps(ack, allow_nan=False)
     return ack
@@ -122,3 +135,9 @@ def running_core(**config: Any) -> tuple[VehicleCore, Recorder]:
         assert core.tick_guidance(t_s) is not None
     assert core.guidance.segment > 0
     return core, rec
+
+
+def soon(core: VehicleCore) -> float:
+    """A time half a second after the latest odometry (navigation still valid)."""
+    assert core.odometry is not None
+    return core.odometry.t_s + 0.5

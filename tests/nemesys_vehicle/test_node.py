@@ -20,15 +20,17 @@ import nemesys_vehicle
 from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.core import VehicleCore
 from tests.nemesys_vehicle import fake_rclpy
-from tests.nemesys_vehicle.helpers import CIRCLE, frame_bytes
+from tests.nemesys_vehicle.helpers import AT_DATUM, CIRCLE, frame_bytes
 from vehicle_contract.contract import (
+    DATUM_TOPIC,
     FRAME_TOPIC,
     MISSION_TOPIC,
     POSE_TOPIC,
     STATUS_TOPIC,
     topic,
 )
-from vehicle_contract.payloads import validate_ack, validate_status
+from vehicle_contract.names import topic_names
+from vehicle_contract.payloads import validate_ack, validate_datum, validate_status
 
 NODE_PY = Path(nemesys_vehicle.__file__).parent / "node.py"
 
@@ -115,7 +117,7 @@ def test_every_callback_is_one_line_delegating_to_the_core() -> None:
         if isinstance(n, ast.Attribute)
     }
     callbacks = {k: v for k, v in functions.items() if k.split(".")[-1].startswith("_on_")}
-    assert len(callbacks) == 6
+    assert len(callbacks) == 8
     for name, fn in callbacks.items():
         body = _body(fn)
         assert len(body) == 1, name
@@ -126,7 +128,7 @@ def test_every_callback_is_one_line_delegating_to_the_core() -> None:
         assert hasattr(VehicleCore, target.removeprefix("self.core.")), target
         assert f"self.{fn.name}" in init_refs, f"{name} is never registered"
     publishers = {k: v for k, v in functions.items() if ".__init__" not in k and "_publish_" in k}
-    assert len(publishers) == 4
+    assert len(publishers) == 5
     for name, fn in publishers.items():
         body = _body(fn)
         assert len(body) == 1, name
@@ -171,35 +173,61 @@ def test_topic_mode_wiring(monkeypatch: pytest.MonkeyPatch) -> None:
         assert node.params == dict(VehicleConfig.parameter_defaults())
         assert node.core.config == VehicleConfig()
         # subscriptions: the frame topic RELIABLE + TRANSIENT_LOCAL, as the contract says
-        assert set(node.subscriptions) == {FRAME_TOPIC, "/odom"}
+        assert set(node.subscriptions) == {FRAME_TOPIC, "/odom", "/fix", "/battery_state"}
         frame_type, on_frame, frame_qos = node.subscriptions[FRAME_TOPIC]
         assert frame_type is fake_rclpy.UInt8MultiArray
         assert _qos(frame_qos) == ("reliable", "transient_local", 10)
         odom_type, on_odometry, odom_qos = node.subscriptions["/odom"]
         assert odom_type is fake_rclpy.OdometryMsg
         assert _qos(odom_qos)[:2] == ("best_effort", "volatile")
+        fix_type, on_fix, fix_qos = node.subscriptions["/fix"]
+        assert fix_type is fake_rclpy.NavSatFix
+        assert _qos(fix_qos)[:2] == ("best_effort", "volatile")
+        battery_type, on_battery, _ = node.subscriptions["/battery_state"]
+        assert battery_type is fake_rclpy.BatteryState
         # publishers, with the contract's QoS
         pubs = node.publishers
-        assert set(pubs) == {MISSION_TOPIC, STATUS_TOPIC, POSE_TOPIC, "/nemesys/setpoint"}
-        for name in (MISSION_TOPIC, STATUS_TOPIC, POSE_TOPIC):
+        contract_topics = (MISSION_TOPIC, STATUS_TOPIC, POSE_TOPIC, DATUM_TOPIC)
+        assert set(pubs) == {*contract_topics, "/nemesys/setpoint"}
+        for name in contract_topics:
             q = topic(name).qos
             assert _qos(pubs[name].qos) == (q.reliability.value, q.durability.value, q.depth)
+        assert _qos(pubs[DATUM_TOPIC].qos) == ("reliable", "transient_local", 1)
         assert _qos(pubs["/nemesys/setpoint"].qos) == ("reliable", "volatile", 1)
         periods = sorted(p for p, _ in node.timers)
         assert periods == pytest.approx([0.05, 0.1, 0.5])
-        # a status before any odometry, a frame held for it, then the odometry
         timers = {round(p, 6): cb for p, cb in node.timers}
+        # a status before any odometry: unknown numbers null, navigation not valid
         timers[0.5]()
         status = json.loads(pubs[STATUS_TOPIC].sent[-1].data)
         assert validate_status(status) == []
-        assert status["depth_m"] is None
+        assert (status["depth_m"], status["nav_valid"]) == (None, False)
+        # a frame before any odometry: rejected at once, never held
         on_frame(fake_rclpy.UInt8MultiArray(array.array("B", frame_bytes("circle", **CIRCLE))))
-        assert pubs[MISSION_TOPIC].sent == []
-        on_odometry(_odometry_msg(3.0, 4.0, -2.0))
+        ack = json.loads(pubs[MISSION_TOPIC].sent[-1].data)
+        assert validate_ack(ack) == []
+        assert (ack["outcome"], ack["reason"], ack["late"]) == ("rejected", "no_navigation", False)
+        # odometry at the surface, then the first fix there: the datum, published at once
+        on_odometry(_odometry_msg(3.0, 4.0, 0.0))
+        assert pubs[DATUM_TOPIC].sent == []
+        on_fix(fake_rclpy.NavSatFix(29.5316, -82.3031, status=0))
+        datum = json.loads(pubs[DATUM_TOPIC].sent[-1].data)
+        assert validate_datum(datum) == []
+        assert (datum["lat_deg"], datum["lon_deg"], datum["source"]) == (
+            29.5316,
+            -82.3031,
+            "navsatfix",
+        )
+        assert datum["odometry_origin"] == {"north_m": -4.0, "east_m": -3.0}
+        on_battery(fake_rclpy.BatteryState(0.5))
+        # 1 m east and 2 m north of there, 2 m deep
+        on_odometry(_odometry_msg(4.0, 6.0, -2.0))
+        on_frame(fake_rclpy.UInt8MultiArray(array.array("B", frame_bytes("circle", **CIRCLE))))
         ack = json.loads(pubs[MISSION_TOPIC].sent[-1].data)
         assert validate_ack(ack) == []
         assert ack["outcome"] == "accepted"
         assert ack["t_s"] == pytest.approx(1_700_000_000.25)
+        assert (ack["from"]["x_m"], ack["from"]["y_m"], ack["from"]["z_m"]) == (2.0, 1.0, 2.0)
         assert ack["from"]["heading_deg"] == 90.0
         assert ack["from"]["speed_mps"] == pytest.approx(0.3)
         assert len(pubs["/nemesys/setpoint"].sent) == 1
@@ -213,15 +241,37 @@ def test_topic_mode_wiring(monkeypatch: pytest.MonkeyPatch) -> None:
         pose = pubs[POSE_TOPIC].sent[-1]
         assert pose.header.frame_id == "map_ned"
         p = pose.pose.position
-        assert (p.x, p.y, p.z) == (4.0, 3.0, 2.0)
+        assert (p.x, p.y, p.z) == (2.0, 1.0, 2.0)
         assert all(type(v) is float for v in (p.x, p.y, p.z))
         timers[0.5]()
         status = json.loads(pubs[STATUS_TOPIC].sent[-1].data)
         assert validate_status(status) == []
-        assert (status["x_m"], status["y_m"], status["depth_m"]) == (4.0, 3.0, 2.0)
-        assert status["pattern"] == "circle"
+        assert (status["x_m"], status["y_m"], status["depth_m"]) == (2.0, 1.0, 2.0)
+        assert (status["pattern"], status["battery_pct"], status["nav_valid"]) == (
+            "circle",
+            50.0,
+            True,
+        )
+        assert [a["seq"] for a in status["recent_acks"]] == [1, 2]
         node.destroy_node()
         assert node.destroyed
+
+
+def test_a_vehicle_namespace_moves_every_contract_topic(monkeypatch: pytest.MonkeyPatch) -> None:
+    overrides = {"vehicle_namespace": "auv1", "odometry_topic": "odom"}
+    monkeypatch.setattr(fake_rclpy.Node, "overrides", overrides)
+    with fake_rclpy.installed(monkeypatch) as fake:
+        node = fake.node.VehicleNode()
+        names = topic_names("auv1")
+        assert names.mission == "/auv1/nemesys/mission"
+        assert set(node.publishers) == {
+            names.mission,
+            names.status,
+            names.pose,
+            names.datum,
+            "/auv1/nemesys/setpoint",
+        }
+        assert set(node.subscriptions) == {names.frame, "/auv1/odom", "/fix", "/battery_state"}
 
 
 def test_serial_mode_wiring_reads_a_pty(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -231,12 +281,14 @@ def test_serial_mode_wiring_reads_a_pty(monkeypatch: pytest.MonkeyPatch) -> None
         "serial_url": os.ttyname(slave),
         "setpoint_frame": "ned",
         "odometry_topic": "/vehicle/odom",
+        **AT_DATUM,  # the navigation starts at the datum: no fix needed
     }
     monkeypatch.setattr(fake_rclpy.Node, "overrides", overrides)
     try:
         with fake_rclpy.installed(monkeypatch) as fake:
             node = fake.node.VehicleNode()
-            assert set(node.subscriptions) == {"/vehicle/odom"}  # no frame topic
+            # no frame topic
+            assert set(node.subscriptions) == {"/vehicle/odom", "/fix", "/battery_state"}
             periods = sorted(p for p, _ in node.timers)
             assert periods == pytest.approx([0.02, 0.05, 0.1, 0.5])
             poll = next(cb for p, cb in node.timers if abs(p - 0.02) < 1e-9)

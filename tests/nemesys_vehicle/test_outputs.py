@@ -33,6 +33,10 @@ STATUS_KEYS = {
     "mode",
     "pattern",
     "active",
+    "nav_valid",
+    "nav_age_s",
+    "frame_input",
+    "recent_acks",
 }
 
 
@@ -42,9 +46,14 @@ def test_status_before_odometry_says_null_for_what_is_unknown() -> None:
     assert rec.statuses == [status]
     assert set(status) == STATUS_KEYS
     assert status["t_s"] == T0_S
-    for key in ("x_m", "y_m", "depth_m", "heading_deg", "speed_mps", "battery_pct"):
+    for key in ("x_m", "y_m", "depth_m", "heading_deg", "speed_mps", "battery_pct", "nav_age_s"):
         assert status[key] is None
     assert (status["mode"], status["pattern"], status["active"]) == ("idle", None, None)
+    assert (status["nav_valid"], status["frame_input"], status["recent_acks"]) == (
+        False,
+        "topic",
+        [],
+    )
     assert validate_status(status) == []
     json.dumps(status, allow_nan=False)
 
@@ -62,6 +71,7 @@ def test_status_from_odometry_is_ned() -> None:
     assert status["speed_mps"] == 0.1
     assert status["battery_pct"] == 87.5
     assert status["mode"] == "idle"
+    assert (status["nav_valid"], status["nav_age_s"]) == (True, 0.25)
     assert validate_status(status) == []
     text = json.dumps(status, allow_nan=False)
     assert json.loads(text) == status
@@ -74,8 +84,8 @@ def test_pose_is_ned_in_map_ned_with_a_yaw_quaternion() -> None:
     pose = core.tick_pose(T0_S + 0.5)
     assert pose is not None
     assert rec.poses == [pose]
-    assert pose["header"] == {
-        "stamp": {"sec": int(T0_S), "nanosec": 500_000_000},
+    assert pose["header"] == {  # stamped when the navigation solution came, not when sent
+        "stamp": {"sec": int(T0_S), "nanosec": 0},
         "frame_id": "map_ned",
     }
     assert pose["pose"]["position"] == {"x": 4.0, "y": 3.0, "z": 5.0}

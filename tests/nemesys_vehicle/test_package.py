@@ -19,16 +19,18 @@ import pytest
 import nemesys_vehicle
 from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.convert import (
+    battery_fraction,
     config_from_parameters,
     contract_qos,
     fill_pose_stamped,
     frame_data,
     json_text,
+    navsatfix_from_msg,
     odometry_from_msg,
     ros_time_s,
 )
-from nemesys_vehicle.core import Odometry, Setpoint, pose_msg, setpoint_msg
-from nemesys_vehicle.frames import NedPose
+from nemesys_vehicle.frames import MapOrigin, NedPose
+from nemesys_vehicle.messages import Odometry, Setpoint, pose_msg, setpoint_msg
 from planner import CircleFence
 from tests.nemesys_vehicle import fake_rclpy
 from vehicle_contract.contract import FRAME_TOPIC, Durability, Reliability
@@ -174,12 +176,35 @@ def test_config_builds_the_limits_and_guidance() -> None:
         {"max_depth_m": 500.0},  # beyond the rated depth
         {"max_speed_mps": -1.0},
         {"geofence_radius_m": -1.0},
+        {"vehicle_namespace": "auv-1"},
+        {"vehicle_namespace": "1auv"},
+        {"nav_timeout_s": 0.0},
+        {"nav_timeout_s": math.inf},
+        {"nav_fault_action": "drift"},
+        {"datum_source": "gps"},
+        {"datum_lat_deg": 91.0},
+        {"datum_lon_deg": math.nan},
+        {"odometry_origin_at_datum": True},  # the datum is the first fix's: no origin there
+        {"fix_max_depth_m": -0.1},
+        {"magnetic_declination_deg": 200.0},
+        {"navsatfix_topic": ""},
+        {"setpoint_topic": "/"},
     ],
     ids=str,
 )
 def test_config_refuses_bad_values(bad: dict[str, Any]) -> None:
     with pytest.raises(ValueError):
         VehicleConfig(**bad)
+
+
+def test_topic_parameters_without_a_slash_go_under_the_vehicle_namespace() -> None:
+    plain = VehicleConfig()
+    assert plain.resolve(plain.setpoint_topic) == "/nemesys/setpoint"
+    assert plain.resolve(plain.odometry_topic) == "/odom"
+    named = VehicleConfig(vehicle_namespace="fleet/auv1/")
+    assert named.resolve(named.setpoint_topic) == "/fleet/auv1/nemesys/setpoint"
+    assert named.resolve("odom") == "/fleet/auv1/odom"
+    assert named.resolve("/odom") == "/odom"
 
 
 def test_config_from_parameters() -> None:
@@ -207,9 +232,10 @@ def test_odometry_from_msg() -> None:
     odo = odometry_from_msg(msg, 12.5)
     assert odo == Odometry(12.5, 1.0, 2.0, -3.0, 0.0, 0.0, q.z, q.w, odo.speed_mps, "map")
     assert odo.speed_mps == pytest.approx(0.5)
-    ned = odo.ned()
-    assert ned[:3] == (2.0, 1.0, 3.0)
-    assert ned.heading_deg == pytest.approx(0.0, abs=1e-9)  # ENU yaw 90: facing north
+    enu = odo.enu()
+    assert enu[:3] == (1.0, 2.0, -3.0)
+    assert enu.yaw_deg == pytest.approx(90.0)  # facing north
+    assert odo.depth_m == 3.0
     msg.header.frame_id = ""
     assert odometry_from_msg(msg, 0.0).frame_id == "odom"
 
@@ -236,6 +262,20 @@ def test_setpoint_frames() -> None:
     assert enu["header"]["frame_id"] == "world"
     assert enu["pose"]["position"] == {"x": 2.0, "y": 1.0, "z": -4.0}
     assert enu["pose"]["orientation"] == {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}  # ENU yaw 0
+    # the odometry's origin 10 m north of the datum: the same point is 9 m south of it
+    shifted = setpoint_msg(sp, "enu", "world", MapOrigin(10.0, 0.0, 0.0))
+    assert shifted["pose"]["position"] == {"x": 2.0, "y": -9.0, "z": -4.0}
+
+
+def test_navsatfix_and_battery_from_msg() -> None:
+    fix = fake_rclpy.NavSatFix(29.5, -82.25, status=0)
+    assert navsatfix_from_msg(fix) == (29.5, -82.25, True)
+    fix.status.status = -1  # STATUS_NO_FIX
+    assert navsatfix_from_msg(fix)[2] is False
+    fix.status.status = 2  # STATUS_GBAS_FIX
+    assert navsatfix_from_msg(fix)[2] is True
+    assert battery_fraction(fake_rclpy.BatteryState(0.42)) == 0.42
+    assert math.isnan(battery_fraction(fake_rclpy.BatteryState()))
 
 
 def test_small_conversions() -> None:

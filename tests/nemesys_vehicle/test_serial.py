@@ -13,10 +13,11 @@ from hypothesis import strategies as st
 
 from codec import FRAME_BITS, FRAME_BYTES
 from nemesys_vehicle.config import VehicleConfig
-from nemesys_vehicle.core import Recorder, VehicleCore
+from nemesys_vehicle.core import VehicleCore
+from nemesys_vehicle.messages import Recorder
 from nemesys_vehicle.serial_input import SerialByteSource
 from nemesys_vehicle.stream import FrameStream
-from tests.nemesys_vehicle.helpers import CIRCLE, T0_S, frame_bytes, odometry, same_ack
+from tests.nemesys_vehicle.helpers import AT_DATUM, CIRCLE, T0_S, frame_bytes, odometry, same_ack
 from vehicle_contract.payloads import validate_ack
 
 CIRCLE_BYTES = frame_bytes("circle", **CIRCLE)
@@ -77,7 +78,7 @@ def test_the_buffer_stays_short_in_endless_noise() -> None:
 
 def _core() -> tuple[VehicleCore, Recorder]:
     rec = Recorder()
-    core = VehicleCore(VehicleConfig(), rec.sinks())
+    core = VehicleCore(VehicleConfig(**AT_DATUM), rec.sinks())
     core.on_odometry(odometry(T0_S))
     return core, rec
 

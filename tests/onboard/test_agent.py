@@ -18,11 +18,18 @@ from codec import (
     decode_frame,
     encode_frame,
 )
-from onboard.agent import OnboardAgent
+from onboard.agent import NoNavigation, OnboardAgent
 from onboard.guidance import Guidance, Reference
 from planner import CircleFence, Limits, VehicleState, plan, validate
 from tests.codec.helpers import crafted_frame, flip_frame
-from vehicle_contract.codes import INVALID_PLAN, LIMIT_VIOLATION, Mode
+from vehicle_contract.codes import (
+    INVALID_PLAN,
+    LIMIT_VIOLATION,
+    NO_NAVIGATION,
+    RECENT_ACKS_MAX,
+    RECENT_ACKS_S,
+    Mode,
+)
 
 ACK_KEYS = {
     "seq",
@@ -431,3 +438,72 @@ def test_the_console_reproduces_the_vehicles_plan_from_the_ack() -> None:
     again = plan(decode_frame(second.frame.bits).command, VehicleState(**ack2["from"]), mirror)
     assert agent.active is not None
     assert again.path == agent.active.path and again.anchor == agent.active.anchor
+
+
+# --- without navigation --------------------------------------------------------------------
+
+STALE = NoNavigation("navigation stale: the last odometry is 5.0 s old", last_known=True)
+NONE_YET = NoNavigation("no navigation yet: no odometry has arrived", last_known=False)
+
+
+@pytest.mark.parametrize("navigation", [STALE, NONE_YET], ids=["stale", "none yet"])
+def test_without_navigation_a_command_is_rejected_and_changes_nothing(
+    navigation: NoNavigation,
+) -> None:
+    agent = _running_agent()
+    g = agent.guidance
+    before = (agent.active, g.plan, g.mode, g.segment, g.hold)
+    for bits in (_bits("hover", duration=60, depth=2, heading=0), _bits("circle", **CIRCLE)):
+        ack, ref = agent.receive(bits, FRAME_BITS, STATE, navigation=navigation)
+        assert set(ack) == ACK_KEYS
+        assert (ack["outcome"], ack["reason"]) == ("rejected", NO_NAVIGATION)
+        assert ack["detail"] == navigation.detail
+        assert ack["duplicate"] is False  # the active command too: it cannot be confirmed
+        assert ack["command"] is not None and isinstance(ack["decode_latency_ms"], float)
+        assert ref is None
+    assert (agent.active, g.plan, g.mode, g.segment, g.hold) == before
+    # a frame that does not decode keeps its own reason
+    ack, _ = agent.receive(_no_sync(), FRAME_BITS, STATE, navigation=navigation)
+    assert ack["reason"] == "no_sync"
+
+
+def test_surface_without_navigation_is_flown_from_the_last_known_state_only() -> None:
+    surface = encode_frame("surface", {}).frame.value
+    ack, _ = _agent().receive(surface, FRAME_BITS, STATE, navigation=NONE_YET)
+    assert ack["reason"] == NO_NAVIGATION  # no state at all: nothing to plan from
+    agent = _running_agent()
+    ack, ref = agent.receive(surface, FRAME_BITS, STATE, navigation=STALE)
+    assert ack["outcome"] == "accepted"
+    assert ack["from"] == STATE.as_dict()
+    assert ref is not None and ref.depth_m == 0.0
+    assert agent.guidance.mode is Mode.SURFACING
+
+
+def test_a_suspended_command_sent_again_is_replanned() -> None:
+    agent = _running_agent()
+    first = agent.active
+    agent.suspend()
+    later = VehicleState(5.0, 5.0, 2.0, 45.0, 0.1, 60.0)
+    ack, ref = agent.receive(_bits("circle", **CIRCLE), FRAME_BITS, later)
+    assert (ack["outcome"], ack["duplicate"]) == ("accepted", False)
+    assert ack["from"] == later.as_dict()
+    assert agent.active is not first and ref is not None
+    assert agent.suspended is False
+    ack, _ = agent.receive(_bits("circle", **CIRCLE), FRAME_BITS, later)
+    assert ack["duplicate"] is True
+    idle = _agent()
+    idle.suspend()  # nothing to suspend
+    assert idle.suspended is False
+
+
+def test_the_recent_acks_are_the_newest_and_age_out() -> None:
+    agent = _agent()
+    acks = []
+    for k in range(RECENT_ACKS_MAX + 3):
+        state = VehicleState(0.0, 0.0, 2.0, 0.0, 0.0, 100.0 + k)
+        acks.append(agent.receive(None, 8, state)[0])
+    recent = agent.recent_acks(100.0 + RECENT_ACKS_MAX + 2)
+    assert recent == acks[-RECENT_ACKS_MAX:]
+    assert all(a is b for a, b in zip(recent, acks[-RECENT_ACKS_MAX:], strict=True))
+    assert agent.recent_acks(100.0 + RECENT_ACKS_MAX + 2 + RECENT_ACKS_S) == [acks[-1]]
+    assert agent.recent_acks(1e9) == []

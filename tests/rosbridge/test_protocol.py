@@ -77,8 +77,15 @@ def test_topic_tables_come_from_the_contract() -> None:
         "/nemesys/pose": "geometry_msgs/PoseStamped",
         "/nemesys/mission": "std_msgs/String",
         "/nemesys/status": "std_msgs/String",
+        "/nemesys/datum": "std_msgs/String",
     }
-    assert tuple(contract.TOPIC_TYPES) == (FRAME_TOPIC, POSE_TOPIC, MISSION_TOPIC, STATUS_TOPIC)
+    assert tuple(contract.TOPIC_TYPES) == (
+        FRAME_TOPIC,
+        POSE_TOPIC,
+        MISSION_TOPIC,
+        STATUS_TOPIC,
+        contract.DATUM_TOPIC,
+    )
     assert len(EXAMPLE) == FRAME_BYTES
 
 

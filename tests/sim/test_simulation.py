@@ -29,6 +29,9 @@ STATUS_KEYS = {
     "mode",
     "pattern",
     "active",
+    "nav_valid",
+    "frame_input",
+    "recent_acks",
     "link",
 }
 LINK_KEYS = {

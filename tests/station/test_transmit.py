@@ -28,6 +28,7 @@ from station.transmit import (
     RosbridgeTransmitter,
     SendResult,
     SerialTransmitter,
+    TcpTransmitter,
     ack_match,
     failure_reason,
     open_transmitter,
@@ -148,7 +149,7 @@ def test_tcp_gateway_receives_exactly_the_bytes() -> None:
     thread.start()
     try:
         tx = open_transmitter(f"tcp://127.0.0.1:{port}")
-        assert isinstance(tx, SerialTransmitter) and tx.url == f"socket://127.0.0.1:{port}"
+        assert isinstance(tx, TcpTransmitter) and (tx.host, tx.port) == ("127.0.0.1", port)
         with tx:
             results = [tx.send(frame) for frame in FRAMES]
         thread.join(2)
@@ -157,6 +158,22 @@ def test_tcp_gateway_receives_exactly_the_bytes() -> None:
     assert all(r.ok for r in results)
     assert results[0].target == f"tcp://127.0.0.1:{port}"
     assert bytes(received) == b"".join(f.to_bytes() for f in FRAMES)
+
+
+def test_a_serial_check_writes_nothing_and_sees_the_device_go() -> None:
+    """A pty whose other end closes stands for a USB adapter pulled out: the check (no byte
+    written) fails and the port is closed (the next check opens it again)."""
+    master, slave = os.openpty()
+    path = os.ttyname(slave)
+    with SerialTransmitter(path) as tx:
+        ok = tx.check()
+        assert ok.ok and ok.what == "modem" and tx.connected
+        assert "0 bytes waiting to go out" in ok.detail
+        assert not select.select([master], [], [], 0)[0]  # nothing was written
+        os.close(master)
+        os.close(slave)
+        gone = tx.check()
+        assert not gone.ok and gone.reason == "i/o error" and not tx.connected
 
 
 def test_missing_device_is_port_not_found(tmp_path: Any) -> None:
@@ -233,7 +250,7 @@ def test_good_targets() -> None:
     assert isinstance(ser, SerialTransmitter)
     assert (ser.url, ser.baudrate, ser.target) == ("/dev/ttyUSB0", 115200, "serial:///dev/ttyUSB0")
     tcp = open_transmitter("tcp://[::1]:4001", bitrate_bps=18_000)
-    assert isinstance(tcp, SerialTransmitter) and tcp.url == "socket://[::1]:4001"
+    assert isinstance(tcp, TcpTransmitter) and (tcp.host, tcp.port) == ("::1", 4001)
     assert tcp.gap_s == pytest.approx(100 / 18_000)
     assert len(TARGET_FORMS) == 5
 

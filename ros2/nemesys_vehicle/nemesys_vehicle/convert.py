@@ -1,9 +1,10 @@
 """Conversions between ROS 2 message objects and the core's plain values. No ROS imports.
 
 The functions read and write message objects by attribute (duck typing), so they run, and are
-tested, without ROS 2: ``nav_msgs/msg/Odometry`` in, ``geometry_msgs/msg/PoseStamped`` filled
-in place, JSON text for ``std_msgs/msg/String``, parameters to :class:`VehicleConfig`, and the
-QoS of every topic the node uses (the contract's for the contract topics).
+tested, without ROS 2: ``nav_msgs/msg/Odometry``, ``sensor_msgs/msg/NavSatFix`` and
+``sensor_msgs/msg/BatteryState`` in, ``geometry_msgs/msg/PoseStamped`` filled in place, JSON
+text for ``std_msgs/msg/String``, parameters to :class:`VehicleConfig`, and the QoS of every
+topic the node uses (the contract's for the contract topics).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from collections.abc import Iterable, Mapping
 from typing import Any, Final
 
 from nemesys_vehicle.config import VehicleConfig
-from nemesys_vehicle.core import Odometry
+from nemesys_vehicle.messages import Odometry
 from vehicle_contract.contract import Durability, QoS, Reliability, topic
 from vehicle_contract.messages import to_json
 
@@ -22,6 +23,10 @@ ODOMETRY_QOS: Final = QoS(Reliability.BEST_EFFORT, Durability.VOLATILE, 5)
 #: Setpoints out: a RELIABLE publisher matches reliable and best-effort subscribers; only the
 #: latest setpoint matters.
 SETPOINT_QOS: Final = QoS(Reliability.RELIABLE, Durability.VOLATILE, 1)
+#: GPS fixes and battery states in: sensor data, as odometry (matches any publisher).
+SENSOR_QOS: Final = QoS(Reliability.BEST_EFFORT, Durability.VOLATILE, 5)
+#: ``sensor_msgs/msg/NavSatStatus.STATUS_FIX``: a status at or above it has a fix.
+STATUS_FIX: Final = 0
 
 
 def contract_qos(topic_name: str) -> QoS:
@@ -58,6 +63,18 @@ def odometry_from_msg(msg: Any, t_s: float) -> Odometry:
         math.sqrt(v.x * v.x + v.y * v.y + v.z * v.z),
         str(msg.header.frame_id) or "odom",
     )
+
+
+def navsatfix_from_msg(msg: Any) -> tuple[float, float, bool]:
+    """A ``sensor_msgs/msg/NavSatFix`` as ``(lat_deg, lon_deg, fixed)``: ``fixed`` when its
+    status says it has a fix (``status.status >= STATUS_FIX``)."""
+    return float(msg.latitude), float(msg.longitude), int(msg.status.status) >= STATUS_FIX
+
+
+def battery_fraction(msg: Any) -> float:
+    """The state of charge of a ``sensor_msgs/msg/BatteryState``: ``percentage``, 0..1 (NaN:
+    not measured)."""
+    return float(msg.percentage)
 
 
 def fill_pose_stamped(msg: Any, pose: Mapping[str, Any]) -> Any:

@@ -8,154 +8,58 @@ guidance (:mod:`onboard.guidance`). Inputs:
 * :meth:`VehicleCore.on_serial_bytes`: a raw ME receiver stream, any chunking
   (:class:`nemesys_vehicle.stream.FrameStream` finds the frames);
 * :meth:`VehicleCore.on_odometry`: the navigation solution (:class:`Odometry`, ENU);
+* :meth:`VehicleCore.on_navsatfix`: a GPS fix (the datum, :mod:`nemesys_vehicle.georef`);
+* :meth:`VehicleCore.on_battery_state`: the state of charge;
 * the clock ticks :meth:`tick_status`, :meth:`tick_pose`, :meth:`tick_guidance`.
 
-Outputs go to :class:`Sinks` (and are returned): acknowledgements and status as JSON-ready
-dicts (``/nemesys/mission``, ``/nemesys/status``), the pose and the setpoint as PoseStamped
-dicts (``/nemesys/pose`` in ``map_ned``; the setpoint in ENU or NED, see ``setpoint_msg``).
+Outputs go to :class:`nemesys_vehicle.messages.Sinks` (and are returned): acknowledgements,
+status and datum as JSON-ready dicts (``/nemesys/mission``, ``/nemesys/status``,
+``/nemesys/datum``), the pose and the setpoint as PoseStamped dicts (``/nemesys/pose`` in
+``map_ned``; the setpoint in ENU or NED, see :func:`nemesys_vehicle.messages.setpoint_msg`).
 Every time is ROS time in seconds, passed in by the caller (the node's clock).
 
-Before the first odometry the vehicle does not know where it is: frames are held (up to the
-frame topic's QoS depth) and processed, in order, when it arrives; no pose is published, and
-the status says ``null`` for the position, depth, heading and speed. Setpoints are published
-only while the agent has an active command: until the first accepted frame the node leaves the
-autopilot alone.
+**Every frame is acknowledged at once**, never held: with no navigation to plan from (no
+odometry yet, odometry older than ``nav_timeout_s``, or no datum yet) a decoded command is
+rejected with ``no_navigation`` (Surface is still flown from the last known position). An
+acknowledgement made more than the contract's deadline after the frame's receipt says
+``late: true``.
+
+**Navigation health**: navigation is valid while the latest odometry is at most
+``nav_timeout_s`` old and the vehicle is geo-referenced. Only then is the pose published
+(stamped with the odometry's time) and the status's position filled in. When valid navigation
+goes stale the vehicle enters the ``nav_fault`` mode: it flies ``nav_fault_action`` (surface,
+or hold the last known depth and position) and the active command is suspended; the mode
+stays until a command is accepted again (with valid navigation, or a Surface). A commanded
+Surface is no fault: it goes on, from the last known position. Setpoints are
+published only while the agent has a command (until the first accepted frame the node leaves
+the autopilot alone).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections import deque
-from collections.abc import Callable
-from dataclasses import astuple, dataclass, field
-from typing import Any, Final
+from typing import Any
 
-from codec import FRAME_BITS, FRAME_BYTES, GUARD_BITS
 from nemesys_vehicle.config import VehicleConfig
-from nemesys_vehicle.frames import EnuPose, NedPose, enu_to_ned, ned_to_enu, yaw_deg_of
-from nemesys_vehicle.frames import yaw_quaternion as yaw_q
+from nemesys_vehicle.frames import NedPose
+from nemesys_vehicle.georef import Georef
+from nemesys_vehicle.messages import (
+    Odometry,
+    Setpoint,
+    Sinks,
+    frame_bits,
+    pose_msg,
+    setpoint_msg,
+)
 from nemesys_vehicle.stream import FrameStream
-from onboard.agent import OnboardAgent, command_json
+from onboard.agent import NoNavigation, OnboardAgent, command_json
 from onboard.guidance import Guidance, Reference
 from planner import VehicleState
 from vehicle_contract.codes import Mode
-from vehicle_contract.contract import FRAME_TOPIC, topic
-from vehicle_contract.endpoint import Pose
-from vehicle_contract.messages import pose_stamped_msg, stamp
-
-#: Frames held while waiting for the first odometry (the frame topic's history depth).
-PENDING_FRAMES: Final = topic(FRAME_TOPIC).qos.depth
+from vehicle_contract.contract import ACK_DEADLINE_S, DATUM_REPEAT_S
 
 JsonDict = dict[str, Any]
-
-
-@dataclass(frozen=True, slots=True)
-class Odometry:
-    """One navigation sample as ``nav_msgs/msg/Odometry`` carries it (REP-103: ENU world,
-    FLU body). The world origin must be at the water surface (depth = ``-z_up_m``)."""
-
-    t_s: float
-    x_east_m: float
-    y_north_m: float
-    z_up_m: float
-    qx: float
-    qy: float
-    qz: float
-    qw: float
-    #: Speed through the water (the norm of the twist's linear velocity).
-    speed_mps: float
-    #: The odometry's ``header.frame_id``: the frame of ENU setpoints.
-    frame_id: str = "odom"
-
-    def is_finite(self) -> bool:
-        return all(math.isfinite(v) for v in astuple(self)[:-1])
-
-    def ned(self) -> NedPose:
-        enu = EnuPose(
-            self.x_east_m,
-            self.y_north_m,
-            self.z_up_m,
-            yaw_deg_of((self.qx, self.qy, self.qz, self.qw)),
-        )
-        return enu_to_ned(enu)
-
-
-@dataclass(frozen=True, slots=True)
-class Setpoint:
-    """What guidance asks for at ``t_s``: the point it aims at (NED), the course to it, the
-    speed, and whether the vertical thrusters are on (False: afloat at the surface)."""
-
-    t_s: float
-    x_north_m: float
-    y_east_m: float
-    depth_m: float
-    course_deg: float
-    speed_mps: float
-    vertical: bool
-    mode: str
-
-
-def _ignore(_: JsonDict) -> None:
-    return None
-
-
-@dataclass(slots=True)
-class Sinks:
-    """Where the core's outputs go (the node publishes them; tests record them)."""
-
-    ack: Callable[[JsonDict], None] = _ignore
-    status: Callable[[JsonDict], None] = _ignore
-    pose: Callable[[JsonDict], None] = _ignore
-    setpoint: Callable[[JsonDict], None] = _ignore
-
-
-@dataclass(slots=True)
-class Recorder:
-    """Sinks that keep everything (tests, diagnostics)."""
-
-    acks: list[JsonDict] = field(default_factory=list)
-    statuses: list[JsonDict] = field(default_factory=list)
-    poses: list[JsonDict] = field(default_factory=list)
-    setpoints: list[JsonDict] = field(default_factory=list)
-
-    def sinks(self) -> Sinks:
-        return Sinks(
-            self.acks.append, self.statuses.append, self.poses.append, self.setpoints.append
-        )
-
-
-def pose_msg(t_s: float, ned: NedPose) -> JsonDict:
-    """``geometry_msgs/PoseStamped`` in ``map_ned`` (position NED, heading yaw quaternion):
-    the contract's message, built as the simulator's (no roll)."""
-    pose = Pose(t_s, ned.x_north_m, ned.y_east_m, ned.z_down_m, 0.0, ned.heading_deg)
-    return pose_stamped_msg(pose)
-
-
-def setpoint_msg(setpoint: Setpoint, frame: str, enu_frame_id: str) -> JsonDict:
-    """The setpoint as a ``geometry_msgs/PoseStamped``: position = the point guidance aims at,
-    orientation = the course to it as a yaw quaternion, z = the depth reference (NED, in
-    ``map_ned``) or its negative (ENU, in ``enu_frame_id``: the odometry's frame)."""
-    ned = NedPose(setpoint.x_north_m, setpoint.y_east_m, setpoint.depth_m, setpoint.course_deg)
-    if frame == "ned":
-        return pose_msg(setpoint.t_s, ned)
-    enu = ned_to_enu(ned)
-    qx, qy, qz, qw = yaw_q(enu.yaw_deg)
-    return {
-        "header": {"stamp": stamp(setpoint.t_s), "frame_id": enu_frame_id},
-        "pose": {
-            "position": {"x": enu.x_east_m, "y": enu.y_north_m, "z": enu.z_up_m},
-            "orientation": {"x": qx, "y": qy, "z": qz, "w": qw},
-        },
-    }
-
-
-def frame_bits(data: bytes) -> tuple[int | None, int]:
-    """A frame message's bits for the agent: ``(bits, n_bits)``; ``None`` when it is not
-    ``FRAME_BYTES`` long (acknowledged as malformed), as the simulator does."""
-    if len(data) != FRAME_BYTES:
-        return None, 8 * len(data)
-    return int.from_bytes(data, "big") >> GUARD_BITS, FRAME_BITS
 
 
 class VehicleCore:
@@ -167,60 +71,84 @@ class VehicleCore:
         self.guidance = Guidance(self.config.guidance_config())
         self.agent = OnboardAgent(self.guidance, self.config.limits())
         self.stream = FrameStream()
+        self.georef = Georef(self.config)
         self.odometry: Odometry | None = None
         #: State of charge when the vehicle reports one (None: unknown, ``null`` in status).
         self.battery_pct: float | None = None
         self.frames_in = 0
-        self.frames_dropped = 0  # held before the first odometry and pushed out by newer ones
         self.odometry_rejected = 0  # samples with a non-finite value
-        self._pending: deque[tuple[bytes, float]] = deque()
+        self.battery_rejected = 0  # percentages outside 0..1
+        #: The fault action being flown ("surface" or "hold"), None when not in nav_fault.
+        self.fault: str | None = None
+        self.nav_faults = 0
+        #: Where the fault action holds: the last known (north, east, depth, heading).
+        self._fault_at = (0.0, 0.0, 0.0, 0.0)
+        self._nav_was_valid = False
+        self._held = False  # guidance's idle hold point is set (the first map_ned pose)
+        self._datum_sent_s: float | None = None
 
     # --- inputs --------------------------------------------------------------------------
 
-    def on_frame(self, data: bytes, t_s: float, receipt_s: float | None = None) -> JsonDict | None:
+    def on_frame(self, data: bytes, t_s: float, receipt_s: float | None = None) -> JsonDict:
         """One received frame (13 bytes; any other length is acknowledged as malformed).
 
-        Returns the acknowledgement (also sent to ``sinks.ack``), or None while the frame is
-        held for the first odometry. ``receipt_s``: ``time.perf_counter()`` at arrival (the
-        agent's decode latency starts there; default now).
+        Returns the acknowledgement (also sent to ``sinks.ack``), made at once.
+        ``receipt_s``: ``time.perf_counter()`` at arrival (the agent's decode latency and the
+        deadline start there; default now).
         """
         receipt = time.perf_counter() if receipt_s is None else receipt_s
         self.frames_in += 1
-        if self.odometry is None:
-            if len(self._pending) == PENDING_FRAMES:
-                self._pending.popleft()
-                self.frames_dropped += 1
-            self._pending.append((bytes(data), receipt))
-            return None
-        return self._process(bytes(data), t_s, receipt)
+        self._check_navigation(t_s)
+        navigation = self.navigation(t_s)
+        pose = self.map_pose()
+        # without a map_ned position the state carries the time only (nothing is planned)
+        state = self.state(t_s) if pose is not None else VehicleState(0.0, 0.0, 0.0, t_s=t_s)
+        bits, n_bits = frame_bits(bytes(data))
+        ack, ref = self.agent.receive(bits, n_bits, state, receipt, navigation)
+        if ref is not None:  # accepted and replanned: guidance's first new setpoint, now
+            self.fault = None
+            ned = NedPose(state.x_m, state.y_m, state.z_m, state.heading_deg)
+            self._emit_setpoint(ref, ned, t_s)
+        ack["late"] = time.perf_counter() - receipt > ACK_DEADLINE_S
+        self.sinks.ack(ack)
+        return ack
 
     def on_serial_bytes(self, data: bytes, t_s: float) -> list[JsonDict]:
         """Bytes from a serial ME receiver (any chunking): one acknowledgement per frame the
         receiver synchronised on, decoded or not (see :mod:`nemesys_vehicle.stream`)."""
         receipt = time.perf_counter()
-        acks = []
-        for frame in self.stream.feed(data):
-            ack = self.on_frame(frame, t_s, receipt)
-            if ack is not None:
-                acks.append(ack)
-        return acks
+        return [self.on_frame(frame, t_s, receipt) for frame in self.stream.feed(data)]
 
     def on_odometry(self, odometry: Odometry) -> bool:
-        """A navigation sample; False (and ignored) if a value is not finite. The first one
-        sets guidance's hold point (idle: station keeping where the vehicle is) and releases
-        the frames held until then."""
+        """A navigation sample; False (and ignored) if a value is not finite."""
         if not odometry.is_finite():
             self.odometry_rejected += 1
             return False
-        first = self.odometry is None
         self.odometry = odometry
-        if first:
-            state = self.state(odometry.t_s)
-            self.guidance.hold_here(state.x_m, state.y_m, state.z_m, state.heading_deg)
-            while self._pending:
-                data, receipt = self._pending.popleft()
-                self._process(data, odometry.t_s, receipt)
+        self._hold_first_pose()
+        self._check_navigation(odometry.t_s)  # valid from now: its going stale is a fault
         return True
+
+    def on_navsatfix(self, t_s: float, lat_deg: float, lon_deg: float, fixed: bool) -> bool:
+        """A GPS fix (``fixed``: its status says it has one). Used only while the vehicle is
+        not yet geo-referenced, with fresh odometry at the surface (depth at most
+        ``fix_max_depth_m``); True when it placed ``map_ned`` (the datum is published then)."""
+        odometry = self.odometry
+        if not fixed or self.georef.referenced or odometry is None:
+            return False
+        if t_s - odometry.t_s > self.config.nav_timeout_s:
+            return False
+        if odometry.depth_m > self.config.fix_max_depth_m:
+            return False
+        try:
+            placed = self.georef.on_fix(lat_deg, lon_deg, odometry.enu(), t_s)
+        except ValueError:  # a latitude or longitude out of range: no fix
+            return False
+        if placed:
+            self._hold_first_pose()
+            self._check_navigation(t_s)
+            self._publish_datum(t_s)
+        return placed
 
     def on_battery(self, battery_pct: float | None) -> None:
         """The state of charge in percent, 0..100 (None: unknown).
@@ -232,78 +160,172 @@ class VehicleCore:
             raise ValueError(f"battery_pct must be within 0..100, got {battery_pct!r}")
         self.battery_pct = battery_pct
 
+    def on_battery_state(self, fraction: float) -> bool:
+        """``sensor_msgs/BatteryState.percentage``: 0..1, NaN when not measured (unknown).
+        A value outside 0..1 is ignored and counted (``battery_rejected``): False."""
+        if math.isnan(fraction):
+            self.battery_pct = None
+            return True
+        if not 0.0 <= fraction <= 1.0:
+            self.battery_rejected += 1
+            return False
+        self.battery_pct = 100.0 * fraction
+        return True
+
     # --- clock ticks ---------------------------------------------------------------------
 
     def tick_status(self, t_s: float) -> JsonDict:
-        """The status message (contract schema ``status``). Before the first odometry the
-        position, depth, heading and speed are unknown: ``null``, as the contract asks."""
+        """The status message (contract schema ``status``). Without valid navigation the
+        position, depth, heading and speed are unknown: ``null``, as the contract asks. The
+        datum goes out with it when due (set, or :data:`DATUM_REPEAT_S` since the last)."""
+        self._check_navigation(t_s)
+        valid = self.navigation(t_s) is None
+        pose = self.map_pose() if valid else None
         odometry = self.odometry
-        ned = odometry.ned() if odometry is not None else None
         active = self.agent.active
         status: JsonDict = {
             "t_s": t_s,
-            "x_m": ned.x_north_m if ned is not None else None,
-            "y_m": ned.y_east_m if ned is not None else None,
-            "depth_m": ned.z_down_m if ned is not None else None,
-            "heading_deg": ned.heading_deg if ned is not None else None,
-            "speed_mps": odometry.speed_mps if odometry is not None else None,
+            "x_m": pose.x_north_m if pose is not None else None,
+            "y_m": pose.y_east_m if pose is not None else None,
+            "depth_m": pose.z_down_m if pose is not None else None,
+            "heading_deg": pose.heading_deg if pose is not None else None,
+            "speed_mps": odometry.speed_mps if odometry is not None and valid else None,
             "battery_pct": self.battery_pct,
-            "mode": self.guidance.mode.value,
+            "mode": Mode.NAV_FAULT.value if self.fault is not None else self.guidance.mode.value,
             "pattern": active.pattern if active is not None else None,
             "active": command_json(active.command) if active is not None else None,
+            "nav_valid": valid,
+            "nav_age_s": max(0.0, t_s - odometry.t_s) if odometry is not None else None,
+            "frame_input": "receiver" if self.config.frame_input == "serial" else "topic",
+            "recent_acks": self.agent.recent_acks(t_s),
         }
         self.sinks.status(status)
+        sent = self._datum_sent_s
+        if sent is None or t_s - sent >= DATUM_REPEAT_S or t_s < sent:
+            self._publish_datum(t_s)
         return status
 
     def tick_pose(self, t_s: float) -> JsonDict | None:
-        """The pose in ``map_ned`` (None before the first odometry)."""
-        if self.odometry is None:
+        """The pose in ``map_ned``, stamped with the odometry's time; None (nothing sent)
+        without valid navigation."""
+        self._check_navigation(t_s)
+        pose = self.map_pose()
+        if self.navigation(t_s) is not None or pose is None or self.odometry is None:
             return None
-        msg = pose_msg(t_s, self.odometry.ned())
+        msg = pose_msg(self.odometry.t_s, pose)
         self.sinks.pose(msg)
         return msg
 
     def tick_guidance(self, t_s: float) -> Setpoint | None:
         """One guidance step from the latest odometry; the setpoint (None, and nothing
-        published, before the first odometry or the first accepted command)."""
-        odometry = self.odometry
-        if odometry is None or self.agent.active is None:
+        published, before the first accepted command). In ``nav_fault``: the fault action's
+        setpoint, from the last known position."""
+        self._check_navigation(t_s)
+        pose = self.map_pose()
+        if pose is None or self.agent.active is None:
             return None
-        ned = odometry.ned()
-        ref = self.guidance.update(ned.x_north_m, ned.y_east_m, ned.z_down_m, t_s)
-        return self._emit_setpoint(ref, ned, t_s)
+        if self.fault is not None:
+            north_m, east_m, depth_m, heading_deg = self._fault_at
+            if self.fault == "surface":
+                depth_m = 0.0
+            mode = Mode.NAV_FAULT.value
+            setpoint = Setpoint(t_s, north_m, east_m, depth_m, heading_deg, 0.0, True, mode)
+            self._publish_setpoint(setpoint)
+            return setpoint
+        # (stale navigation without a fault: a commanded Surface; guidance surfaces from the
+        # last known position, which is all surfacing needs)
+        ref = self.guidance.update(pose.x_north_m, pose.y_east_m, pose.z_down_m, t_s)
+        return self._emit_setpoint(ref, pose, t_s)
 
-    # --- internals -----------------------------------------------------------------------
+    # --- navigation ----------------------------------------------------------------------
 
-    def state(self, t_s: float) -> VehicleState:
-        """The vehicle as the planner sees it (as :meth:`sim.simulation.Simulation.state`).
-        Depth is at least 0: a vehicle afloat whose odometry puts it a little above the
-        surface is at the surface."""
+    def navigation(self, t_s: float) -> NoNavigation | None:
+        """None while navigation is valid at ``t_s``; else why not (the ``no_navigation``
+        rejection's detail, and whether there is a last known position to surface from)."""
         odometry = self.odometry
         if odometry is None:
-            raise RuntimeError("no odometry yet")
-        ned = odometry.ned()
+            return NoNavigation("no navigation yet: no odometry has arrived", last_known=False)
+        age_s = t_s - odometry.t_s
+        if age_s > self.config.nav_timeout_s:
+            return NoNavigation(
+                f"navigation stale: the last odometry is {age_s:.1f} s old (nav_timeout_s "
+                f"{self.config.nav_timeout_s:g})",
+                last_known=self.georef.referenced,
+            )
+        if not self.georef.referenced:
+            return NoNavigation(self.georef.waiting_for(), last_known=False)
+        return None
+
+    def map_pose(self) -> NedPose | None:
+        """The latest odometry in ``map_ned`` (None: no odometry, or not geo-referenced)."""
+        if self.odometry is None or not self.georef.referenced:
+            return None
+        return self.georef.to_map(self.odometry.enu())
+
+    def state(self, t_s: float) -> VehicleState:
+        """The vehicle as the planner sees it (as :meth:`sim.simulation.Simulation.state`),
+        from the latest odometry (the last known position when stale). Depth is at least 0:
+        a vehicle afloat whose odometry puts it a little above the surface is at the surface.
+
+        Raises:
+            RuntimeError: no map_ned position yet.
+        """
+        pose = self.map_pose()
+        if pose is None or self.odometry is None:
+            raise RuntimeError("no map_ned position yet")
         g = self.guidance
         segment = g.segment if g.mode is Mode.RUNNING and g.plan is not None else None
         return VehicleState(
-            ned.x_north_m,
-            ned.y_east_m,
-            max(0.0, ned.z_down_m),
-            ned.heading_deg,
-            odometry.speed_mps,
+            pose.x_north_m,
+            pose.y_east_m,
+            max(0.0, pose.z_down_m),
+            pose.heading_deg,
+            self.odometry.speed_mps,
             t_s,
             segment,
         )
 
-    def _process(self, data: bytes, t_s: float, receipt_s: float) -> JsonDict:
-        bits, n_bits = frame_bits(data)
-        state = self.state(t_s)
-        ack, ref = self.agent.receive(bits, n_bits, state, receipt_s)
-        self.sinks.ack(ack)
-        if ref is not None:  # accepted and replanned: guidance's first new setpoint, now
-            ned = NedPose(state.x_m, state.y_m, state.z_m, state.heading_deg)
-            self._emit_setpoint(ref, ned, t_s)
-        return ack
+    def _check_navigation(self, t_s: float) -> None:
+        """Enter ``nav_fault`` when valid navigation has gone stale since the last check."""
+        valid = self.navigation(t_s) is None
+        active = self.agent.active
+        # a commanded Surface goes on as it is (it overrides everything): no fault action
+        surfacing = active is not None and active.pattern == "surface" and self.fault is None
+        if self._nav_was_valid and not valid and not surfacing:
+            pose = self.map_pose()
+            if pose is not None:
+                self.fault = self.config.nav_fault_action
+                self.nav_faults += 1
+                self.agent.suspend()
+                self._fault_at = (
+                    pose.x_north_m,
+                    pose.y_east_m,
+                    max(0.0, pose.z_down_m),
+                    pose.heading_deg,
+                )
+        self._nav_was_valid = valid
+
+    def _hold_first_pose(self) -> None:
+        """Guidance's idle hold point: the first map_ned pose (station keeping there)."""
+        pose = self.map_pose()
+        if pose is not None and not self._held:
+            self._held = True
+            self.guidance.hold_here(
+                pose.x_north_m, pose.y_east_m, max(0.0, pose.z_down_m), pose.heading_deg
+            )
+
+    # --- outputs -------------------------------------------------------------------------
+
+    def _publish_datum(self, t_s: float) -> None:
+        msg = self.georef.datum_msg(t_s)
+        if msg is not None:
+            self._datum_sent_s = t_s
+            self.sinks.datum(msg)
+
+    def _publish_setpoint(self, setpoint: Setpoint) -> None:
+        frame_id = self.odometry.frame_id if self.odometry is not None else "odom"
+        msg = setpoint_msg(setpoint, self.config.setpoint_frame, frame_id, self.georef.origin)
+        self.sinks.setpoint(msg)
 
     def _emit_setpoint(self, ref: Reference, ned: NedPose, t_s: float) -> Setpoint:
         north_m, east_m = self._aim(ref, ned)
@@ -317,8 +339,7 @@ class VehicleCore:
             ref.vertical,
             self.guidance.mode.value,
         )
-        frame_id = self.odometry.frame_id if self.odometry is not None else "odom"
-        self.sinks.setpoint(setpoint_msg(setpoint, self.config.setpoint_frame, frame_id))
+        self._publish_setpoint(setpoint)
         return setpoint
 
     def _aim(self, ref: Reference, ned: NedPose) -> tuple[float, float]:

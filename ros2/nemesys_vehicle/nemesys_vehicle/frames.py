@@ -7,7 +7,11 @@ y east,
 z down (depth), with an FRD body, and the heading measured from north, clockwise.
 
 Each direction is ONE function: :func:`enu_to_ned` and :func:`ned_to_enu` (position and
-heading together). The quaternion helpers read the yaw out of an orientation and build the
+heading together, the axes only). The odometry's ENU frame has its origin wherever the
+navigation started, and maybe a magnetic north: :func:`odometry_to_map` is the one edge from
+it to the contract's ``map_ned`` about the datum (the axes, then the declination, then the
+origin's offset, :class:`MapOrigin`), :func:`map_to_odometry` its inverse (setpoints in the
+odometry's frame). The quaternion helpers read the yaw out of an orientation and build the
 yaw-only quaternion the contract publishes; :func:`quaternion_enu_to_ned` converts a full
 attitude (used to cross-check the yaw path in the tests). Angles in degrees.
 """
@@ -69,6 +73,46 @@ def ned_to_enu(pose: NedPose) -> EnuPose:
         pose.x_north_m + 0.0,
         -pose.z_down_m + 0.0,
         (90.0 - pose.heading_deg + 180.0) % 360.0 - 180.0,
+    )
+
+
+class MapOrigin(NamedTuple):
+    """Where the odometry's frame sits in ``map_ned``: its origin (m north and east of the
+    datum) and the angle from true north to its own north (+y ENU), clockwise (deg): the
+    magnetic declination for a magnetic frame, 0 for a true-north one (REP-103)."""
+
+    north_m: float = 0.0
+    east_m: float = 0.0
+    declination_deg: float = 0.0
+
+
+def odometry_to_map(pose: EnuPose, origin: MapOrigin) -> NedPose:
+    """An odometry pose (ENU about where navigation started) in ``map_ned`` about the datum:
+    :func:`enu_to_ned`, turned by the declination (its north -> true north), plus the origin.
+    Depth is unchanged (the odometry's origin is at the water surface)."""
+    ned = enu_to_ned(pose)
+    d = math.radians(origin.declination_deg)
+    cos_d, sin_d = math.cos(d), math.sin(d)
+    return NedPose(
+        ned.x_north_m * cos_d - ned.y_east_m * sin_d + origin.north_m + 0.0,
+        ned.x_north_m * sin_d + ned.y_east_m * cos_d + origin.east_m + 0.0,
+        ned.z_down_m,
+        (ned.heading_deg + origin.declination_deg) % 360.0,
+    )
+
+
+def map_to_odometry(pose: NedPose, origin: MapOrigin) -> EnuPose:
+    """The inverse of :func:`odometry_to_map`: a ``map_ned`` pose in the odometry's ENU."""
+    north_m, east_m = pose.x_north_m - origin.north_m, pose.y_east_m - origin.east_m
+    d = math.radians(origin.declination_deg)
+    cos_d, sin_d = math.cos(d), math.sin(d)
+    return ned_to_enu(
+        NedPose(
+            north_m * cos_d + east_m * sin_d,
+            -north_m * sin_d + east_m * cos_d,
+            pose.z_down_m,
+            (pose.heading_deg - origin.declination_deg) % 360.0,
+        )
     )
 
 

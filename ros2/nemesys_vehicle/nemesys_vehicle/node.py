@@ -15,23 +15,29 @@ from nav_msgs.msg import Odometry as OdometryMsg
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from sensor_msgs.msg import BatteryState, NavSatFix
 from std_msgs.msg import String, UInt8MultiArray
 
 from nemesys_vehicle.config import VehicleConfig
 from nemesys_vehicle.convert import (
     ODOMETRY_QOS,
+    SENSOR_QOS,
     SETPOINT_QOS,
+    battery_fraction,
     config_from_parameters,
     contract_qos,
     fill_pose_stamped,
     frame_data,
     json_text,
+    navsatfix_from_msg,
     odometry_from_msg,
     ros_time_s,
 )
-from nemesys_vehicle.core import Sinks, VehicleCore
+from nemesys_vehicle.core import VehicleCore
+from nemesys_vehicle.messages import Sinks
 from nemesys_vehicle.serial_input import SerialByteSource
 from vehicle_contract.contract import (
+    DATUM_TOPIC,
     FRAME_TOPIC,
     MISSION_TOPIC,
     POSE_TOPIC,
@@ -41,6 +47,7 @@ from vehicle_contract.contract import (
     QoS,
     Reliability,
 )
+from vehicle_contract.names import topic_names
 
 _RELIABILITY = {
     Reliability.RELIABLE: ReliabilityPolicy.RELIABLE,
@@ -69,17 +76,21 @@ class VehicleNode(Node):  # type: ignore[misc]  # rclpy is untyped here (not ins
         super().__init__(VEHICLE_NODE.lstrip("/"))  # the contract's node name
         self.declare_parameters("", VehicleConfig.parameter_defaults())
         config = config_from_parameters(self.get_parameters(VehicleConfig.parameter_names()))
+        names = topic_names(config.vehicle_namespace)  # the contract's, under the namespace
         self._mission_pub = self.create_publisher(
-            String, MISSION_TOPIC, qos_profile(contract_qos(MISSION_TOPIC))
+            String, names.mission, qos_profile(contract_qos(MISSION_TOPIC))
         )
         self._status_pub = self.create_publisher(
-            String, STATUS_TOPIC, qos_profile(contract_qos(STATUS_TOPIC))
+            String, names.status, qos_profile(contract_qos(STATUS_TOPIC))
         )
         self._pose_pub = self.create_publisher(
-            PoseStamped, POSE_TOPIC, qos_profile(contract_qos(POSE_TOPIC))
+            PoseStamped, names.pose, qos_profile(contract_qos(POSE_TOPIC))
+        )
+        self._datum_pub = self.create_publisher(
+            String, names.datum, qos_profile(contract_qos(DATUM_TOPIC))
         )
         self._setpoint_pub = self.create_publisher(
-            PoseStamped, config.setpoint_topic, qos_profile(SETPOINT_QOS)
+            PoseStamped, config.resolve(config.setpoint_topic), qos_profile(SETPOINT_QOS)
         )
         self.core = VehicleCore(
             config,
@@ -88,6 +99,7 @@ class VehicleNode(Node):  # type: ignore[misc]  # rclpy is untyped here (not ins
                 status=self._publish_status,
                 pose=self._publish_pose,
                 setpoint=self._publish_setpoint,
+                datum=self._publish_datum,
             ),
         )
         # opened on the first poll: never in topic mode
@@ -98,13 +110,28 @@ class VehicleNode(Node):  # type: ignore[misc]  # rclpy is untyped here (not ins
             info=self.get_logger().info,
         )
         self.create_subscription(
-            OdometryMsg, config.odometry_topic, self._on_odometry, qos_profile(ODOMETRY_QOS)
+            OdometryMsg,
+            config.resolve(config.odometry_topic),
+            self._on_odometry,
+            qos_profile(ODOMETRY_QOS),
+        )
+        self.create_subscription(
+            NavSatFix,
+            config.resolve(config.navsatfix_topic),
+            self._on_navsatfix,
+            qos_profile(SENSOR_QOS),
+        )
+        self.create_subscription(
+            BatteryState,
+            config.resolve(config.battery_topic),
+            self._on_battery,
+            qos_profile(SENSOR_QOS),
         )
         if config.frame_input == "serial":
             self.create_timer(config.serial_poll_period_s, self._on_serial_poll)
         else:
             self.create_subscription(
-                UInt8MultiArray, FRAME_TOPIC, self._on_frame, qos_profile(contract_qos(FRAME_TOPIC))
+                UInt8MultiArray, names.frame, self._on_frame, qos_profile(contract_qos(FRAME_TOPIC))
             )
         self.create_timer(config.status_period_s, self._on_status_timer)
         self.create_timer(config.pose_period_s, self._on_pose_timer)
@@ -124,6 +151,12 @@ class VehicleNode(Node):  # type: ignore[misc]  # rclpy is untyped here (not ins
 
     def _on_odometry(self, msg: Any) -> None:
         self.core.on_odometry(odometry_from_msg(msg, self._now_s()))
+
+    def _on_navsatfix(self, msg: Any) -> None:
+        self.core.on_navsatfix(self._now_s(), *navsatfix_from_msg(msg))
+
+    def _on_battery(self, msg: Any) -> None:
+        self.core.on_battery_state(battery_fraction(msg))
 
     def _on_status_timer(self) -> None:
         self.core.tick_status(self._now_s())
@@ -147,6 +180,9 @@ class VehicleNode(Node):  # type: ignore[misc]  # rclpy is untyped here (not ins
 
     def _publish_setpoint(self, setpoint: dict[str, Any]) -> None:
         self._setpoint_pub.publish(fill_pose_stamped(PoseStamped(), setpoint))
+
+    def _publish_datum(self, datum: dict[str, Any]) -> None:
+        self._datum_pub.publish(String(data=json_text(datum)))
 
     def destroy_node(self) -> None:
         self._serial.close()

@@ -17,6 +17,7 @@ from fastapi.testclient import TestClient
 
 from backend.authoring.durations import flown
 from backend.authoring.profile import twin_profile
+from backend.scripts.completion import vehicle_verdict
 from backend.scripts.labels import seconds
 from backend.scripts.operations import (
     REPEATING,
@@ -342,3 +343,23 @@ def test_timeline_export_and_run_agree(client: TestClient) -> None:
         took, estimated = reported - before["sent_s"], before["completion_s"]
         assert 0.8 * estimated <= took <= 1.2 * estimated + STATUS_PERIOD_S, (i, took, estimated)
         assert before["state_text"].endswith(", as the vehicle reported")
+
+
+def test_a_navigation_fault_ends_the_step_like_an_empty_battery() -> None:
+    """A vehicle whose navigation went stale flies its fault action (hold or surface) and says
+    nav_fault until it accepts a command again: the step will not complete, in words."""
+    params = {"depth": 4.0, "duration": 60.0}
+    hover = {"pattern": "hover", "params": params}
+    fault = {"t_s": 300.0, "mode": "nav_fault", "pattern": "hover", "active": hover}
+    verdict, why = vehicle_verdict({**fault, "nav_age_s": 12.4}, "hover", params, 250.0)
+    assert verdict == "ended"
+    assert why == (
+        "the vehicle's navigation went stale during the hover (nav_fault, its last navigation "
+        "12 s old): it holds or surfaces from where it last knew it was, and cannot report the "
+        "step complete until navigation is back and it accepts a command again"
+    )
+    assert vehicle_verdict(fault, "hover", params, 250.0)[1].startswith(
+        "the vehicle's navigation went stale during the hover (nav_fault): "
+    )
+    running = {**fault, "mode": "running"}
+    assert vehicle_verdict(running, "hover", params, 250.0)[0] == "running"

@@ -445,6 +445,14 @@ def test_an_empty_battery_stops_the_wait() -> None:
     assert "battery is empty" in (r.reason or "")
 
 
+def test_a_navigation_fault_stops_the_wait() -> None:
+    r = straight_then_hover(lambda: 60.0)
+    to_the_last_ack(r)
+    r.observe(status("nav_fault", 560.0))
+    assert r.state()["outcome"] == "stopped"
+    assert "navigation went stale during the hover (nav_fault)" in (r.reason or "")
+
+
 def test_a_link_that_reports_nothing_completes_each_step_by_the_estimate() -> None:
     s = script(step("straight", STRAIGHT, "at", 0), step("hover", HOVER, "after_previous"))
     r = ScriptRunner(s, "auto", completion_s=[STRAIGHT_DONE_S, 45.0])
