@@ -12,7 +12,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import secrets
 from collections.abc import Coroutine, Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
@@ -42,11 +41,11 @@ from backend.mission_log.store import MissionLog
 from backend.scripts.guard import RunGuard
 from backend.settings import Settings
 from backend.telemetry import TelemetryHub
+from backend.vehicle_link import link_delay_s, open_vehicle_link
 from backend.viewer.draw_queue import PreviewDrawer
 from codec import Encoded, airtime_s
 from planner import Limits, Plan, VehicleState
 from station.link import Link, RosbridgeLink
-from station.link_modem import open_link
 from vehicle_contract.messages import pose_from_message
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
@@ -132,22 +131,8 @@ class Console:
         dives = self.dives = Dives(self.log, s.target, self.hub)
         if self._given_link is not None:
             link: Link = self._given_link
-        elif s.training:
-            from rosbridge.server import BridgeServer
-            from sim.simulation import SimConfig, Simulation
-
-            self.sim = Simulation(SimConfig(seed=s.sim_seed, limits=self.limits))
-            # frames only from this console: a per-start secret for the rosbridge auth op
-            secret = secrets.token_hex(16)
-            self.bridge = BridgeServer(
-                self.sim, "127.0.0.1", s.sim_port, time_scale=s.sim_time_scale, auth_secret=secret
-            )
-            await self.bridge.start()
-            link = RosbridgeLink(f"ws://127.0.0.1:{self.bridge.port}", auth_secret=secret)
         else:
-            link = open_link(
-                s.target, s.bitrate_bps, s.telemetry or None, namespace=s.vehicle_namespace
-            )
+            link, self.sim, self.bridge = await open_vehicle_link(s, self.limits)
         self.link = link
         link.on_pose = self._on_pose
         link.on_status = self._on_status
@@ -164,7 +149,7 @@ class Console:
             copy_interval_s=s.copy_interval_s,
             delivery_target=s.delivery_target,
             link_ber=self.link_ber,
-            link_delay_s=self._link_delay_s,
+            link_delay_s=lambda: link_delay_s(self.sim, self.bridge),
             airtime_s=airtime_s(s.bitrate_bps),
             target=s.target,
             clock=self.clock,
@@ -301,14 +286,6 @@ class Console:
         channel's in training, else the operator's choice (:mod:`backend.commands.link_ber`)."""
         now = ber_now(self)
         return now.ber, now.loss
-
-    def _link_delay_s(self) -> float:
-        if self.sim is None:
-            return 0.0
-        delay = self.sim.channel.config.delay_s
-        scale = self.bridge.time_scale if self.bridge is not None else 1.0
-        # the channel's delay is in simulated seconds; the ack timeout runs on the wall clock
-        return delay / scale if scale > 0 else 3600.0
 
     def vehicle_state(self) -> VehicleState:
         """Where previews, predictions and joins start: the believed position (NED)."""

@@ -25,7 +25,6 @@ import json
 import logging
 import time
 from collections.abc import Callable
-from enum import StrEnum
 from typing import Any, Final
 
 from websockets.exceptions import ConnectionClosed, WebSocketException
@@ -40,13 +39,16 @@ from rosbridge.protocol import (
     InvalidData,
 )
 from rosbridge.transport import RosbridgeClient, TopicHandler
+from station.capability import Capability, capability_of
 from station.link_acks import SeenAcks
 from station.transmit import LinkCheck, failure_reason, frame_msg
-from station.vehicle_graph import GraphUnknown, VehicleGraph, read_graph, verdict_of
+from station.vehicle_graph import GraphUnknown, VehicleGraph, read_graph
 from vehicle_contract.contract import DATUM_TOPIC
 from vehicle_contract.names import topic_names
 
 logger = logging.getLogger("station.link")
+
+__all__ = ["Capability", "Link", "RosbridgeLink", "capability_of"]
 
 Handler = Callable[[dict[str, Any]], None]
 
@@ -55,43 +57,6 @@ ROSAPI_TIMEOUT_S: Final = 3.0
 #: How often a connected link asks the graph again (s): a publisher that appears (the onboard
 #: agent started, or the pose publisher after the console subscribed) is seen within it.
 GRAPH_POLL_S: Final = 2.0
-
-
-class Capability(StrEnum):
-    """What a vehicle can report back over its link."""
-
-    #: The vehicle runs the onboard agent: acknowledgements and telemetry.
-    ACKS_AND_TELEMETRY = "acks_and_telemetry"
-    #: A ROS 2 vehicle without the agent: pose / status, no acknowledgements.
-    TELEMETRY_ONLY = "telemetry_only"
-    #: An ME modem: nothing comes back.
-    NONE = "none"
-    #: Not known yet (not connected, or the vehicle could not be asked).
-    UNKNOWN = "unknown"
-
-    @property
-    def acknowledges(self) -> bool:
-        return self is Capability.ACKS_AND_TELEMETRY
-
-    @property
-    def telemetry(self) -> bool:
-        return self in (Capability.ACKS_AND_TELEMETRY, Capability.TELEMETRY_ONLY)
-
-
-def capability_of(
-    graph: VehicleGraph, *, frames_over_rosbridge: bool = True
-) -> tuple[Capability, list[str]]:
-    """What a vehicle with this ROS graph can report back, by the one rule
-    (:func:`station.vehicle_graph.verdict_of`: rosbridge's own node is not the vehicle), and
-    a named problem for every contract topic that is missing, of the wrong type, or only
-    rosbridge's. ``frames_over_rosbridge`` False: frames go out another way (an ME modem)."""
-    verdict = verdict_of(graph, frames_over_rosbridge=frames_over_rosbridge)
-    problems = list(verdict.problems)
-    if verdict.agent and (verdict.frames or not frames_over_rosbridge):
-        return Capability.ACKS_AND_TELEMETRY, problems
-    if verdict.pose or verdict.status:
-        return Capability.TELEMETRY_ONLY, problems
-    return Capability.NONE, problems
 
 
 class Link:

@@ -1,0 +1,58 @@
+"""The link the console opens to its vehicle, from the settings.
+
+Training: the simulated vehicle and its rosbridge server on loopback, reached through the same
+rosbridge client a real vehicle gets (frames only from this console: a per-start secret for
+the rosbridge auth op). Otherwise: the target the settings name (a rosbridge URL, an ME modem,
+or a modem with telemetry over rosbridge: :func:`station.link_modem.open_link`).
+"""
+
+from __future__ import annotations
+
+import secrets
+from typing import TYPE_CHECKING
+
+from backend.settings import Settings
+from planner import Limits
+from station.link import Link, RosbridgeLink
+from station.link_modem import open_link
+
+if TYPE_CHECKING:  # the heavy ones, imported when training starts
+    from rosbridge.server import BridgeServer
+    from sim.simulation import Simulation
+
+
+async def open_vehicle_link(
+    s: Settings, limits: Limits
+) -> tuple[Link, Simulation | None, BridgeServer | None]:
+    """The link (not started), and in training the simulator and its started bridge.
+
+    Raises:
+        ValueError: a target or telemetry setting that names no link (the message says
+            which forms are allowed).
+    """
+    if not s.training:
+        link = open_link(
+            s.target, s.bitrate_bps, s.telemetry or None, namespace=s.vehicle_namespace
+        )
+        return link, None, None
+    from rosbridge.server import BridgeServer
+    from sim.simulation import SimConfig, Simulation
+
+    sim = Simulation(SimConfig(seed=s.sim_seed, limits=limits))
+    secret = secrets.token_hex(16)
+    bridge = BridgeServer(
+        sim, "127.0.0.1", s.sim_port, time_scale=s.sim_time_scale, auth_secret=secret
+    )
+    await bridge.start()
+    link = RosbridgeLink(f"ws://127.0.0.1:{bridge.port}", auth_secret=secret)
+    return link, sim, bridge
+
+
+def link_delay_s(sim: Simulation | None, bridge: BridgeServer | None) -> float:
+    """The emulated channel's delay on the wall clock (s), what an acknowledgement's timeout
+    adds; 0 off training. The channel's delay is in simulated seconds."""
+    if sim is None:
+        return 0.0
+    delay = sim.channel.config.delay_s
+    scale = bridge.time_scale if bridge is not None else 1.0
+    return delay / scale if scale > 0 else 3600.0
