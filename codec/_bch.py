@@ -362,13 +362,16 @@ def _make_t2_decoders(
                     if e1:
                         return (w ^ e1) >> 16, 1
                     return w >> 16, UNCORRECTABLE
-                e1 = bit[first[k] + l1]
-                e2 = bit[second[k] + l1]
+                e1 = bit[first[k] + l1]  # 0: no root (most words with 3 errors) or outside
+                if e1:
+                    e2 = bit[second[k] + l1]
+                    if e2:
+                        return (w ^ e1 ^ e2) >> 16, 2
             else:
                 e1 = bit[first0 + l1]
                 e2 = bit[second0 + l1]
-            if e1 and e2:
-                return (w ^ e1 ^ e2) >> 16, 2
+                if e1 and e2:
+                    return (w ^ e1 ^ e2) >> 16, 2
         return w >> 16, UNCORRECTABLE
 
     def decode(received: int) -> tuple[int, int]:

@@ -7,10 +7,12 @@ the reference node ``ros2/nemesys_vehicle``) run on Python 3.10 and later; the c
 and ``json.dumps`` give its value), ``str()`` and ``format()`` give the value on every
 version (a plain ``str, Enum`` on 3.10 gives ``"Mode.IDLE"``: acknowledgement and status
 texts, f-strings and log lines would change), ``repr`` is the enum's, the class iterates its
-members in order, ``Cls(value)`` looks a member up (``ValueError`` if none), ``Cls[name]`` by
-name, members are never copied (``copy``, ``deepcopy`` and pickle give the member itself)
-and cannot be reassigned. Members spell their values out (3.11's ``auto()`` is not
-reproduced).
+members in order and has their number as ``len``, ``Cls(value)`` looks a member up
+(``ValueError`` if none), ``Cls[name]`` by name, members are never copied (``copy``,
+``deepcopy`` and pickle give the member itself) and cannot be reassigned. Nothing more of
+:class:`enum.Enum` (``__members__``, ``in`` the class, ``reversed``): the vehicle side uses
+none of it, and each method is resident memory. Members spell their values out (3.11's
+``auto()`` is not reproduced).
 
 :class:`StrEnum` is that, written out here rather than taken from :mod:`enum`, because the
 onboard path's memory budget (1 MiB over a plain interpreter, ``nemesys bench onboard``)
@@ -77,30 +79,15 @@ else:  # not type-checked (the checker sees the above): annotations for the read
             return cls._member_map_[name]
 
         def __iter__(cls) -> Iterator[StrEnum]:
-            return iter(tuple(cls._member_map_.values()))
-
-        def __reversed__(cls) -> Iterator[StrEnum]:
-            return reversed(tuple(cls._member_map_.values()))
+            return iter(cls._member_map_.values())
 
         def __len__(cls) -> int:
             return len(cls._member_map_)
-
-        def __contains__(cls, member: object) -> bool:
-            return isinstance(member, cls) and member._name_ in cls._member_map_
 
         def __setattr__(cls, name: str, value: object) -> None:
             if name in cls.__dict__.get("_member_map_", ()):
                 raise AttributeError(f"cannot reassign member {name!r}")
             super().__setattr__(name, value)
-
-        def __delattr__(cls, name: str) -> None:
-            if name in cls.__dict__.get("_member_map_", ()):
-                raise AttributeError(f"cannot delete member {name!r}")
-            super().__delattr__(name)
-
-        @property
-        def __members__(cls) -> dict[str, StrEnum]:
-            return dict(cls._member_map_)
 
         def __repr__(cls) -> str:
             return f"<enum {cls.__name__!r}>"
