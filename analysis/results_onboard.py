@@ -59,7 +59,10 @@ def _paper_rows(rep: ReconfigReport) -> list[list[str]]:
         "VmHWM of a fresh process decoding and replanning the three scenarios, median of "
         f"{rep.memory_runs} processes"
     )
-    how.append(f"the same minus a bare `python -c` ({kib_text(rep.bare_kb)})")
+    how.append(
+        "the same minus a plain interpreter, `python -I -S` (no site, no `.pth` start-up "
+        f"hooks) with the checkout alone on `sys.path` ({kib_text(rep.bare_kb)})"
+    )
     return [[*row, text] for row, text in zip(paper_rows(rep), how, strict=True)]
 
 
@@ -182,7 +185,8 @@ def reconfig(rep: ReconfigReport, spread: DecodeSpread) -> Section:
         "planner does per waypoint to take 26 ms for 4 waypoints and 1.62 s for 36. Our "
         "waypoint counts are our planner's (its discretisation, plus the join from the "
         f"vehicle's position), not the paper's. Memory: the paper's {PAPER_RSS_MB:g} MB "
-        "matches a whole small Python process; a bare CPython interpreter here already peaks "
+        "matches a whole small Python process; a plain CPython interpreter here (`python -I "
+        "-S`: the baseline, with no start-up hook preloading modules) already peaks "
         f"at {kib_text(rep.bare_kb)}, so the increment ({kib_text(rep.increment_kb)}) is what "
         "decoding and replanning add.",
     ]

@@ -1,5 +1,5 @@
 """The memory half of ``nemesys bench reconfig``: peak RSS of a fresh interpreter running the
-onboard decode + replan of the three retask scenarios, against a bare interpreter.
+onboard decode + replan of the three retask scenarios, against a plain interpreter.
 
 The onboard process imports the onboard path (``codec``, ``planner``, the agent and
 guidance), builds an agent per scenario and feeds it the scenario's first frame and then its
@@ -7,27 +7,29 @@ retask frame, from the vehicle states the scenario's acknowledgments record. The
 the codeword bit errors of :data:`MEMORY_ERRORS`, so the error correction's memory is part of
 what is measured; the process prints the bits the agent corrected and :func:`measure_memory`
 checks them. The kernel counts in KiB ("kB"); the report prints MiB.
+
+Both processes are plain interpreters (:data:`bench._timing.PLAIN_BASELINE`: ``python -I -S``
+with the checkout's root alone on ``sys.path``), so the increment counts every module the
+onboard path loads, the standard library's included, and nothing a start-up hook preloaded
+into the baseline; the onboard packages' bytecode is compiled first for the interpreter
+measured (:func:`compile_onboard`), as installing them on a vehicle does.
 """
 
 from __future__ import annotations
 
-import compileall
-import pathlib
 import random
 import statistics
 
-import codec
-import onboard
-import planner
-import vehicle_contract
 from bench._onboard import with_errors
-from bench._timing import peak_rss_run
+from bench._timing import compile_packages, peak_rss_run
 from sim.scenarios import SCENARIOS, run_scenario
 
 #: The retask scenarios, in the paper's order.
 RETASK_SCENARIOS = ("wreck", "panel", "pod")
 
-#: The onboard path's bound on the increment over a bare interpreter (KiB: 1.0 MiB).
+#: The vehicle's packages: all the onboard process may load of the checkout.
+ONBOARD_PACKAGES = ("codec", "planner", "onboard", "vehicle_contract")
+#: The onboard path's bound on the increment over a plain interpreter (KiB: 1.0 MiB).
 TARGET_INCREMENT_KB = 1024
 #: Codeword bit errors put in each scenario's (first, retask) frame for the memory run.
 MEMORY_ERRORS = {"wreck": (1, 2), "panel": (2, 0), "pod": (2, 1)}
@@ -41,6 +43,7 @@ _BARE = _PEAK
 _ONBOARD = (
     """
 import sys
+CONSOLE = ("analysis", "backend", "bench", "cli", "rosbridge", "sim", "station")
 from planner import VehicleState
 from onboard.agent import OnboardAgent
 from onboard.guidance import Guidance
@@ -54,18 +57,19 @@ for case in sys.argv[1:]:
         if ack["outcome"] != "accepted" or ref is None:
             raise SystemExit(ack["detail"])
         corrected.append(ack["corrected_bits"])
+console = [m for m in sys.modules if m.partition(".")[0] in CONSOLE]
+if console:
+    raise SystemExit(f"the onboard process loaded {console}")
 print(*corrected)
 """
     + _PEAK
 )
 
 
-def compile_onboard() -> None:
-    """Write the onboard packages' bytecode, as installing them on a vehicle does."""
-    for package in (codec, planner, onboard, vehicle_contract):
-        compileall.compile_dir(
-            str(pathlib.Path(package.__file__ or "").parent), quiet=1, force=False
-        )
+def compile_onboard(python: str | None = None) -> None:
+    """Write the onboard packages' bytecode for ``python`` (default this interpreter), as
+    installing them on a vehicle does."""
+    compile_packages(ONBOARD_PACKAGES, python)
 
 
 def onboard_arguments(seed: int = 15) -> list[str]:
@@ -89,23 +93,27 @@ def onboard_arguments(seed: int = 15) -> list[str]:
     return args
 
 
-def measure_memory(runs: int) -> tuple[int, int, tuple[int, ...]]:
-    """Median peak RSS (KiB) of a bare interpreter and of the onboard decode + replan of the
+def measure_memory(
+    runs: int, python: str | None = None, args: list[str] | None = None
+) -> tuple[int, int, tuple[int, ...]]:
+    """Median peak RSS (KiB) of a plain interpreter and of the onboard decode + replan of the
     three scenarios' frames with bit errors, ``runs`` fresh processes each, interleaved; and
-    the bits the agent corrected per frame.
+    the bits the agent corrected per frame. ``python``: the interpreter measured (default
+    this one); ``args``: :func:`onboard_arguments`, if already made.
 
     Raises:
         RuntimeError: the agent did not correct exactly the errors put in the frames.
     """
-    compile_onboard()
-    args = onboard_arguments()
+    compile_onboard(python)
+    if args is None:
+        args = onboard_arguments()
     expected = tuple(e for name in RETASK_SCENARIOS for e in MEMORY_ERRORS[name])
     bare: list[int] = []
     onboard: list[int] = []
     corrected: tuple[int, ...] = ()
     for _ in range(runs):
-        bare.append(peak_rss_run(_BARE, args)[0])
-        peak, printed = peak_rss_run(_ONBOARD, args)
+        bare.append(peak_rss_run(_BARE, args, python)[0])
+        peak, printed = peak_rss_run(_ONBOARD, args, python)
         onboard.append(peak)
         corrected = tuple(int(c) for c in printed[-1].split())
         if corrected != expected:

@@ -10,6 +10,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 
@@ -68,21 +69,54 @@ def verdict(ok: bool) -> str:
     return "met" if ok else "MISSED"
 
 
-def peak_rss_run(code: str, args: Sequence[str]) -> tuple[int, list[str]]:
-    """Peak RSS (KiB, as the kernel's ``VmHWM`` counts it) of one fresh ``python -c code
-    args...`` process, which prints its own peak on its last line; and the lines it printed
-    before that."""
+#: How the memory benches start a process, the onboard one and its baseline alike: a plain
+#: interpreter. ``-I`` ignores the environment (PYTHONPATH, the user site) and ``-S`` skips
+#: ``site``, so no ``.pth`` start-up hook runs (the console's editable install has one, which
+#: preloads dozens of modules into any ``python -c`` of its venv and hides their cost) and no
+#: site-packages are on the path; the process then puts the checkout's root alone on
+#: ``sys.path``, which holds the vehicle's packages.
+PLAIN_FLAGS = ("-I", "-S")
+#: The checkout's root (the vehicle's packages are folders in it).
+ROOT = str(Path(__file__).resolve().parent.parent)
+#: The baseline, named as the benches print it.
+PLAIN_BASELINE = "a plain interpreter (python -I -S: no site, no .pth start-up hooks)"
+
+
+def plain_command(code: str, python: str | None = None) -> list[str]:
+    """``python -I -S -c code``, the code run with the checkout's root on ``sys.path``."""
+    path = f"import sys; sys.path.insert(0, {ROOT!r})\n"
+    return [python or sys.executable, *PLAIN_FLAGS, "-c", path + code]
+
+
+def peak_rss_run(
+    code: str, args: Sequence[str], python: str | None = None
+) -> tuple[int, list[str]]:
+    """Peak RSS (KiB, as the kernel's ``VmHWM`` counts it) of one fresh plain interpreter
+    (:func:`plain_command`) running ``code args...``, which prints its own peak on its last
+    line; and the lines it printed before that."""
     done = subprocess.run(
-        [sys.executable, "-c", code, *args], capture_output=True, text=True, check=True
+        [*plain_command(code, python), *args], capture_output=True, text=True, check=True
     )
     lines = done.stdout.strip().splitlines()
     return int(lines[-1]), lines[:-1]
 
 
 def peak_rss_kb(code: str, args: Sequence[str], runs: int) -> int:
-    """Median peak RSS (KiB) of ``runs`` fresh ``python -c code args...`` processes; the code
-    prints its own peak (``VmHWM``) on its last line of output."""
+    """Median peak RSS (KiB) of ``runs`` fresh plain interpreters running ``code args...``;
+    the code prints its own peak (``VmHWM``) on its last line of output."""
     return int(statistics.median(peak_rss_run(code, args)[0] for _ in range(runs)))
+
+
+def compile_packages(names: Sequence[str], python: str | None = None) -> None:
+    """Write the bytecode of the checkout's packages ``names`` for ``python`` (default this
+    one), as installing them does: compiling source costs a fresh process more than a
+    megabyte of peak RSS that an installed vehicle never pays."""
+    dirs = [str(Path(ROOT) / name) for name in names]
+    subprocess.run(
+        [python or sys.executable, *PLAIN_FLAGS, "-m", "compileall", "-q", *dirs],
+        check=True,
+        capture_output=True,
+    )
 
 
 def mib(kib: float) -> str:

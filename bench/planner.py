@@ -9,7 +9,8 @@ interleaved in one process; medians of the rounds are printed.
 
 Memory: peak RSS (``VmHWM``) of a fresh interpreter that imports the onboard path
 (``codec``, ``planner``), decodes one frame per pattern and replans each in turn, against a
-bare interpreter started the same way (``python -c``, same flags and environment), medians of
+plain interpreter started the same way (``python -I -S``: no ``site``, so no start-up hook
+preloads modules into the baseline; the checkout's root alone on ``sys.path``), medians of
 several runs, with the packages' bytecode compiled first as on an installed vehicle. The
 frames carry 0, 1 and 2 codeword bit errors in turn, so the error correction's memory is
 counted; the process prints the bits it corrected and the bench checks them. The kernel counts
@@ -19,16 +20,12 @@ decode-and-replan process.
 
 from __future__ import annotations
 
-import compileall
-import pathlib
 import random
 import statistics
 from typing import TextIO
 
-import codec
-import planner
 from bench._onboard import ERROR_COUNTS, with_errors
-from bench._timing import interleaved_medians, mib, peak_rss_run, table
+from bench._timing import compile_packages, interleaved_medians, mib, peak_rss_run, table
 from codec import DICTIONARY, Command, decode_frame, encode_frame
 from planner import Plan, VehicleState, plan
 
@@ -84,10 +81,7 @@ def compile_onboard() -> None:
     """Write the onboard packages' bytecode, as installing them on the vehicle does (even
     under PYTHONDONTWRITEBYTECODE): compiling source costs a fresh process ~1.5 MB of peak
     RSS that an installed vehicle never pays."""
-    for package in (codec, planner):
-        compileall.compile_dir(
-            str(pathlib.Path(package.__file__ or "").parent), quiet=1, force=False
-        )
+    compile_packages(("codec", "planner"))
 
 
 def onboard_frames(seed: int = 15) -> tuple[list[str], tuple[int, ...]]:
@@ -104,7 +98,7 @@ def onboard_frames(seed: int = 15) -> tuple[list[str], tuple[int, ...]]:
 
 
 def memory_kb(runs: int) -> tuple[int, int, tuple[int, ...]]:
-    """Median peak RSS (KiB) of the bare interpreter and of the onboard decode + replan of
+    """Median peak RSS (KiB) of the plain interpreter and of the onboard decode + replan of
     frames with bit errors, interleaved; and the bits the onboard process corrected per frame.
 
     Raises:
@@ -195,7 +189,7 @@ def run(out: TextIO, quick: bool = False) -> int:
     bare, onboard, corrected = memory_kb(runs)
     extra = onboard - bare
     mem_rows = [
-        ["bare interpreter (python -c)", mib(bare), "", ""],
+        ["plain interpreter (python -I -S, the baseline)", mib(bare), "", ""],
         [
             f"import codec + planner, decode {len(corrected)} frames, replan each",
             mib(onboard),

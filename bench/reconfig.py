@@ -28,17 +28,22 @@ Onboard decode against bchlib: the whole onboard decode (13 bytes through a new
 ``FrameReceiver``: sync, BCH, CRC-4, dictionary and field checks, to the checked command)
 and bchlib's bare BCH decode of the same codeword bytes, over the scenarios' frames with 0, 1
 and 2 codeword bit errors, interleaved in this process (:mod:`bench._onboard`); the ratio is
-taken within the run. The target is at most 4x bchlib.
+taken within the run. The target is at most 3x bchlib. (``nemesys bench onboard`` gives the
+same ratio, with the codeword decoder's and the memory, on each Python a vehicle runs.)
 
 Memory: peak RSS (``VmHWM``) of a fresh interpreter that imports the onboard path (``codec``,
 ``planner``, the agent and guidance), builds an agent per scenario and feeds it the
 scenario's first frame and then its retask frame, from the vehicle states the scenario's
-acknowledgments record; against a bare interpreter started the same way (``python -c``, the
-same arguments). The frames carry 1 or 2 codeword bit errors (and one none), so the error
+acknowledgments record; against the baseline, a plain interpreter started the same way:
+``python -I -S`` (no ``site``, so no ``.pth`` start-up hook: the console's editable install
+has one that preloads dozens of modules into its venv's every ``python -c``), with the
+checkout's root alone on ``sys.path`` and the same arguments (:mod:`bench._reconfig_memory`).
+So the increment counts every module the onboard path loads, the standard library's too. The
+frames carry 1 or 2 codeword bit errors (and one none), so the error
 correction is part of what is measured; the process prints the bits the agent corrected and
 the bench checks them. Bytecode is compiled first, as on an installed vehicle. The kernel
-counts in KiB ("kB"); both the absolute peak and the increment over the bare interpreter are
-printed in MiB beside the paper's 13.2 "MB".
+counts in KiB ("kB"); both the absolute peak and the increment over the plain interpreter
+are printed in MiB beside the paper's 13.2 "MB".
 
 Ratios are paper / ours: how many times faster (or smaller) ours is; below 1 it is slower.
 """
@@ -69,7 +74,7 @@ from bench._reconfig_memory import (
     measure_memory,
     onboard_arguments,
 )
-from bench._timing import machine, mib, table
+from bench._timing import PLAIN_BASELINE, machine, mib, table
 from codec import encode_frame
 from sim.scenarios import SCENARIOS
 
@@ -99,6 +104,7 @@ __all__ = [
     "ratio",
     "receive_afresh",
     "retask_cases",
+    "retask_frames",
     "run",
 ]
 
@@ -145,16 +151,21 @@ class ReconfigReport:
         return self.trials_per_scenario * len(self.scenarios)
 
 
-def onboard_decode(rounds: int, loops: int) -> DecodeTiming:
-    """The whole onboard decode against bchlib over every scenario's first and retask
-    frames, with 0, 1 and 2 errors."""
+def retask_frames() -> list[int]:
+    """Every retask scenario's first and retask frames (clean 100-bit ints)."""
     frames = []
     for name in RETASK_SCENARIOS:
         sc = SCENARIOS[name]
         for k in (0, sc.retask):
             cmd = sc.commands[k]
             frames.append(encode_frame(cmd.pattern, cmd.params).frame.value)
-    return time_decode(frames, rounds, loops)
+    return frames
+
+
+def onboard_decode(rounds: int, loops: int) -> DecodeTiming:
+    """The whole onboard decode against bchlib over every scenario's first and retask
+    frames, with 0, 1 and 2 errors."""
+    return time_decode(retask_frames(), rounds, loops)
 
 
 def measure(quick: bool = False) -> ReconfigReport:
@@ -219,7 +230,7 @@ def paper_rows(report: ReconfigReport) -> list[list[str]]:
     )
     rows.append(
         [
-            'memory: increment over a bare interpreter (paper "MB", ours MiB)',
+            'memory: increment over a plain interpreter (paper "MB", ours MiB)',
             f"{PAPER_RSS_MB:g}",
             f"{inc_mib:.2f}",
             ratio(PAPER_RSS_MB, inc_mib, "smaller", "larger"),
@@ -277,8 +288,9 @@ def format_report(report: ReconfigReport) -> str:
         table(DETAIL_HEADERS, detail_rows(report)),
         "",
         f"Peak RSS (VmHWM, the kernel's KiB shown as MiB), median of {report.memory_runs} "
-        f"fresh processes each: bare interpreter {mib(report.bare_kb)}, decode + replan of "
-        f"the three scenarios {mib(report.peak_kb)} (+{mib(report.increment_kb)}; target "
+        f"fresh processes each: the baseline, {PLAIN_BASELINE} with the checkout alone on "
+        f"sys.path, {mib(report.bare_kb)}; decode + replan of the three scenarios in the "
+        f"same {mib(report.peak_kb)} (+{mib(report.increment_kb)}; target "
         f"<= {mib(TARGET_INCREMENT_KB)}: "
         f"{'met' if report.increment_kb <= TARGET_INCREMENT_KB else 'MISSED'}).",
         "The frames fed carry codeword bit errors; bits the agent corrected per frame: "

@@ -173,6 +173,7 @@ BENCHMARKS = (
     "sim",
     "console",
     "reconfig",
+    "onboard",
     "recovery",
     "channel_estimate",
     "durations",

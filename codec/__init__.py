@@ -189,8 +189,9 @@ if not TYPE_CHECKING:
         module_name = _LAZY.get(name)
         if module_name is None:
             raise AttributeError(f"module 'codec' has no attribute {name!r}")
-        import importlib
+        import sys
 
-        value = getattr(importlib.import_module(module_name), name)
+        __import__(module_name)  # not importlib: it loads warnings, on the onboard path too
+        value = getattr(sys.modules[module_name], name)
         globals()[name] = value
         return value

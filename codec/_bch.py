@@ -20,14 +20,18 @@ highest-degree bit is sent first. A codeword is ``message << r | parity``, r = n
 
 from __future__ import annotations
 
-from types import MappingProxyType
-
 from codec._errors import UNCORRECTABLE
 from codec._gf2 import ChunkedRemainder, GF2m, degree, linear_table, poly_mul
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
     from collections.abc import Callable, Mapping, Sequence
+
+    #: The closed form's tables for t = 2 (see :func:`closed_form_tables`).
+    ClosedForm = tuple[
+        bytes, bytes, bytes, bytes, Sequence[int], bytes,
+        tuple[int, ...], tuple[int, ...], int, int, tuple[int, ...],
+    ]  # fmt: skip
 
 #: Primitive polynomial of GF(2^8): x^8 + x^4 + x^3 + x^2 + 1 (bchlib's and galois' default).
 PRIM_POLY_GF256 = 0x11D
@@ -139,31 +143,65 @@ class TableDecoder:
     """Syndrome-table decoder for a (72, 56)-shaped code with t <= 2 (the default code).
 
     The remainder of the received word modulo g(x) is a complete syndrome for these codes. It
-    is the XOR of nine byte-table lookups (one per codeword byte). A non-zero remainder is
-    then solved in closed form (:func:`make_corrector`): S1 and S3 by four byte lookups, the
-    error locator's roots from one 256-entry table of the roots of y^2 + y = c. Memory: the
-    code's byte tables (9 x 256 packed 16-bit entries, 7 of them shared with the encoder,
-    about 5 KiB) and about 1.5 KiB of ``bytes`` tables for the correction, built with the
-    decoder: a word with errors allocates nothing. (A dictionary from every correctable
-    syndrome to its pattern, 2628 entries, costs about 300 KiB of resident memory;
-    :attr:`error_patterns` still builds it on demand, for the numpy batch path and the
-    tests, but the decoders never use it.)
+    is the XOR of one byte-table lookup per message byte and the parity bytes themselves (their
+    remainder is themselves: degree < r). A non-zero remainder is then solved in closed form
+    (:func:`make_corrector`): S1 and S3 by four byte lookups, the error locator's roots from
+    one table per c of y^2 + y = c. Memory: the message bytes' tables as tuples (indexing a
+    tuple is about twice as fast as the code's packed tables; 7 x 256 entries, about 70 KiB,
+    or none when given the frame's, which carry its CRC check too) and a few KiB of
+    ``bytes`` and tuple tables for the correction, built with the decoder: a word with errors
+    allocates nothing but its result. (A dictionary from every correctable syndrome to its
+    pattern, 2628 entries, costs about 300 KiB of resident memory; :attr:`error_patterns`
+    still builds it on demand, for the numpy batch path and the tests, but the decoders never
+    use it.)
+
+    Args:
+        code: the code, 72 bits with t <= 2 and r = 8 or 16.
+        message_tables: byte tables of the message bytes, most significant first, whose bits
+            0 .. r-1 are the code's remainder tables' (bits above are ignored, so a frame can
+            pack a check of its own there and share them); default: the code's, as tuples.
     """
 
     N_BYTES = 9
 
-    def __init__(self, code: BCHCode) -> None:
+    def __init__(
+        self, code: BCHCode, message_tables: Sequence[Sequence[int]] | None = None
+    ) -> None:
         if code.t > 2 or code.r > 16 or code.r % 8 or code.n != 8 * self.N_BYTES:
             raise ValueError(
                 "the table decoder handles 72-bit codes with t <= 2 and r = 8 or 16 parity bits"
             )
         self.code = code
         self._errors: dict[int, int] | None = None
+        k_bytes = code.k // 8
+        own = code.remainder_tables[:k_bytes]
+        if message_tables is None:
+            message_tables = tuple(tuple(table) for table in own)
+        elif len(message_tables) != k_bytes or any(
+            len(mine) != 256
+            or any((a & ((1 << code.r) - 1)) != b for a, b in zip(mine, table, strict=True))
+            for mine, table in zip(message_tables, own, strict=True)
+        ):
+            raise ValueError("message_tables are not the code's remainder tables")
+        #: The message bytes' tables the decoders index (bits 0 .. r-1: the remainder).
+        self.message_tables: tuple[Sequence[int], ...] = tuple(message_tables)
         self.decode: Callable[[int], tuple[int, int]]
         self.decode_bytes: Callable[[bytes], tuple[int, int]]
         #: Non-zero remainder -> the correctable error pattern, or ``None`` (closed form).
-        self.correct: Callable[[int], int | None] = make_corrector(code)
-        self.decode, self.decode_bytes = _make_decoders(code.remainder_tables, code.r, self.correct)
+        self.correct: Callable[[int], int | None]
+        #: The closed form's tables (t = 2, :func:`closed_form_tables`), else ``None``.
+        self.closed_form: ClosedForm | None = None
+        if code.t == 2 and code.r == 16:
+            self.closed_form = closed_form_tables(code)
+            self.correct = _t2_corrector(self.closed_form)
+            self.decode, self.decode_bytes = _make_t2_decoders(
+                self.message_tables, self.closed_form
+            )
+        else:
+            self.correct = make_corrector(code)
+            self.decode, self.decode_bytes = _make_decoders(
+                code.remainder_tables, code.r, self.correct
+            )
         self.decode.__doc__ = """Same contract as :meth:`BCHCode.decode`."""
         self.decode_bytes.__doc__ = """Decode the codeword as 9 bytes, MSB first (the wire form).
 
@@ -174,29 +212,31 @@ class TableDecoder:
         """Non-zero syndrome (remainder mod g) -> the correctable error pattern it stands for."""
         errors = self._errors
         if errors is None:
-            from codec._berlekamp import correctable_errors  # the batch path's and the tests'
+            from types import MappingProxyType  # the batch path's and the tests': not onboard
+
+            from codec._berlekamp import correctable_errors
 
             errors = self._errors = correctable_errors(self.code)
         return MappingProxyType(errors)
 
 
-def make_corrector(code: BCHCode) -> Callable[[int], int | None]:
-    """The error pattern of weight 1..t (t <= 2) with a given non-zero remainder mod g(x), or
-    ``None`` when there is none inside the (shortened) codeword: bounded-distance decoding,
-    the same decisions as :meth:`BCHCode.decode` and as a table of every correctable syndrome.
+def closed_form_tables(code: BCHCode) -> ClosedForm:
+    """The tables of the t = 2 closed form (:func:`make_corrector`), m <= 8:
 
-    In closed form over GF(2^m): the syndromes S1 = r(alpha) and S3 = r(alpha^3) of the
-    remainder r come from byte tables (linear in r). One error at i: S1 = alpha^i and
-    S3 = S1^3. Two errors x1, x2: x1 + x2 = S1 and x1 x2 = S3 / S1 + S1^2, so with x = S1 y
-    the locator becomes y^2 + y = c, c = S3 / S1^3 + 1, whose root y0 (the other is y0 + 1)
-    one 2^m-entry table holds; no root (trace of c is 1) means more than two errors. An error
-    position at or beyond n (outside the shortened code) is uncorrectable too. For t = 1 the
-    remainder is S1 itself up to the field isomorphism: one error at log S1, if below n.
+    ``s1_lo, s1_hi, s3_lo, s3_hi``: S1 and S3 of the remainder's low and high byte
+    (``bytes``; S = lo ^ hi by linearity); ``log``: the field's; ``cube``: log of S1^3 from log
+    of S1. Two errors x1, x2: x1 + x2 = S1 and x1 x2 = S3 / S1 + S1^2, so with x = S1 y the
+    locator becomes y^2 + y = c, c = S3 / S1^3 + 1; ``first[k]`` and ``second[k]`` are the
+    logs of its two roots y0 and y0 + 1 for c = alpha^k + 1 (k = log S3 - 3 log S1, any
+    sign: the tables have 2^m - 1 entries and negative indices wrap), and ``first0`` and
+    ``second0`` for c = 1 (S3 = 0). No root (trace of c is 1: more than two errors) is
+    :data:`_NO_ROOT` there. ``bit[e]``: the error pattern of the position of log ``e``
+    (``e`` below two periods) when it lies inside the shortened codeword, else 0, and 0 for
+    every ``e`` from ``_NO_ROOT``: the errors are then ``bit[first[k] + log S1]`` and
+    ``bit[second[k] + log S1]``, both non-zero exactly when the word is correctable.
     """
     f = code.field
-    exp, log, order, n = f.exp, f.log, f.order, code.n
-    if code.t > 2 or f.m > 8 or code.r % 8:
-        raise ValueError("the closed-form corrector handles t <= 2 over GF(2^m), m <= 8")
+    exp, order, n = f.exp, f.order, code.n
 
     def syndrome_tables(j: int) -> list[bytes]:
         """S_j of the remainder's bytes, least significant byte first: ``bytes`` of 256."""
@@ -206,9 +246,52 @@ def make_corrector(code: BCHCode) -> Callable[[int], int | None]:
             tables.append(bytes(linear_table(units)))  # small ints: no garbage
         return tables
 
-    s1_tables = syndrome_tables(1)
+    s1_lo, s1_hi = syndrome_tables(1)
+    s3_lo, s3_hi = syndrome_tables(3)
+    root_log = [_NO_ROOT] * (1 << f.m)  # c -> log of a root y of y^2 + y = c (y, y + 1)
+    for y in range(2, 1 << f.m):
+        root_log[f.mul(y, y) ^ y] = f.log[y]
+
+    def logs(c: int) -> tuple[int, int]:
+        first = root_log[c]
+        return (first, f.log[exp[first] ^ 1]) if first != _NO_ROOT else (_NO_ROOT, _NO_ROOT)
+
+    pairs = [logs(exp[k] ^ 1) if k else (_NO_ROOT, _NO_ROOT) for k in range(order)]
+    first0, second0 = logs(1)
+    bit = tuple(1 << e % order if e < 2 * order and e % order < n else 0 for e in range(3 * order))
+    return (
+        s1_lo, s1_hi, s3_lo, s3_hi, f.log, bytes(3 * i % order for i in range(order)),
+        tuple(p[0] for p in pairs), tuple(p[1] for p in pairs), first0, second0, bit,
+    )  # fmt: skip
+
+
+#: ``first``/``second`` for "no root": with a log of S1 added (at most 2^m - 2) it indexes
+#: the zeros at the end of ``bit``.
+_NO_ROOT = 510
+
+
+def make_corrector(code: BCHCode) -> Callable[[int], int | None]:
+    """The error pattern of weight 1..t (t <= 2) with a given non-zero remainder mod g(x), or
+    ``None`` when there is none inside the (shortened) codeword: bounded-distance decoding,
+    the same decisions as :meth:`BCHCode.decode` and as a table of every correctable syndrome.
+
+    In closed form over GF(2^m) (:func:`closed_form_tables`): the syndromes S1 = r(alpha) and
+    S3 = r(alpha^3) of the remainder r come from byte tables (linear in r). One error at i:
+    S1 = alpha^i and S3 = S1^3. Two errors: the roots of y^2 + y = c from a table by
+    c; no root means more than two errors. An error position at or beyond n (outside the
+    shortened code) is uncorrectable too. For t = 1 the remainder is S1 itself up to the field
+    isomorphism: one error at log S1, if below n.
+    """
+    f = code.field
+    log, order, n = f.log, f.order, code.n
+    if code.t > 2 or f.m > 8 or code.r % 8 or 2 * order > _NO_ROOT:
+        raise ValueError("the closed-form corrector handles t <= 2 over GF(2^m), m <= 8")
     if code.t == 1:
-        (s1_table,) = s1_tables
+        exp = f.exp
+        (s1_table,) = [
+            bytes(linear_table([exp[(8 * b + k) % order] for k in range(8)]))
+            for b in range(code.r // 8)
+        ]
 
         def correct_one(rem: int) -> int | None:
             s1 = s1_table[rem]
@@ -218,15 +301,12 @@ def make_corrector(code: BCHCode) -> Callable[[int], int | None]:
             return 1 << i if i < n else None
 
         return correct_one
-    s1_lo, s1_hi = s1_tables
-    s3_lo, s3_hi = syndrome_tables(3)
-    # roots[c] = a root y >= 2 of y^2 + y = c, 0 when there is none (c = 0 is never asked).
-    roots = bytearray(1 << f.m)
-    for y in range(2, 1 << f.m):
-        roots[f.mul(y, y) ^ y] = y
-    root_of = bytes(roots)
+    return _t2_corrector(closed_form_tables(code))
 
-    cube = bytes(3 * i % order for i in range(order))  # log of S1^3 from log of S1
+
+def _t2_corrector(tables: ClosedForm) -> Callable[[int], int | None]:
+    """:func:`make_corrector` for t = 2, from its tables."""
+    s1_lo, s1_hi, s3_lo, s3_hi, log, cube, first, second, first0, second0, bit = tables
 
     def correct(rem: int) -> int | None:
         lo = rem & 0xFF
@@ -235,25 +315,69 @@ def make_corrector(code: BCHCode) -> Callable[[int], int | None]:
         if not s1:
             return None  # S3 != 0 with S1 = 0: at least three errors
         l1 = log[s1]
-        l1_cubed = cube[l1]
         s3 = s3_lo[lo] ^ s3_hi[hi]
-        if s3 == exp[l1_cubed]:
-            return 1 << l1 if l1 < n else None
-        # exp holds two periods, so exponents up to 2 * order - 2 need no reduction.
-        y = root_of[(exp[log[s3] - l1_cubed + order] if s3 else 0) ^ 1]
-        if not y:
-            return None
-        i = log[y] + l1  # x1 = S1 * y
-        if i >= order:
-            i -= order
-        j = log[exp[i] ^ s1]  # x2 = x1 + S1
-        return (1 << i) | (1 << j) if i < n and j < n else None
+        if s3:
+            k = log[s3] - cube[l1]
+            if not k:  # S3 = S1^3: one error, at log S1
+                return bit[l1] or None
+            e1, e2 = bit[first[k] + l1], bit[second[k] + l1]
+        else:
+            e1, e2 = bit[first0 + l1], bit[second0 + l1]
+        return e1 | e2 if e1 and e2 else None
 
     return correct
 
 
 # The decoders are closures over their tables: cell variables are read almost as fast as
 # locals and, unlike default arguments, cost nothing per call. This is the per-frame hot path.
+
+
+def _make_t2_decoders(
+    tables: Sequence[Sequence[int]], closed_form: ClosedForm
+) -> tuple[Callable[[int], tuple[int, int]], Callable[[bytes], tuple[int, int]]]:
+    """The (72, 56) t = 2 decoders, the closed form written out (a call costs more than it):
+    the same decisions as :func:`make_corrector` (the tests compare every remainder)."""
+    t0, t1, t2, t3, t4, t5, t6 = tables
+    s1_lo, s1_hi, s3_lo, s3_hi, log, cube, first, second, first0, second0, bit = closed_form
+    from_bytes = int.from_bytes
+
+    def decode_bytes(b: bytes) -> tuple[int, int]:
+        w = from_bytes(b, "big")
+        # The parity bytes are their own remainder: XOR the word in and keep the low 16 bits.
+        syn = (
+            t0[b[0]] ^ t1[b[1]] ^ t2[b[2]] ^ t3[b[3]] ^ t4[b[4]] ^ t5[b[5]] ^ t6[b[6]] ^ w
+        ) & 0xFFFF
+        if not syn:
+            return w >> 16, 0
+        lo = syn & 0xFF
+        hi = syn >> 8
+        s1 = s1_lo[lo] ^ s1_hi[hi]
+        if s1:
+            l1 = log[s1]
+            s3 = s3_lo[lo] ^ s3_hi[hi]
+            if s3:
+                k = log[s3] - cube[l1]
+                if not k:
+                    e1 = bit[l1]
+                    if e1:
+                        return (w ^ e1) >> 16, 1
+                    return w >> 16, UNCORRECTABLE
+                e1 = bit[first[k] + l1]  # 0: no root (most words with 3 errors) or outside
+                if e1:
+                    e2 = bit[second[k] + l1]
+                    if e2:
+                        return (w ^ e1 ^ e2) >> 16, 2
+            else:
+                e1 = bit[first0 + l1]
+                e2 = bit[second0 + l1]
+                if e1 and e2:
+                    return (w ^ e1 ^ e2) >> 16, 2
+        return w >> 16, UNCORRECTABLE
+
+    def decode(received: int) -> tuple[int, int]:
+        return decode_bytes(received.to_bytes(9, "big"))
+
+    return decode, decode_bytes
 
 
 def _make_decoders(

@@ -7,8 +7,6 @@ pattern is adding a :class:`Pattern` to :data:`PATTERNS`, nothing else.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-
 from codec._fields import (
     COUNT,
     DEPTH,
@@ -24,9 +22,16 @@ from codec._record import Record, init
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
-    from collections.abc import Iterator
+    from collections.abc import ItemsView, Iterator, KeysView, Mapping, ValuesView
 
     from codec._fastpath import StraightLine
+
+    _MappingBase = Mapping[str, "Pattern"]
+else:
+    # A Mapping to the type checker and to every caller, without collections.abc at run time:
+    # importing it loads the collections package, 0.45-0.6 MiB of the vehicle's 1 MiB
+    # (``nemesys bench onboard``); CommandDictionary writes the mixin methods out instead.
+    _MappingBase = object
 
 #: Width of the pattern ID (bits) and the number of parameter fields in every frame.
 PATTERN_ID_BITS = 4
@@ -200,8 +205,14 @@ PATTERNS: tuple[Pattern, ...] = (
 )
 
 
-class CommandDictionary(Mapping[str, Pattern]):
-    """Patterns by name, with lookup by ID; validated once at construction."""
+class CommandDictionary(_MappingBase):
+    """Patterns by name, with lookup by ID; validated once at construction.
+
+    A read-only ``Mapping[str, Pattern]`` (names in dictionary order), equal to another
+    mapping with the same items, and unhashable, as a :class:`collections.abc.Mapping` is;
+    but not registered as one (that module is not loaded onboard), so ``isinstance(d,
+    Mapping)`` is false.
+    """
 
     def __init__(self, patterns: tuple[Pattern, ...]) -> None:
         by_id: dict[int, Pattern] = {}
@@ -231,6 +242,32 @@ class CommandDictionary(Mapping[str, Pattern]):
 
     def __len__(self) -> int:
         return len(self._by_name)
+
+    def __contains__(self, name: object) -> bool:
+        return name in self._by_name
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, CommandDictionary):
+            return self._by_name == other._by_name
+        if isinstance(other, dict):
+            return self._by_name == other
+        return NotImplemented
+
+    __hash__ = None  # type: ignore[assignment]  # as Mapping: equal by value, so unhashable
+
+    def keys(self) -> KeysView[str]:
+        return self._by_name.keys()
+
+    def values(self) -> ValuesView[Pattern]:
+        return self._by_name.values()
+
+    def items(self) -> ItemsView[str, Pattern]:
+        return self._by_name.items()
+
+    if not TYPE_CHECKING:  # Mapping's overloads are what the type checker sees
+
+        def get(self, name, default=None):
+            return self._by_name.get(name, default)
 
     def by_id(self, pattern_id: int) -> Pattern | None:
         return self._by_id.get(pattern_id)

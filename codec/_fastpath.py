@@ -3,10 +3,11 @@
 A modem delivers a frame as its 13 bytes, so the receiver's common case is a buffer whose
 first three bytes are the preamble and delimiter. :func:`straight_line` decodes that case
 without the bit-level search: the sync distance from three bytes, the BCH syndrome from the
-nine codeword bytes (the code's byte tables), a closed-form correction when it is not zero,
-the CRC-4 check in the same lookups (:func:`_check_tables`), and the pattern and field checks
-from tables made once per dictionary (all six fields in one mask test, see
-:func:`_field_classes`).
+nine codeword bytes (the table decoder's message tables, ``FAST_DECODER.message_tables``), a
+closed-form correction when it is not zero (its tables, written out as in the table decoder),
+the CRC-4 check in the same lookups (the tables carry it: ``codec._frame._check_tables``), and
+the pattern and field checks from tables made once per dictionary (all six fields in one mask
+test, see :func:`_field_classes`).
 
 It only ever accepts: whenever a check fails (sync beyond the tolerance, uncorrectable,
 CRC, unknown pattern, a field) it returns ``None`` and :class:`codec.FrameReceiver` runs its
@@ -30,12 +31,12 @@ from codec._frame import (
     SYNC_WORD,
     Decoded,
 )
-from codec._gf2 import linear_table, poly_mod
+from codec._gf2 import poly_mod
 from codec._record import slot_setters
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
-    from collections.abc import Callable, Sequence
+    from collections.abc import Callable
 
     #: ``(received bytes, sync tolerance) -> Decoded``, or ``None`` for "not on the straight
     #: line" (the bit-level path then decides).
@@ -110,40 +111,27 @@ def _field_classes(dictionary: CommandDictionary) -> tuple[bytes, list[Entry | N
     return classes, entries
 
 
-def _check_tables() -> tuple[Sequence[int], ...]:
-    """Byte tables of the codeword's seven message bytes giving, in one XOR, the BCH syndrome
-    (bits 0-15, the code's remainder tables) and the message's remainder modulo the CRC
-    polynomial (bits 16-19: zero exactly when the CRC-4 holds, since the message is the
-    payload shifted by 4 plus its CRC). The two parity bytes need no table: their remainder is
-    themselves (degree < 16), checked here."""
-    tables = CODE.remainder_tables
-    if list(tables[7]) != [b << 8 for b in range(256)] or list(tables[8]) != list(range(256)):
-        raise ValueError("the parity bytes' remainder tables are not the identity")
-    combined = []
-    for j in range(MESSAGE_BYTES):
-        shift = 8 * (MESSAGE_BYTES - 1 - j)  # message bit of the byte's lowest bit
-        units = [
-            tables[j][1 << i] | poly_mod(1 << (shift + i), CRC_POLY) << CODE.r for i in range(8)
-        ]
-        combined.append(linear_table(units, CODE.r + CRC_BITS))
-    return tuple(combined)
-
-
-def _build(dictionary: CommandDictionary) -> StraightLine:
+def _build(dictionary: CommandDictionary) -> StraightLine:  # noqa: PLR0915 (the hot path below)
     if SYNC_BITS != 24 or CODE.n != 72 or CODE.r != 16 or FIELDS_PER_FRAME != 6 or CRC_BITS != 4:
         raise ValueError("the straight line is written for the 24 + 72-bit frame layout")
-    t0, t1, t2, t3, t4, t5, t6 = _check_tables()
-    parity = CODE.r
-    # crc_of_bit[k]: the CRC check of codeword bit k - 1 (zero for a parity bit).
-    crc_of_bit = [0] + [
-        poly_mod(1 << (k - parity), CRC_POLY) if k >= parity else 0 for k in range(CODE.n)
-    ]
-    correct = FAST_DECODER.correct
+    closed_form = FAST_DECODER.closed_form
+    if closed_form is None or len(FAST_DECODER.message_tables) != MESSAGE_BYTES:
+        raise ValueError("the straight line needs the t = 2 table decoder")
+    # Bits 0-15 of each message byte's entry: its BCH remainder; bits 16-19: its CRC check.
+    t0, t1, t2, t3, t4, t5, t6 = FAST_DECODER.message_tables
+    if any(max(t) >> CODE.r + CRC_BITS for t in FAST_DECODER.message_tables) or not any(
+        max(t) >> CODE.r for t in FAST_DECODER.message_tables
+    ):
+        raise ValueError("the table decoder's message tables do not carry the CRC check")
+    s1_lo, s1_hi, s3_lo, s3_hi, log, cube, first, second, first0, second0, bit = closed_form
+    # crc_of[e]: the CRC check of the error at the position of log e (bit[e]'s), 0 for a
+    # parity bit and where bit[e] is 0: the received message's check plus the errors' is the
+    # corrected message's (the check is linear).
+    crc_of = tuple(poly_mod(error >> CODE.r, CRC_POLY) if error >> CODE.r else 0 for error in bit)
     field_classes = _field_classes(dictionary)
     if field_classes is None:
         return _decline
     classes, entries = field_classes
-    sync_bytes = SYNC_WORD.to_bytes(3, "big")
     half_shift = SHIFT_DISTANCE // 2
     from_bytes = int.from_bytes
     new = object.__new__
@@ -151,37 +139,62 @@ def _build(dictionary: CommandDictionary) -> StraightLine:
     set_command, set_corrected, set_sync_errors = slot_setters(
         Decoded, "command", "corrected", "sync_errors"
     )
+    payload_mask = (1 << (MESSAGE_BITS - CRC_BITS)) - 1
+    payload_shift = CODE.r + CRC_BITS
 
-    def decode(raw: bytes, tolerance: int) -> Decoded | None:
-        if raw.startswith(sync_bytes):
-            sync = 0
-        else:
-            sync = (((raw[0] << 16) | (raw[1] << 8) | raw[2]) ^ SYNC_WORD).bit_count()
+    def decode(raw: bytes, tolerance: int) -> Decoded | None:  # noqa: PLR0915 (written out)
+        w = from_bytes(raw[:ALIGNED_BYTES], "big")  # sync word, then the codeword
+        sync = w >> 72 ^ SYNC_WORD
+        if sync:
+            sync = sync.bit_count()
             if sync > tolerance or sync > half_shift:
                 return None
-        # Bits 0-15: the BCH syndrome; bits 16-19: the received message's CRC check.
+        # Bits 0-15: the BCH syndrome (the parity bytes are their own remainder); bits 16-19:
+        # the received message's CRC check.
         check = (
-            t0[raw[3]] ^ t1[raw[4]] ^ t2[raw[5]] ^ t3[raw[6]] ^ t4[raw[7]]
-            ^ t5[raw[8]] ^ t6[raw[9]] ^ (raw[10] << 8) ^ raw[11]
+            t0[raw[3]] ^ t1[raw[4]] ^ t2[raw[5]] ^ t3[raw[6]] ^ t4[raw[7]] ^ t5[raw[8]]
+            ^ t6[raw[9]] ^ (w & 0xFFFF)
         )  # fmt: skip
         if check:
+            # The closed form (codec._bch), written out: a call costs more than it.
             syn = check & 0xFFFF
-            error = correct(syn) if syn else None  # no BCH error: then the CRC failed
-            if error is None:
+            if not syn:
+                return None  # no BCH error: the CRC failed
+            lo = syn & 0xFF
+            hi = syn >> 8
+            s1 = s1_lo[lo] ^ s1_hi[hi]
+            if not s1:
                 return None
-            # The CRC check is linear too: the received message's, plus that of the error's
-            # (at most two) message bits, by bit position (bit_length: position + 1).
-            low = error & -error
-            high = error ^ low
-            crc = check >> 16 ^ crc_of_bit[low.bit_length()]
-            if high:
-                crc ^= crc_of_bit[high.bit_length()]
-            if crc:
-                return None
-            p = ((from_bytes(raw[3:12], "big") ^ error) >> 20).to_bytes(7, "big")
-            corrected = 2 if high else 1
+            l1 = log[s1]
+            s3 = s3_lo[lo] ^ s3_hi[hi]
+            if s3:
+                k = log[s3] - cube[l1]
+                if not k:  # one error, at log S1
+                    error = bit[l1]
+                    if not error or check >> 16 != crc_of[l1]:
+                        return None
+                    p = ((w ^ error) >> payload_shift & payload_mask).to_bytes(7, "big")
+                    corrected = 1
+                else:
+                    i1 = first[k] + l1
+                    i2 = second[k] + l1
+                    error = bit[i1]
+                    if not error or not bit[i2] or check >> 16 != crc_of[i1] ^ crc_of[i2]:
+                        return None
+                    error ^= bit[i2]
+                    p = ((w ^ error) >> payload_shift & payload_mask).to_bytes(7, "big")
+                    corrected = 2
+            else:
+                i1 = first0 + l1
+                i2 = second0 + l1
+                error = bit[i1]
+                if not error or not bit[i2] or check >> 16 != crc_of[i1] ^ crc_of[i2]:
+                    return None
+                error ^= bit[i2]
+                p = ((w ^ error) >> payload_shift & payload_mask).to_bytes(7, "big")
+                corrected = 2
         else:  # a codeword whose CRC holds
-            p = (from_bytes(raw[3:10], "big") >> 4).to_bytes(7, "big")
+            p = (w >> payload_shift & payload_mask).to_bytes(7, "big")
             corrected = 0
         entry = entries[p[0]]
         if entry is None:

@@ -135,7 +135,9 @@ class OnboardAgent:
         frame = Frame(bits)
         frame_hex = frame.hex
         events = FrameReceiver().feed_bytes(frame.to_bytes())
-        event = next((e for e in events if isinstance(e, Accepted)), events[-1] if events else None)
+        event = events[0] if events else None  # one accepted event: the common case
+        if type(event) is not Accepted:  # else the first accepted one, or the last rejection
+            event = next((e for e in events if isinstance(e, Accepted)), event and events[-1])
         if event is None:
             return self._reject(
                 state,

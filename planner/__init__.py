@@ -107,8 +107,9 @@ if not TYPE_CHECKING:
         module = _LAZY.get(name)
         if module is None:
             raise AttributeError(f"module 'planner' has no attribute {name!r}")
-        import importlib
+        import sys
 
-        value = getattr(importlib.import_module(f"planner.{module}"), name)
+        __import__(f"planner.{module}")  # not importlib: it loads warnings (onboard path)
+        value = getattr(sys.modules[f"planner.{module}"], name)
         globals()[name] = value
         return value

@@ -4,9 +4,9 @@ acknowledgements a status carries.
 
 The vehicle contract (:mod:`vehicle_contract.contract`) owns them; the onboard agent and
 guidance (:mod:`onboard`), which a real vehicle installs, import them from here. So this module
-is on the onboard path and stays as light as it: ``codec`` (already loaded there) and
-:mod:`enum`, no :mod:`typing`, no :mod:`dataclasses` (``bench/_reconfig_memory.py``,
-``tests/codec/test_imports.py``).
+is on the onboard path and stays as light as it: ``codec`` (already loaded there, with its
+:class:`codec.compat.StrEnum`), no :mod:`enum`, :mod:`typing` or :mod:`dataclasses`
+(``bench/_reconfig_memory.py``, ``tests/codec/test_imports.py``).
 """
 
 from __future__ import annotations

@@ -21,7 +21,7 @@ def test_quick_run_prints_every_pattern_and_the_memory_rows() -> None:
         assert float(cells[2]) > 0 and float(cells[3]) > 0  # total and per-waypoint us
         assert row.count("met") + row.count("MISSED") == 2
     assert "1620 ms" in text and "26 ms" in text and "15 ms/wp" in text
-    bare = next(ln for ln in lines if ln.startswith("bare interpreter"))
+    bare = next(ln for ln in lines if ln.startswith("plain interpreter (python -I -S"))
     onboard = next(ln for ln in lines if ln.startswith("import codec + planner"))
     bare_mib = float(bare.split(" MiB")[0].split()[-1])
     onboard_mib = float(onboard.split(" MiB")[0].split()[-1])

@@ -47,13 +47,14 @@ def test_quick_run_prints_paper_ours_and_ratio() -> None:
         assert receiver > 0 and bit_level > 0 and bchlib > 0
         assert cells[3].endswith("x") and cells[5] == "27"
         judged = start.startswith("mean")  # the bound is on the mean over 0-2 errors
-        assert cells[4] == ("<= 4x bchlib" if judged else "(info)")
+        assert cells[4] == ("<= 3x bchlib" if judged else "(info)")
         assert cells[6] in (("met", "MISSED") if judged else ("-",))
     assert "Whole decode / bchlib over 0-2 errors: " in text
     for name in ("Shipwreck", "BOP", "Pod"):
         detail = next(ln for ln in lines if ln.startswith(name + " "))
         assert int(detail.split()[4]) >= 2  # waypoints, after "name a -> b"
-    assert "bare interpreter" in text and "Machine:" in text
+    # The memory's baseline is named: a plain interpreter, no start-up hook.
+    assert "the baseline, a plain interpreter (python -I -S" in text and "Machine:" in text
 
 
 @pytest.mark.slow  # a benchmark run, ~1.5 s

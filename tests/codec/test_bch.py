@@ -347,3 +347,31 @@ def test_table_decoder_for_the_single_error_72_64_code(rng: random.Random) -> No
             expected = code.decode(received)
             assert decoder.decode(received) == expected
             assert decoder.decode_bytes(received.to_bytes(9, "big")) == expected
+
+
+def test_written_out_decoders_agree_with_the_corrector_on_every_remainder() -> None:
+    """The table decoder writes the closed form out (no call): for every non-zero remainder,
+    the word that is that remainder (message 0, parity bits = the remainder) decodes to what
+    :meth:`TableDecoder.correct` says, through both entry points."""
+    for syndrome in range(1, 1 << CODE.r):
+        error = TABLE.correct(syndrome)
+        expected = (0, UNCORRECTABLE) if error is None else ((syndrome ^ error) >> 16, 2)
+        if error is not None:
+            expected = (expected[0], error.bit_count())
+        assert TABLE.decode_bytes(syndrome.to_bytes(9, "big")) == expected, syndrome
+        assert TABLE.decode(syndrome) == expected, syndrome
+
+
+def test_message_tables_are_the_codes_remainder_tables() -> None:
+    """The frame's decoder shares its message tables with the receiver's CRC check (bits 16
+    and up); bits 0-15 are the code's remainder tables, and other tables are refused."""
+    from codec import FAST_DECODER
+
+    for mine, reference in zip(FAST_DECODER.message_tables, CODE.remainder_tables, strict=False):
+        assert [v & 0xFFFF for v in mine] == list(reference)
+    assert any(max(t) >> 16 for t in FAST_DECODER.message_tables)  # the CRC check's bits
+    assert TableDecoder(CODE).message_tables == tuple(tuple(t) for t in CODE.remainder_tables[:7])
+    wrong = [list(t) for t in TableDecoder(CODE).message_tables]
+    wrong[3][5] ^= 1
+    with pytest.raises(ValueError, match="not the code's remainder tables"):
+        TableDecoder(CODE, wrong)

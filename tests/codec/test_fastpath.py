@@ -320,3 +320,33 @@ def test_a_dictionary_pickles_without_its_straight_line() -> None:
     assert copy.straight_line is None and dict(copy) == dict(DICTIONARY)
     data = frame_bytes(FRAMES[0][1])
     assert FrameReceiver(dictionary=copy).feed_bytes(data) == FrameReceiver().feed_bytes(data)
+
+
+def test_every_remainder_decides_as_the_bit_level_path() -> None:
+    """The straight line writes the closed form and the CRC check out: for every non-zero
+    codeword remainder, the frame of the all-zero message (straight, every code 0, a valid
+    command) with those parity bits gets the same events on both paths; and every 1- and
+    2-bit error pattern of a codeword is corrected alike."""
+    clean = frame_of(Command(DICTIONARY["straight"], (0, 0, 0, 0))).value
+    assert clean >> 4 & ((1 << 72) - 1) == 0  # message 0, parity 0
+    straight = straight_line(DICTIONARY)
+    taken = 0
+    for syndrome in range(1, 1 << 16):
+        data = ((clean | syndrome << 4) << 4).to_bytes(FRAME_BYTES, "big")
+        fast = straight(data, 2)
+        slow = FrameReceiver(fast_path=False).feed_bytes(data)
+        if fast is None:
+            assert not slow or not isinstance(slow[0], Accepted) or slow[0].offset != 0
+        else:
+            taken += 1
+            assert slow and isinstance(slow[0], Accepted) and slow[0].decoded == fast, syndrome
+    assert taken >= 16 + 16 * 15 // 2  # at least the errors in the parity bits alone
+    value = frame_of(random_command(random.Random(3))).value
+    for i in range(72):
+        for j in range(i, 72):
+            damaged = value ^ (1 << (4 + i)) ^ (1 << (4 + j) if j != i else 0)
+            data = (damaged << 4).to_bytes(FRAME_BYTES, "big")
+            fast = straight(data, 2)
+            assert fast is not None and fast.corrected == (1 if i == j else 2), (i, j)
+            (event,) = FrameReceiver(fast_path=False).feed_bytes(data)
+            assert isinstance(event, Accepted) and event.decoded == fast

@@ -6,6 +6,8 @@ from __future__ import annotations
 import subprocess
 import sys
 
+from tests.vehicle_side import ROOT
+
 
 def _modules_after(statement: str) -> set[str]:
     code = f"import sys; {statement}; print('\\n'.join(sys.modules))"
@@ -13,6 +15,16 @@ def _modules_after(statement: str) -> set[str]:
         [sys.executable, "-c", code], check=True, capture_output=True, text=True
     )
     return set(result.stdout.split())
+
+
+def plain_modules_after(statement: str) -> set[str]:
+    """The modules a plain interpreter (``python -I -S``, the memory benches' baseline: no
+    site, no start-up hook) has loaded after ``statement``, the checkout first on the path."""
+    code = f"import sys; sys.path.insert(0, {str(ROOT)!r}); {statement}; print(*sys.modules)"
+    done = subprocess.run(
+        [sys.executable, "-I", "-S", "-c", code], check=True, capture_output=True, text=True
+    )
+    return set(done.stdout.split())
 
 
 def test_codec_imports_no_numpy() -> None:

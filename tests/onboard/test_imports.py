@@ -8,7 +8,7 @@ from __future__ import annotations
 import subprocess
 import sys
 
-from tests.codec.test_imports import HEAVY
+from tests.codec.test_imports import HEAVY, plain_modules_after
 
 #: The agent and guidance, as the onboard process imports them (``bench/_reconfig_memory.py``).
 ONBOARD = "from onboard.agent import OnboardAgent; from onboard.guidance import Guidance"
@@ -44,3 +44,20 @@ def test_the_probe_sees_the_contract_when_it_is_imported() -> None:
     """Guards the test above against passing because the probe itself is broken."""
     loaded = _modules_after(ONBOARD + "; import vehicle_contract.contract")
     assert {"vehicle_contract.contract", "vehicle_contract.payloads"} <= loaded
+
+
+#: All the standard library the onboard process loads beyond a plain interpreter's own: the
+#: planner's trigonometry, and ``from __future__ import annotations`` (an import at run time).
+ONBOARD_STDLIB = {"math", "__future__"}
+
+
+def test_the_agent_loads_no_standard_library_module_but_math() -> None:
+    """In a plain interpreter (no site), the onboard process's baseline: enum, collections,
+    functools, typing, importlib and the like cost the vehicle's memory budget more than the
+    agent's own code (``nemesys bench onboard``)."""
+    bare = plain_modules_after("pass")
+    loaded = plain_modules_after(ONBOARD + "; import planner; planner.validate")
+    ours = ("codec", "planner", "onboard", "vehicle_contract")
+    added = {m for m in loaded - bare if m.partition(".")[0] not in ours}
+    assert added == ONBOARD_STDLIB
+    assert "enum" in plain_modules_after("import enum") - bare  # the probe sees a loaded module
