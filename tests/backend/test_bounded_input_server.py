@@ -20,6 +20,8 @@ from websockets.sync.client import connect
 from websockets.sync.connection import Connection
 
 from backend.api.live import MAX_CONTROL_BYTES, MAX_CONTROL_DEPTH
+from backend.api.schemas.live import message_types
+from backend.messages import News
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import TOKEN, clear_nemesys_env
 
@@ -131,6 +133,9 @@ def test_50_mb_bodies_cost_the_server_nothing(server: ConsoleProcess) -> None:
     assert after["VmHWM"] - before["VmHWM"] < PEAK_GROWTH_KIB, report
 
 
+NEWS = message_types(News)
+
+
 def test_ws_limits_through_uvicorn(server: ConsoleProcess) -> None:
     deep = MAX_CONTROL_DEPTH + 1
 
@@ -138,7 +143,7 @@ def test_ws_limits_through_uvicorn(server: ConsoleProcess) -> None:
         ws.send(text)
         while True:
             msg: dict[str, object] = json.loads(ws.recv(timeout=5))
-            if msg["type"] not in ("telemetry", "command", "vehicle"):
+            if msg["type"] not in NEWS:  # the news every page gets (a belief, the link, ...)
                 return msg
 
     with connect(server.ws_url, open_timeout=5) as ws:
