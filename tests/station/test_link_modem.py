@@ -180,6 +180,15 @@ def test_the_hybrid_link_reads_a_receiver_only_vehicle_under_its_namespace(
             try:
                 await until("two-way", lambda: link.capability is Capability.ACKS_AND_TELEMETRY)
                 assert link.capability_problems == []
+                # the capability comes from the graph, read before the subscriptions: publish
+                # once the datum's subscription is in (the vehicle's node re-sends it anyway)
+                await until(
+                    "the datum's subscription",
+                    lambda: any(
+                        m.get("op") == "subscribe" and m.get("topic") == "/auv1/nemesys/datum"
+                        for m in list(bridge.received)
+                    ),
+                )
                 message = {"data": json.dumps(datum)}
                 await asyncio.to_thread(bridge.publish, "/auv1/nemesys/datum", message)
                 await until("the datum", lambda: heard)
