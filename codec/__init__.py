@@ -55,6 +55,22 @@ from codec._sync import Accepted, Event, FrameReceiver, Rejected
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
+    from codec._address import (
+        ADDRESSED_FRAME_BITS,
+        ADDRESSED_FRAME_BYTES,
+        BROADCAST_ADDRESS,
+        FLEET_DELIMITER,
+        MAX_ADDRESS,
+        AddressedDecoded,
+        AddressedFrame,
+        MisaddressedError,
+        address_word,
+        addressed_frame_of,
+        check_address,
+        check_vehicle_address,
+        decode_addressed_codeword,
+    )
+    from codec._address_sync import AddressedReceiver
     from codec._delivery import (
         MAX_COPIES,
         binomial_cdf,
@@ -64,7 +80,7 @@ if TYPE_CHECKING:
     )
     from codec._describe import describe_dictionary, describe_pattern, markdown_tables
     from codec._number_text import ASCII_DIGITS, int_from_text, number_from_text
-    from codec._parse import decode_frame, parse_frame
+    from codec._parse import decode_addressed_frame, decode_frame, parse_frame
     from codec._snap import Snap
     from codec._wire import (
         Encoded,
@@ -79,7 +95,10 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "ADDRESSED_FRAME_BITS",
+    "ADDRESSED_FRAME_BYTES",
     "ASCII_DIGITS",
+    "BROADCAST_ADDRESS",
     "CODE",
     "CODEWORD_BITS",
     "CRC_BITS",
@@ -92,9 +111,11 @@ __all__ = [
     "FAST_DECODER",
     "FIELDS_PER_FRAME",
     "FIELD_BITS",
+    "FLEET_DELIMITER",
     "FRAME_BITS",
     "FRAME_BYTES",
     "GUARD_BITS",
+    "MAX_ADDRESS",
     "MAX_COPIES",
     "MESSAGE_BITS",
     "PARITY_BITS",
@@ -107,6 +128,9 @@ __all__ = [
     "SYNC_WORD",
     "UNCORRECTABLE",
     "Accepted",
+    "AddressedDecoded",
+    "AddressedFrame",
+    "AddressedReceiver",
     "BCHCode",
     "ChoiceScale",
     "CodecError",
@@ -120,6 +144,7 @@ __all__ = [
     "Field",
     "Frame",
     "FrameReceiver",
+    "MisaddressedError",
     "NumericScale",
     "ParamValue",
     "Pattern",
@@ -129,11 +154,17 @@ __all__ = [
     "Segment",
     "Snap",
     "TableDecoder",
+    "address_word",
+    "addressed_frame_of",
     "airtime_s",
     "binomial_cdf",
+    "check_address",
+    "check_vehicle_address",
     "command_of_message",
     "copies_for",
     "crc4",
+    "decode_addressed_codeword",
+    "decode_addressed_frame",
     "decode_codeword",
     "decode_frame",
     "delivery_probability",
@@ -153,11 +184,26 @@ __all__ = [
 ]
 
 # Encoding, one-frame decode (of any accepted form), the listing helpers and the delivery
-# arithmetic are imported on first use: the console needs them, the vehicle does not
+# arithmetic are imported on first use: the console needs them, the vehicle does not; so are
+# addressed frames (docs/protocol.md, "Addressing"): a vehicle with no address never loads them
 # (``nemesys bench reconfig`` measures its memory). (Hidden from the type checker, which sees
 # the imports above, so that a misspelt name imported from codec is still an error and not an
 # ``object``.)
 _LAZY = {
+    "ADDRESSED_FRAME_BITS": "codec._address",
+    "ADDRESSED_FRAME_BYTES": "codec._address",
+    "BROADCAST_ADDRESS": "codec._address",
+    "FLEET_DELIMITER": "codec._address",
+    "MAX_ADDRESS": "codec._address",
+    "AddressedDecoded": "codec._address",
+    "AddressedFrame": "codec._address",
+    "MisaddressedError": "codec._address",
+    "address_word": "codec._address",
+    "addressed_frame_of": "codec._address",
+    "check_address": "codec._address",
+    "check_vehicle_address": "codec._address",
+    "decode_addressed_codeword": "codec._address",
+    "AddressedReceiver": "codec._address_sync",
     "describe_dictionary": "codec._describe",
     "describe_pattern": "codec._describe",
     "markdown_tables": "codec._describe",
@@ -173,6 +219,7 @@ _LAZY = {
     "Encoded": "codec._wire",
     "Section": "codec._wire",
     "airtime_s": "codec._wire",
+    "decode_addressed_frame": "codec._parse",
     "decode_frame": "codec._parse",
     "encode_frame": "codec._wire",
     "frame_of": "codec._wire",

@@ -51,6 +51,10 @@ class RejectReason(StrEnum):
     FIELD_OUT_OF_RANGE = "field_out_of_range"
     #: A field the pattern does not use is not zero.
     UNUSED_FIELD_SET = "unused_field_set"
+    #: An addressed frame for another vehicle, an address word that is no address, or (at a
+    #: vehicle with an address) an unaddressed frame other than surface: docs/protocol.md,
+    #: "Addressing". A vehicle with no address never gives it.
+    OTHER_VEHICLE = "other_vehicle"
 
 
 class DecodeError(CodecError):

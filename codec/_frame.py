@@ -196,6 +196,17 @@ def command_of_message(message: int, dictionary: CommandDictionary = DICTIONARY)
             RejectReason.CRC_MISMATCH,
             "CRC-4 mismatch after error correction: more errors than the code can correct",
         )
+    return command_of_payload(payload, dictionary)
+
+
+def command_of_payload(payload: int, dictionary: CommandDictionary = DICTIONARY) -> Command:
+    """The dictionary's checks of a 52-bit payload (pattern ID, then the fields j1..j6), and
+    its command: what every frame, addressed or not, carries after its CRC.
+
+    Raises:
+        DecodeError: unknown pattern ID, invalid field code, non-zero unused field (in that
+            order).
+    """
     pattern_id = payload >> (FIELDS_PER_FRAME * FIELD_BITS)
     pattern = dictionary.by_id(pattern_id)
     if pattern is None:

@@ -105,13 +105,20 @@ class Section(Record):
         init(self, "length", length)
 
 
-def sections(pattern: Pattern | None = None) -> tuple[Section, ...]:
-    """The frame's sections in order (the widths of :data:`codec._frame.SECTION_BITS`); field
-    sections take the pattern's field names."""
+def sections(pattern: Pattern | None = None, *, addressed: bool = False) -> tuple[Section, ...]:
+    """The frame's sections in order (the widths of :data:`codec._frame.SECTION_BITS`, or of
+    :data:`codec._address.ADDRESSED_SECTION_BITS` for an addressed frame); field sections take
+    the pattern's field names."""
     fields = pattern.fields if pattern is not None else ()
+    widths = SECTION_BITS
+    if addressed:
+        from codec._address import ADDRESSED_SECTION_BITS
+
+        widths = ADDRESSED_SECTION_BITS
     names = [
         "preamble",
         "delimiter",
+        *(("address", "address_check") if addressed else ()),
         "pattern",
         *(f.name for f in fields[:FIELDS_PER_FRAME]),
         *(f"j{j + 1} (unused)" for j in range(len(fields), FIELDS_PER_FRAME)),
@@ -121,7 +128,7 @@ def sections(pattern: Pattern | None = None) -> tuple[Section, ...]:
     ]
     out = []
     start = 0
-    for name, width in zip(names, SECTION_BITS, strict=True):
+    for name, width in zip(names, widths, strict=True):
         out.append(Section(name, start, width))
         start += width
     return tuple(out)
@@ -167,8 +174,17 @@ def message_of(command: Command) -> int:
     return (payload << CRC_BITS) | CRC4_REMAINDER(payload)
 
 
-def frame_of(command: Command) -> Frame:
-    """The frame that carries ``command``."""
+def frame_of(command: Command, address: int | None = None) -> Frame:
+    """The frame that carries ``command``: today's 100-bit frame, or with an ``address`` (0:
+    all vehicles, 1-15: one) the 108-bit addressed frame (docs/protocol.md, "Addressing").
+
+    Raises:
+        ValueError: an address out of range, naming the allowed one.
+    """
+    if address is not None:
+        from codec._address import addressed_frame_of
+
+        return addressed_frame_of(payload_of(command), address)
     codeword = CODE.encode(message_of(command))
     return Frame((SYNC_WORD << (CODEWORD_BITS + GUARD_BITS)) | (codeword << GUARD_BITS))
 
@@ -178,16 +194,26 @@ def encode_frame(
     params: Mapping[str, ParamValue] | None = None,
     /,
     dictionary: CommandDictionary = DICTIONARY,
+    address: int | None = None,
     **kwargs: ParamValue,
 ) -> Encoded:
     """Encode a command: ``encode_frame("circle", speed=0.5, depth=2, radius=5, direction="cw")``.
 
     ``pattern`` is a name or ID (then the parameters come as a mapping and/or keywords), or a
-    ready :class:`Command` (then no parameters).
+    ready :class:`Command` (then no parameters). ``address``: ``None`` for today's frame (no
+    fleet), else the vehicle the addressed frame is for (0: all vehicles).
 
     Raises:
-        EncodeError: unknown pattern, missing/unknown parameter, value out of range.
+        EncodeError: unknown pattern, missing/unknown parameter, value out of range, an
+            address out of range.
     """
+    if address is not None:
+        from codec._address import check_address
+
+        try:
+            check_address(address)
+        except ValueError as err:
+            raise EncodeError(str(err)) from None
     if isinstance(pattern, Command):
         if params or kwargs:
             raise TypeError("a Command already holds its parameters")
@@ -195,4 +221,4 @@ def encode_frame(
         snaps: tuple[Snap, ...] = ()
     else:
         command, snaps = make_command(pattern, {**(params or {}), **kwargs}, dictionary)
-    return Encoded(command, snaps, frame_of(command))
+    return Encoded(command, snaps, frame_of(command, address))

@@ -171,8 +171,11 @@ def messages_of_payloads(payloads: U64) -> U64:
     return (payloads << np.uint64(4)) | crc4_batch(payloads).astype(np.uint64)
 
 
-def inject_errors(frames: U8, ber: float, rng: np.random.Generator) -> NDArray[np.int64]:
-    """Flip each of the 100 bits of every frame independently with probability ``ber``.
+def inject_errors(
+    frames: U8, ber: float, rng: np.random.Generator, n_bits: int = FRAME_BITS
+) -> NDArray[np.int64]:
+    """Flip each of the 100 bits of every frame independently with probability ``ber``
+    (``n_bits``: the first ``n_bits`` of each row, e.g. an addressed frame's 108).
 
     Changes ``frames`` in place and returns the number of bits flipped per frame. Below
     :data:`SPARSE_BER_LIMIT` the error positions are drawn sparsely (a Binomial number of
@@ -183,14 +186,14 @@ def inject_errors(frames: U8, ber: float, rng: np.random.Generator) -> NDArray[n
         raise ValueError(f"ber must be in [0, 1], got {ber}")
     n = frames.shape[0]
     if ber > SPARSE_BER_LIMIT:
-        flips = rng.random((n, FRAME_BITS), dtype=np.float32) < np.float32(ber)
-        frames ^= np.packbits(flips, axis=1)
+        flips = rng.random((n, n_bits), dtype=np.float32) < np.float32(ber)
+        frames[:, : (n_bits + 7) // 8] ^= np.packbits(flips, axis=1)
         counts: NDArray[np.int64] = flips.sum(axis=1, dtype=np.int64)
         return counts
-    total_bits = n * FRAME_BITS
+    total_bits = n * n_bits
     positions = _distinct_positions(total_bits, int(rng.binomial(total_bits, ber)), rng)
-    _flip(frames, positions)
-    return np.bincount(positions // FRAME_BITS, minlength=n)
+    _flip(frames, positions, n_bits)
+    return np.bincount(positions // n_bits, minlength=n)
 
 
 def inject_weight(
@@ -218,14 +221,36 @@ def _distinct_positions(total: int, k: int, rng: np.random.Generator) -> NDArray
     return positions
 
 
-def _flip(frames: U8, positions: NDArray[np.int64]) -> None:
-    rows = positions // FRAME_BITS
-    bits = positions % FRAME_BITS
-    flat_byte = rows * FRAME_BYTES + bits // 8
+def _flip(frames: U8, positions: NDArray[np.int64], n_bits: int = FRAME_BITS) -> None:
+    rows = positions // n_bits
+    bits = positions % n_bits
+    flat_byte = rows * frames.shape[1] + bits // 8
     masks = (0x80 >> (bits % 8)).astype(np.float64)
     # Positions are distinct, so per byte the sum of the masks is their OR.
     flips = np.bincount(flat_byte, weights=masks, minlength=frames.size).astype(np.uint8)
     frames ^= flips.reshape(frames.shape)
+
+
+def _dictionary_checks(
+    payload: U64, dictionary: CommandDictionary
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.bool_]]:
+    """Per 52-bit payload: pattern ID known, every used field's code valid, unused fields
+    zero (the scalar path's checks after the CRC)."""
+    known, valid, used = _validity(dictionary)
+    pattern_id = (payload >> np.uint64(FIELDS_PER_FRAME * FIELD_BITS)).astype(np.intp)
+    range_ok = np.ones(payload.shape[0], dtype=np.bool_)
+    unused_ok = np.ones(payload.shape[0], dtype=np.bool_)
+    for j in range(FIELDS_PER_FRAME):
+        shift = np.uint64((FIELDS_PER_FRAME - 1 - j) * FIELD_BITS)
+        code = ((payload >> shift) & np.uint64(0xFF)).astype(np.intp)
+        ok = valid[pattern_id, j, code]
+        is_used = used[pattern_id, j]
+        # Unused fields always follow the used ones, so the scalar path's "first failing
+        # field" is a range failure whenever there is one: np.select's order gives that.
+        unused_ok &= ok | is_used
+        range_ok &= ok | ~is_used
+    known_ok: NDArray[np.bool_] = known[pattern_id]
+    return known_ok, range_ok, unused_ok
 
 
 def decode_frames(
@@ -238,7 +263,6 @@ def decode_frames(
     frames = np.asarray(frames, dtype=np.uint8)
     if frames.ndim != 2 or frames.shape[1] != FRAME_BYTES:
         raise ValueError(f"frames must have shape (N, {FRAME_BYTES})")
-    known, valid, used = _validity(dictionary)
     sync_errors = (
         _POPCOUNT8[frames[:, 0] ^ _SYNC_BYTES[0]]
         + _POPCOUNT8[frames[:, 1] ^ _SYNC_BYTES[1]]
@@ -253,24 +277,13 @@ def decode_frames(
     message = _bytes_to_u64(fixed[:, :7])
     payload = message >> np.uint64(4)
     crc_ok = crc4_batch(payload) == (message & np.uint64(0xF))
-    pattern_id = (payload >> np.uint64(FIELDS_PER_FRAME * FIELD_BITS)).astype(np.intp)
-    range_ok = np.ones(frames.shape[0], dtype=np.bool_)
-    unused_ok = np.ones(frames.shape[0], dtype=np.bool_)
-    for j in range(FIELDS_PER_FRAME):
-        shift = np.uint64((FIELDS_PER_FRAME - 1 - j) * FIELD_BITS)
-        code = ((payload >> shift) & np.uint64(0xFF)).astype(np.intp)
-        ok = valid[pattern_id, j, code]
-        is_used = used[pattern_id, j]
-        # Unused fields always follow the used ones, so the scalar path's "first failing
-        # field" is a range failure whenever there is one: np.select's order gives that.
-        unused_ok &= ok | is_used
-        range_ok &= ok | ~is_used
+    known_ok, range_ok, unused_ok = _dictionary_checks(payload, dictionary)
     status = np.select(
         [
             sync_errors > sync_tolerance,
             corrected < 0,
             ~crc_ok,
-            ~known[pattern_id],
+            ~known_ok,
             ~range_ok,
             ~unused_ok,
         ],

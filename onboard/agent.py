@@ -83,9 +83,27 @@ class NoNavigation:
 
 
 class OnboardAgent:
-    """Decodes, validates and switches guidance. One instance per vehicle."""
+    """Decodes, validates and switches guidance. One instance per vehicle.
 
-    def __init__(self, guidance: Guidance, limits: Limits | None = None) -> None:
+    ``address``: ``None`` (no fleet) takes today's 100-bit frames, exactly as before; 1-15
+    makes this vehicle one of a fleet on a shared link (docs/protocol.md, "Addressing"): it
+    takes 108-bit addressed frames to it or to all, and of unaddressed frames only surface;
+    one addressed to another vehicle is acknowledged rejected ``other_vehicle``, and every
+    acknowledgement then says the ``address`` its frame carried.
+
+    Raises:
+        ValueError: an address that is no vehicle's (1-15), naming the range.
+    """
+
+    def __init__(
+        self, guidance: Guidance, limits: Limits | None = None, address: int | None = None
+    ) -> None:
+        self.address = address
+        if address is not None:  # a fleet's vehicle: its receiver, loaded only then
+            from codec import AddressedReceiver, check_vehicle_address
+
+            check_vehicle_address(address)
+            self._receiver_class = AddressedReceiver
         self.guidance = guidance
         self.limits = limits or Limits()
         self.active: Plan | None = None
@@ -124,6 +142,9 @@ class OnboardAgent:
         """
         t0 = time.perf_counter() if receipt_s is None else receipt_s
         self.seq += 1
+        address = self.address
+        if address is not None:
+            return self._receive_addressed(address, bits, n_bits, state, t0, navigation)
         if bits is None or n_bits != FRAME_BITS:
             return self._reject(
                 state,
@@ -149,7 +170,58 @@ class OnboardAgent:
         if not isinstance(event, Accepted):
             err = event.error
             return self._reject(state, frame_hex, None, err.reason.value, str(err), err.field), None
-        decoded = event.decoded
+        return self._execute(state, frame_hex, event.decoded, t0, navigation)
+
+    def _receive_addressed(
+        self,
+        address: int,
+        bits: int | None,
+        n_bits: int,
+        state: VehicleState,
+        t0: float,
+        navigation: NoNavigation | None,
+    ) -> tuple[dict[str, Any], Reference | None]:
+        """:meth:`receive` for a vehicle with an address: a 100-bit or a 108-bit frame, through
+        the addressed receiver (:class:`codec.AddressedReceiver`)."""
+        from codec import ADDRESSED_FRAME_BITS, ADDRESSED_FRAME_BYTES, AddressedFrame
+
+        if bits is None or n_bits not in (FRAME_BITS, ADDRESSED_FRAME_BITS):
+            return self._reject(
+                state,
+                None,
+                None,
+                RejectReason.MALFORMED.value,
+                f"a frame is {FRAME_BITS} bits ({FRAME_BYTES} bytes), or {ADDRESSED_FRAME_BITS} "
+                f"({ADDRESSED_FRAME_BYTES} bytes) addressed; got {n_bits} bits",
+            ), None
+        frame = Frame(bits) if n_bits == FRAME_BITS else AddressedFrame(bits)
+        frame_hex = frame.hex
+        events = self._receiver_class(address).feed_bytes(frame.to_bytes())
+        event = next((e for e in events if isinstance(e, Accepted)), events[-1] if events else None)
+        if event is None:
+            return self._reject(
+                state,
+                frame_hex,
+                None,
+                RejectReason.NO_SYNC.value,
+                "no preamble and delimiter found within the sync tolerance",
+            ), None
+        if not isinstance(event, Accepted):
+            err = event.error
+            ack = self._reject(state, frame_hex, None, err.reason.value, str(err), err.field)
+            ack["address"] = getattr(err, "address", None)
+            return ack, None
+        return self._execute(state, frame_hex, event.decoded, t0, navigation)
+
+    def _execute(
+        self,
+        state: VehicleState,
+        frame_hex: str,
+        decoded: Decoded,
+        t0: float,
+        navigation: NoNavigation | None,
+    ) -> tuple[dict[str, Any], Reference | None]:
+        """A decoded frame: validated, planned and switched to, or rejected; acknowledged."""
         t1 = time.perf_counter()
         decode_ms = (t1 - t0) * 1e3
         command = decoded.command
@@ -254,6 +326,8 @@ class OnboardAgent:
             # very path the vehicle flies (same anchor, same join)
             "from": state.as_dict() if new is not None else None,
         }
+        if self.address is not None:  # a fleet's vehicle: the address its frame carried
+            ack["address"] = getattr(decoded, "address", None)
         self._recent.append(ack)
         del self._recent[:-RECENT_ACKS_MAX]
         return ack

@@ -72,6 +72,8 @@ NOT_TYPE_CHECKED_AT_310: dict[str, str] = {
         "3.11) types its operators Any at 3.10; its tests run on 3.10's numpy in test-vehicle"
     ),
     "tests/codec/test_batch.py": "codec/batch.py's tests (above)",
+    "codec/batch_addressed.py": "the batch path of addressed frames (numpy, as codec/batch.py)",
+    "tests/codec/test_batch_addressed.py": "codec/batch_addressed.py's tests (above)",
 }
 
 
