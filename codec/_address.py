@@ -24,7 +24,7 @@ With a bare 4-bit address, some of those codewords change the address and keep t
 vehicle then executes another's command (about 1e-6 of frames at a bit error rate of 1e-2).
 Two address words differ in at least 4 bits, so such a codeword must have at least 4 of its
 bits in the address word and keep the CRC: the lightest one in this code weighs 8, and
-misaddressed acceptance falls to about 3e-11 at 1e-2.
+misaddressed acceptance falls below 1e-10 at 1e-2.
 
 The vehicle's side is :func:`decode_addressed_codeword` (and :mod:`codec._address_sync`'s
 receiver); encoding (:func:`addressed_frame_of`) is the console's. Nothing here is loaded by a
@@ -138,9 +138,13 @@ def check_vehicle_address(address: int) -> int:
 
 
 def address_word(address: int) -> int:
-    """The 8-bit address word: the address, then the address again, inverted when it has an
-    odd number of ones. Any two words differ in at least 4 bits (the [8, 4, 4] code)."""
-    check = address ^ (MAX_ADDRESS if address.bit_count() & 1 else 0)
+    """The 8-bit address word: the address, then its check nibble, the address with its two
+    halves swapped, inverted when the address has an odd number of ones. Any two words differ
+    in at least 4 bits (the [8, 4, 4] extended Hamming code). Of the 24 such check nibbles,
+    the swap is one of the 8 for which no BCH codeword lighter than 8 bits turns one address
+    word into another and keeps the CRC (``analysis/addressing.py`` counts them)."""
+    swapped = ((address & 0b11) << 2) | (address >> 2)
+    check = swapped ^ (MAX_ADDRESS if address.bit_count() & 1 else 0)
     return (address << ADDRESS_BITS) | check
 
 

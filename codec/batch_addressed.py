@@ -33,6 +33,7 @@ from codec._errors import RejectReason
 from codec._frame import DEFAULT_SYNC_TOLERANCE, PAYLOAD_BITS
 from codec.batch import (
     _POPCOUNT8,
+    ACCEPTED,
     STATUS_NAMES,
     U8,
     U64,
@@ -116,14 +117,16 @@ def encode_addressed(messages: U64) -> U8:
 def decode_addressed_frames(
     frames: U8,
     *,
-    vehicle: int | None = None,
+    vehicle: int | NDArray[np.integer] | None = None,
     sync_tolerance: int = DEFAULT_SYNC_TOLERANCE,
     dictionary: CommandDictionary = DICTIONARY,
 ) -> AddressedBatchResult:
     """Decode aligned addressed frames with the checks of :func:`codec.decode_frame` as
-    ``vehicle`` (1-15; ``None``: as the console, any address accepted)."""
-    if vehicle is not None:
+    ``vehicle`` (1-15, or one per frame; ``None``: as the console, any address accepted)."""
+    if isinstance(vehicle, int):
         check_vehicle_address(vehicle)
+    elif vehicle is not None and not np.all((vehicle >= 1) & (vehicle <= MAX_ADDRESS)):
+        raise ValueError(f"a vehicle's own address is 1 to {MAX_ADDRESS}")
     frames = np.asarray(frames, dtype=np.uint8)
     if frames.ndim != 2 or frames.shape[1] != ADDRESSED_FRAME_BYTES:
         raise ValueError(f"frames must have shape (N, {ADDRESSED_FRAME_BYTES})")
@@ -157,8 +160,8 @@ def decode_addressed_frames(
             ~unused_ok,
         ],
         [_NO_SYNC, _UNCORRECTABLE, _CRC, OTHER_VEHICLE, _UNKNOWN, _RANGE, _UNUSED],
-        default=0,
+        default=ACCEPTED,
     ).astype(np.uint8)
     corrected = np.where(status == _NO_SYNC, np.int8(-1), corrected).astype(np.int8)
-    address = np.where((status == 0) | (status >= _UNKNOWN), address, np.int8(-1))
+    address = np.where((status == ACCEPTED) | (status >= _UNKNOWN), address, np.int8(-1))
     return AddressedBatchResult(status, corrected, sync_errors, message, address.astype(np.int8))
