@@ -21,10 +21,19 @@ LIMIT_VIOLATION = "limit_violation"
 #: A frame that decoded, but the vehicle has no navigation to plan from (none yet, or stale).
 NO_NAVIGATION = "no_navigation"
 
-#: Every ``reason`` a rejection may give: the codec's (the frame did not decode) and the
-#: agent's (it decoded but is no flyable plan within the vehicle's limits, or there is no
-#: navigation to plan it from).
+#: A frame addressed to another vehicle (or, at a vehicle with an address, an unaddressed one
+#: other than surface): the codec's own reason (docs/protocol.md, "Addressing").
+OTHER_VEHICLE = RejectReason.OTHER_VEHICLE.value
+
+#: Every ``reason`` a rejection may give: the codec's (the frame did not decode, or is not for
+#: this vehicle) and the agent's (it decoded but is no flyable plan within the vehicle's
+#: limits, or there is no navigation to plan it from).
 REJECT_REASONS = (*(r.value for r in RejectReason), INVALID_PLAN, LIMIT_VIOLATION, NO_NAVIGATION)
+
+#: Addresses on a link shared by a fleet: 0 is every vehicle's, a vehicle's own is 1 to 15
+#: (:mod:`codec._address`, spelt out here so the contract loads no more of the codec).
+BROADCAST_ADDRESS = 0
+MAX_ADDRESS = 15
 
 
 class Mode(StrEnum):

@@ -29,8 +29,10 @@ from vehicle_contract.payloads import SCHEMAS
 #: The contract's version (see the module doc for the rule). 2.0: a new reject reason
 #: (``no_navigation``) and mode (``nav_fault``) a 1.x peer does not know; the datum topic,
 #: the acknowledgement deadline and ``late``, ``nav_valid``, ``recent_acks``, vehicle
-#: namespaces.
-CONTRACT_VERSION: Final = "2.0.0"
+#: namespaces. 2.1: a fleet on one link: a vehicle's address (optional: without one, a vehicle
+#: and a console work as in 2.0, with the same frames), the addressed frame on the frame topic,
+#: the ``other_vehicle`` reason and the ``address`` fields, all only where an address is set.
+CONTRACT_VERSION: Final = "2.1.0"
 
 #: A vehicle acknowledges a frame within this long of receiving it (s); one made later says
 #: ``late: true``. (The numbers the onboard path needs live in :mod:`vehicle_contract.codes`.)
@@ -159,7 +161,8 @@ TOPICS: Final = (
         None,
         None,
         True,
-        "one 100-bit frame packed in 13 bytes (docs/protocol.md), as the ME link carries it",
+        "one 100-bit frame packed in 13 bytes (docs/protocol.md), as the ME link carries it; "
+        "to a vehicle with an address, a 108-bit addressed frame in 14 bytes",
     ),
     Topic(
         POSE_TOPIC,
@@ -288,6 +291,16 @@ OBLIGATIONS: Final = (
     "own.",
     "A number the vehicle does not know is null (NaN and infinities become null through "
     "rosbridge); a required field is never left out.",
+    "A fleet on one ME link (docs/protocol.md, Addressing): each vehicle has an address, "
+    f"1 to {codes.MAX_ADDRESS} (the reference node's vehicle_address parameter; "
+    f"{codes.BROADCAST_ADDRESS} addresses all vehicles), and takes the 108-bit addressed frames "
+    f"(14 bytes on {FRAME_TOPIC}) addressed to it or to all, and of the 100-bit frames only "
+    "surface (Surface from a single-vehicle console reaches every vehicle). Any other frame "
+    "that decodes is acknowledged rejected with reason other_vehicle and changes nothing: "
+    "one addressed to another vehicle, or a 100-bit frame other than surface (it names no "
+    "vehicle). Its acknowledgements then carry the address the frame named (address; null "
+    "when none) and its status its own address (address). A vehicle without an address takes "
+    "the 100-bit frames only, exactly as before, and never says address.",
     "Several vehicles in one ROS graph: each puts every contract topic under its namespace, "
     "/<namespace>/nemesys/... (the reference node's vehicle_namespace parameter, the console's "
     "vehicle_namespace setting); without one the names are as listed.",

@@ -14,6 +14,8 @@ from typing import TYPE_CHECKING, Any, Final
 from codec import describe_dictionary
 from vehicle_contract.codes import (
     ACK_DEADLINE_S,
+    BROADCAST_ADDRESS,
+    MAX_ADDRESS,
     MODES,
     RECENT_ACKS_MAX,
     RECENT_ACKS_S,
@@ -60,9 +62,10 @@ ACK_SCHEMA: Final[dict[str, Any]] = {
         "outcome": {"enum": ["accepted", "rejected"], "description": "the verdict"},
         "frame_hex": {
             "type": ["string", "null"],
-            "pattern": "^([0-9a-fA-F]{25}|[0-9a-fA-F]{26})$",
-            "description": "the 100 bits received, 25 hex digits (or the 13 packed bytes); "
-            "null when the message was not a frame",
+            "pattern": "^([0-9a-fA-F]{25}|[0-9a-fA-F]{26}|[0-9a-fA-F]{27}|[0-9a-fA-F]{28})$",
+            "description": "the 100 bits received, 25 hex digits (or the 13 packed bytes); a "
+            "fleet's addressed frame: 108 bits, 27 hex digits (or its 14 packed bytes); null "
+            "when the message was not a frame",
         },
         "corrected_bits": {**_COUNT_OR_NULL, "description": "bits the BCH decoder corrected"},
         "sync_errors": {**_COUNT_OR_NULL, "description": "preamble and delimiter bits wrong"},
@@ -102,6 +105,14 @@ ACK_SCHEMA: Final[dict[str, Any]] = {
             "type": "integer",
             "minimum": 0,
             "description": "the simulator only: bits its emulated channel flipped",
+        },
+        "address": {
+            "type": ["integer", "null"],
+            "minimum": BROADCAST_ADDRESS,
+            "maximum": MAX_ADDRESS,
+            "description": "a vehicle with an address only (2.1): the address the frame "
+            f"carried ({BROADCAST_ADDRESS}: all vehicles); null: an unaddressed frame, or none "
+            "decoded; with reason other_vehicle, the vehicle it was for",
         },
     },
     "allOf": [
@@ -176,6 +187,14 @@ STATUS_SCHEMA: Final[dict[str, Any]] = {
             "enum": ["topic", "receiver"],
             "description": "where the vehicle takes frames from: the frame topic, or only its "
             "own ME receiver (no frame subscriber); absent: the topic",
+        },
+        "address": {
+            "type": ["integer", "null"],
+            "minimum": 1,
+            "maximum": MAX_ADDRESS,
+            "description": "the vehicle's own address on a link it shares with a fleet (2.1; "
+            "docs/protocol.md, Addressing); absent or null: none, it takes single-vehicle "
+            "frames only",
         },
         "recent_acks": {
             "type": "array",

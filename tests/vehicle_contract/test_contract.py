@@ -153,7 +153,8 @@ def test_every_real_simulator_message_validates() -> None:
         reasons.add(reason)
         acks.append(ack)
     # every reason the contract names but no_navigation (the simulator always knows where it is)
-    assert reasons == set(codes.REJECT_REASONS) - {codes.NO_NAVIGATION}
+    # and other_vehicle (a vehicle with an address only: tests/onboard/test_agent_address.py)
+    assert reasons == set(codes.REJECT_REASONS) - {codes.NO_NAVIGATION, codes.OTHER_VEHICLE}
     acks.append(_run(sim, HOVER.frame.to_bytes()))
     acks.append(_run(sim, SURFACE.frame.to_bytes()))
     for _ in range(40):

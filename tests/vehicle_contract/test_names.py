@@ -64,7 +64,7 @@ def test_a_namespaced_name_is_traced_back_to_its_contract_topic() -> None:
 
 def test_the_contract_states_its_conventions_and_deadline() -> None:
     doc = contract.contract_json()
-    assert doc["version"] == contract.CONTRACT_VERSION == "2.0.0"
+    assert doc["version"] == contract.CONTRACT_VERSION == "2.1.0"  # 2.1: addresses (optional)
     assert doc["ack_deadline_s"] == contract.ACK_DEADLINE_S == codes.ACK_DEADLINE_S == 1.0
     conventions = doc["conventions"]
     assert "true (geographic) north" in conventions["heading"]
