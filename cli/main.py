@@ -222,6 +222,12 @@ def cmd_analyze(args: argparse.Namespace, out: TextIO) -> int:
         if args.trials is not None and args.trials < 1:
             raise UsageError(f"--trials must be at least 1, got {args.trials}")
         return delivery.main(out, args.trials or delivery.DEFAULT_TRIALS, args.seed)
+    if args.target == "addressing":
+        from analysis import addressing_report
+
+        if args.trials is not None and args.trials < 1:
+            raise UsageError(f"--trials must be at least 1, got {args.trials}")
+        return addressing_report.main(out, args.trials, args.seed, args.quick, sys.stderr)
     raise UsageError(f"unknown analysis {args.target!r}")
 
 
@@ -317,10 +323,17 @@ def build_parser() -> argparse.ArgumentParser:
         description="ber: decoding success vs bit error rate for T = 1..4 (Monte Carlo through "
         "the real frame and decoder, against the analytic curve), coding efficiency, and the "
         "rate of wrong commands accepted with and without the CRC-4. delivery: one command "
-        "sent r = 1..3 times through the training channel, against 1 - (1 - P1)^r.",
+        "sent r = 1..3 times through the training channel, against 1 - (1 - P1)^r. "
+        "addressing: the ways to address vehicles on one link compared (misaddressed "
+        "acceptance and lost frames, analytic and Monte Carlo), and the one chosen.",
     )
-    p.add_argument("target", choices=["ber", "delivery"], help="what to analyze")
-    p.add_argument("--trials", type=int_from_text, default=None, help="delivery: commands per BER")
+    p.add_argument("target", choices=["ber", "delivery", "addressing"], help="what to analyze")
+    p.add_argument(
+        "--trials",
+        type=int_from_text,
+        default=None,
+        help="delivery: commands per BER; addressing: frames per design and condition",
+    )
     p.add_argument("--quick", action="store_true", help="fewer frames (under a minute)")
     p.add_argument(
         "--out",
