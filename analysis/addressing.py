@@ -245,30 +245,54 @@ def _keys_of(keys: NDArray[np.int64], subsets: NDArray[np.int16]) -> NDArray[np.
     return out
 
 
-def count_keys(keys: NDArray[np.int64], weight: int, targets: Iterable[int]) -> dict[int, int]:
-    """``N(weight, t)`` for each target ``t``: the sets of ``weight`` positions whose keys XOR
-    to ``t``. Each set is found once, as its lowest ``weight // 2`` positions (``low``) and the
-    rest (``high``), all of ``low`` below all of ``high``, with equal keys up to ``t``."""
-    if weight == 0:  # the empty set: key 0
-        return {t: int(t == 0) for t in targets}
+def _halves(
+    keys: NDArray[np.int64], weight: int
+) -> tuple[NDArray[np.int16], NDArray[np.int64], NDArray[np.int16], NDArray[np.int64]]:
+    """The lower halves (``weight // 2`` positions) and their keys, the upper halves sorted by
+    key and their keys."""
     n = keys.shape[0]
     low_size = weight // 2
     low = _subsets(n, low_size)
     high = _subsets(n, weight - low_size)
-    low_keys = _keys_of(keys, low)
-    low_max = low.max(axis=1) if low_size else np.full(1, -1, dtype=np.int16)
     high_keys = _keys_of(keys, high)
     order = np.argsort(high_keys, kind="stable")
-    high_keys, high_min = high_keys[order], high.min(axis=1)[order]
-    counts = {}
-    for t in targets:
-        want = low_keys ^ t
-        first = np.searchsorted(high_keys, want, "left")
-        found = np.searchsorted(high_keys, want, "right") - first
-        rows = np.repeat(np.arange(want.shape[0]), found)
-        at = np.repeat(first - np.cumsum(found) + found, found) + np.arange(int(found.sum()))
-        counts[t] = int(np.count_nonzero(low_max[rows] < high_min[at]))
-    return counts
+    return low, _keys_of(keys, low), high[order], high_keys[order]
+
+
+def _matches(
+    halves: tuple[NDArray[np.int16], NDArray[np.int64], NDArray[np.int16], NDArray[np.int64]],
+    target: int,
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Rows of the lower and upper halves that make a set of key ``target``, each set once: all
+    of the lower half's positions below all of the upper's."""
+    low, low_keys, high, high_keys = halves
+    want = low_keys ^ target
+    first = np.searchsorted(high_keys, want, "left")
+    found = np.searchsorted(high_keys, want, "right") - first
+    rows = np.repeat(np.arange(want.shape[0]), found)
+    at = np.repeat(first - np.cumsum(found) + found, found) + np.arange(int(found.sum()))
+    low_max = low.max(axis=1) if low.shape[1] else np.full(low.shape[0], -1, dtype=np.int16)
+    ordered = low_max[rows] < high.min(axis=1)[at]
+    return rows[ordered], at[ordered]
+
+
+def count_keys(keys: NDArray[np.int64], weight: int, targets: Iterable[int]) -> dict[int, int]:
+    """``N(weight, t)`` for each target ``t``: the sets of ``weight`` positions whose keys XOR
+    to ``t``, found by meeting in the middle (:func:`_matches`)."""
+    if weight == 0:  # the empty set: key 0
+        return {t: int(t == 0) for t in targets}
+    halves = _halves(keys, weight)
+    return {t: int(_matches(halves, t)[0].shape[0]) for t in targets}
+
+
+def vectors_of(keys: NDArray[np.int64], weight: int, target: int) -> list[tuple[int, ...]]:
+    """The sets :func:`count_keys` counts, as sorted positions."""
+    halves = _halves(keys, weight)
+    rows, at = _matches(halves, target)
+    low, _, high, _ = halves
+    return [
+        tuple(sorted((*low[r].tolist(), *high[a].tolist()))) for r, a in zip(rows, at, strict=True)
+    ]
 
 
 def tail_count(d: Design, weight: int, target: int) -> float:
@@ -375,27 +399,35 @@ def figures(d: Design, ber: float, w_exact: int = W_EXACT) -> Figures:
     enum = enumerate_design(d, w_exact)
     n = d.n_sent
     clean = sum(math.comb(n, i) * ber**i * (1 - ber) ** (n - i) for i in range(3))
-    values = []
     if d.mode == "delimiter":  # the sync decides; any valid codeword is executed
         codeword = enum.acceptance(ber, (0,))
+        syncs: dict[tuple[int, int, int], float] = {}  # by the three sync words' differences
+        values = []
         for b, a in pairs():
-            targets = (d.sync_word(a), d.sync_word(0))
-            values.append(sync_probability(d.sync_word(b), targets, ber, d.sync_tolerance))
-        values = [v * codeword for v in values]
+            sent, targets = d.sync_word(b), (d.sync_word(a), d.sync_word(0))
+            shape = (sent ^ targets[0], sent ^ targets[1], 0)
+            if shape not in syncs:
+                syncs[shape] = sync_probability(sent, targets, ber, d.sync_tolerance)
+            values.append(syncs[shape] * codeword)
         own_targets = (d.sync_word(1), d.sync_word(0))
         own = sync_probability(d.sync_word(1), own_targets, ber, d.sync_tolerance)
     else:
         own = sync_probability(d.sync_word(0), (d.sync_word(0),), ber, d.sync_tolerance)
-        values = [own * enum.acceptance(ber, d.targets(b, a)) for b, a in pairs()]
+        reached = {
+            t: enum.acceptance(ber, (t,)) for t in {t for b, a in pairs() for t in d.targets(b, a)}
+        }
+        values = [own * sum(reached[t] for t in d.targets(b, a)) for b, a in pairs()]
     return Figures(ber, float(np.mean(values)), max(values), 1.0 - own * clean)
 
 
-def chosen(rows: dict[str, list[Figures]]) -> str:
-    """The design that meets :data:`REQUIRED` at BER 1e-2 for the worst pair with the fewest
-    frame bits, then the least loss there: the codec's (:data:`CODEC_DESIGN`)."""
-    index = BERS.index(REQUIRED_AT_BER)
-    meeting = [d for d in DESIGNS if rows[d.key][index].misaddressed_max <= REQUIRED]
+def chosen(at_required: dict[str, Figures]) -> str:
+    """The design that meets :data:`REQUIRED` for the worst pair (its figures at
+    :data:`REQUIRED_AT_BER`, by key) with the fewest frame bits, then the least loss: the
+    codec's (:data:`CODEC_DESIGN`)."""
+    if any(f.ber != REQUIRED_AT_BER for f in at_required.values()):
+        raise ValueError(f"the requirement is at BER {REQUIRED_AT_BER:g}")
+    meeting = [d for d in DESIGNS if at_required[d.key].misaddressed_max <= REQUIRED]
     if not meeting:
         raise ValueError("no design meets the requirement")
-    best = min(meeting, key=lambda d: (d.frame_bits, rows[d.key][index].lost))
+    best = min(meeting, key=lambda d: (d.frame_bits, at_required[d.key].lost))
     return best.key

@@ -91,7 +91,10 @@ def run(
             rows.append(MonteCarloRow(key, errors, level, counts, found))
             if progress is not None:
                 progress(f"{key} {rows[-1].condition}: {counts}")
-    return Report(frames, seed, w_exact, analytic, rows, chosen(analytic))
+    at = BERS.index(REQUIRED_AT_BER)
+    return Report(
+        frames, seed, w_exact, analytic, rows, chosen({k: v[at] for k, v in analytic.items()})
+    )
 
 
 def _rate(count: int, frames: int) -> str:
