@@ -32,16 +32,17 @@ from cli.common import (
     positive_rate,
     write_snaps,
 )
+from cli.fleet import add_vehicle_option, decode_text, to_text
 from cli.send import cmd_send
 from codec import (
     DEFAULT_BITRATE_BPS,
     DICTIONARY,
+    AddressedDecoded,
     CodecError,
     Decoded,
     DecodeError,
     EncodeError,
     airtime_s,
-    decode_frame,
     describe_dictionary,
     encode_frame,
     int_from_text,
@@ -81,14 +82,16 @@ def cmd_patterns(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
-    enc = encode_frame(args.pattern, parse_assignments(args.params))
+    address = args.vehicle
+    enc = encode_frame(args.pattern, parse_assignments(args.params), address=address)
     cmd, frame = enc.command, enc.frame
-    airtime_ms = airtime_s(args.bitrate) * 1e3
     bits = frame.bits
-    secs = sections(cmd.pattern)
+    airtime_ms = airtime_s(args.bitrate, len(bits)) * 1e3
+    secs = sections(cmd.pattern, addressed=address is not None)
     if args.json:
         doc: dict[str, Any] = {
             **encoded_json(enc),
+            **({"address": address} if address is not None else {}),
             "units": {f.name: f.unit for f in cmd.pattern.fields},
             "bits": bits,
             "hex": frame.hex,
@@ -103,6 +106,8 @@ def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
         out.write("\n")
         return EXIT_OK
     out.write(f"{cmd.pattern.name} (ID {cmd.pattern.id})\n")
+    if address is not None:
+        out.write(f"  to              {to_text(address)}\n")
     write_snaps(out, enc.snaps)
     out.write(f"bits     {frame.grouped(cmd.pattern)}\n")
     for s in secs:
@@ -117,22 +122,27 @@ def cmd_encode(args: argparse.Namespace, out: TextIO) -> int:
 
 
 def _decoded_json(dec: Decoded) -> dict[str, Any]:
+    address = {"address": dec.address} if isinstance(dec, AddressedDecoded) else {}
     return {
         **command_json(dec.command),
         "corrected": dec.corrected,
         "sync_errors": dec.sync_errors,
+        **address,
     }
 
 
 def _decoded_text(dec: Decoded) -> str:
     bits = "bit" if dec.corrected == 1 else "bits"
-    return f"{dec.command.describe()}  (corrected {dec.corrected} {bits})"
+    to = f", to {to_text(dec.address)}" if isinstance(dec, AddressedDecoded) else ""
+    return f"{dec.command.describe()}  (corrected {dec.corrected} {bits}{to})"
 
 
-def _decode_one(text: str, as_json: bool, out: TextIO, line: int | None) -> bool:
+def _decode_one(
+    text: str, as_json: bool, out: TextIO, line: int | None, vehicle: int | None = None
+) -> bool:
     where = {"line": line} if line is not None else {}
     try:
-        dec = decode_frame(text)
+        dec = decode_text(text, vehicle)
     except DecodeError as err:
         if as_json:
             out.write(json.dumps({**where, "error": str(err), "reason": err.reason.value}) + "\n")
@@ -156,9 +166,10 @@ def cmd_decode(args: argparse.Namespace, out: TextIO) -> int:
             text = raw.strip()
             if not text or text.startswith("#"):
                 continue
-            all_ok &= _decode_one(text, args.json, out, number)
+            all_ok &= _decode_one(text, args.json, out, number, args.vehicle)
         return EXIT_OK if all_ok else EXIT_REJECTED
-    return EXIT_OK if _decode_one("".join(args.frame), args.json, out, None) else EXIT_REJECTED
+    decoded = _decode_one("".join(args.frame), args.json, out, None, args.vehicle)
+    return EXIT_OK if decoded else EXIT_REJECTED
 
 
 # --- send ---------------------------------------------------------------------------------
@@ -270,7 +281,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser(
         "encode",
-        help="encode a command into a 100-bit frame",
+        help="encode a command into a frame (100 bits; 108, addressed, with --vehicle)",
         description="Encode PATTERN with every parameter as name=value (units: m, m/s, s, deg).",
     )
     p.add_argument("pattern", metavar="PATTERN", help=", ".join(DICTIONARY))
@@ -283,6 +294,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="BPS",
         help=f"link bit rate for the airtime (default {DEFAULT_BITRATE_BPS})",
     )
+    add_vehicle_option(p, encode=True)
 
     p = sub.add_parser(
         "decode",
@@ -292,6 +304,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("frame", nargs="+", metavar="BITS", help="the frame, or - for stdin")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    add_vehicle_option(p, encode=False)
 
     send_cli.add_parser(sub)
 
