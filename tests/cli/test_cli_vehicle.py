@@ -22,7 +22,7 @@ def test_encode_to_a_vehicle(capsys: pytest.CaptureFixture[str]) -> None:
     assert doc["airtime_ms"] == pytest.approx(108 / 36_000 * 1e3)
     assert [s["name"] for s in doc["sections"]][2:5] == ["address", "address_check", "pattern"]
     assert "".join(s["bits"] for s in doc["sections"]) == doc["bits"]
-    assert decode_addressed_frame(doc["bits"]).address == 3  # type: ignore[attr-defined]
+    assert decode_addressed_frame(doc["bits"]).address == 3
     status, out, _ = run(["encode", *SQUARE, "--vehicle", "0"], capsys)
     assert status == EXIT_OK and "  to              all vehicles\n" in out
     assert "address_check   bits 28-31  " in out and "airtime  3.000 ms" in out
