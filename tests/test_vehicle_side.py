@@ -136,7 +136,9 @@ def test_pytest_vehicle_side_collects_that() -> None:
     modules = {line.split("::")[0] for line in out.splitlines() if "::" in line}
     assert modules == {
         "tests/onboard/test_agent.py",
+        "tests/onboard/test_agent_address.py",
         "tests/onboard/test_imports.py",
+        "tests/vehicle_contract/test_address.py",
         "tests/vehicle_contract/test_names.py",
     }
 

@@ -15,6 +15,7 @@ from typing import Any, Final
 from nemesys_vehicle.geo import check_lat_lon
 from onboard.guidance import GuidanceConfig
 from planner import CircleFence, Limits
+from vehicle_contract.codes import MAX_ADDRESS
 from vehicle_contract.names import check_namespace
 
 #: Where frames come from: the contract's frame topic, or a serial ME receiver.
@@ -33,6 +34,10 @@ class VehicleConfig:
 
     #: The contract topics go under ``/<vehicle_namespace>/nemesys/...`` ("": ``/nemesys/...``).
     vehicle_namespace: str = ""
+    #: This vehicle's address in a fleet sharing one ME link, 1-15 (docs/protocol.md,
+    #: "Addressing"): it then takes frames addressed to it or to all, and of unaddressed
+    #: frames only surface. 0: none, the single-vehicle frames only (as before addresses).
+    vehicle_address: int = 0
     #: "topic": frames from ``/nemesys/frame``; "serial": a raw ME receiver stream.
     frame_input: str = "topic"
     #: Anything ``serial.serial_for_url`` opens: ``/dev/ttyUSB0``, ``socket://host:port``.
@@ -108,6 +113,11 @@ class VehicleConfig:
 
     def _check_navigation(self) -> None:
         check_namespace(self.vehicle_namespace)  # ValueError naming what is allowed
+        if type(self.vehicle_address) is not int or not 0 <= self.vehicle_address <= MAX_ADDRESS:
+            raise ValueError(
+                f"vehicle_address must be 0 (none: single-vehicle frames only) or this "
+                f"vehicle's address in a fleet, 1 to {MAX_ADDRESS}; got {self.vehicle_address!r}"
+            )
         if not (math.isfinite(self.nav_timeout_s) and self.nav_timeout_s > 0):
             raise ValueError(f"nav_timeout_s must be a positive number, got {self.nav_timeout_s!r}")
         if self.nav_fault_action not in NAV_FAULT_ACTIONS:
@@ -140,6 +150,11 @@ class VehicleConfig:
                 raise ValueError(f"{name} must name a topic, got {getattr(self, name)!r}")
 
     # --- what the parts are built from ---------------------------------------------------
+
+    @property
+    def address(self) -> int | None:
+        """The agent's address: ``None`` when ``vehicle_address`` is 0 (no fleet)."""
+        return self.vehicle_address or None
 
     def limits(self) -> Limits:
         fence = (

@@ -69,8 +69,8 @@ class VehicleCore:
         self.config = config or VehicleConfig()
         self.sinks = sinks or Sinks()
         self.guidance = Guidance(self.config.guidance_config())
-        self.agent = OnboardAgent(self.guidance, self.config.limits())
-        self.stream = FrameStream()
+        self.agent = OnboardAgent(self.guidance, self.config.limits(), self.config.address)
+        self.stream = FrameStream(self.config.address)
         self.georef = Georef(self.config)
         self.odometry: Odometry | None = None
         #: State of charge when the vehicle reports one (None: unknown, ``null`` in status).
@@ -103,7 +103,7 @@ class VehicleCore:
         pose = self.map_pose()
         # without a map_ned position the state carries the time only (nothing is planned)
         state = self.state(t_s) if pose is not None else VehicleState(0.0, 0.0, 0.0, t_s=t_s)
-        bits, n_bits = frame_bits(bytes(data))
+        bits, n_bits = frame_bits(bytes(data), self.config.address is not None)
         ack, ref = self.agent.receive(bits, n_bits, state, receipt, navigation)
         if ref is not None:  # accepted and replanned: guidance's first new setpoint, now
             self.fault = None
@@ -199,6 +199,8 @@ class VehicleCore:
             "frame_input": "receiver" if self.config.frame_input == "serial" else "topic",
             "recent_acks": self.agent.recent_acks(t_s),
         }
+        if self.config.address is not None:  # a fleet's vehicle says which it is
+            status["address"] = self.config.address
         self.sinks.status(status)
         sent = self._datum_sent_s
         if sent is None or t_s - sent >= DATUM_REPEAT_S or t_s < sent:

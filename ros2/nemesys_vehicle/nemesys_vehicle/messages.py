@@ -132,9 +132,14 @@ def setpoint_msg(
     }
 
 
-def frame_bits(data: bytes) -> tuple[int | None, int]:
+def frame_bits(data: bytes, addressed: bool = False) -> tuple[int | None, int]:
     """A frame message's bits for the agent: ``(bits, n_bits)``; ``None`` when it is not
-    ``FRAME_BYTES`` long (acknowledged as malformed), as the simulator does."""
+    ``FRAME_BYTES`` long (acknowledged as malformed), as the simulator does. ``addressed``
+    (a vehicle with an address): 14 bytes are a 108-bit addressed frame too."""
+    if addressed and len(data) == FRAME_BYTES + 1:
+        from codec import ADDRESSED_FRAME_BITS
+
+        return int.from_bytes(data, "big") >> GUARD_BITS, ADDRESSED_FRAME_BITS
     if len(data) != FRAME_BYTES:
         return None, 8 * len(data)
     return int.from_bytes(data, "big") >> GUARD_BITS, FRAME_BITS

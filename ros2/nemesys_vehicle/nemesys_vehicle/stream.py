@@ -10,6 +10,10 @@ as a frame from the topic, so both inputs give the same acknowledgement for the 
 The 4 guard bits of a cut-out frame are zero (the receiver reports a frame as soon as its
 codeword is in, before its guard bits; the agent ignores them anyway), so the result does not
 depend on how the stream was chunked.
+
+A vehicle with an address (a fleet's, docs/protocol.md "Addressing") syncs with the codec's
+:class:`codec.AddressedReceiver` instead, on the 108-bit addressed frames as well as the
+100-bit ones, and cuts each at its own length (14 or 13 bytes) by the sync word it starts with.
 """
 
 from __future__ import annotations
@@ -18,23 +22,33 @@ from codec import (
     CODEWORD_BITS,
     GUARD_BITS,
     SYNC_BITS,
+    SYNC_WORD,
+    AddressedFrame,
+    AddressedReceiver,
     Frame,
     FrameReceiver,
 )
+from codec._address import ADDRESSED_CODEWORD_BITS, FLEET_SYNC_WORD
 
 #: Header plus codeword: the bits of a frame the receiver needs (the guard bits are not sent
 #: on to the agent, see the module doc).
 _FRAME_BODY_BITS = SYNC_BITS + CODEWORD_BITS
 _FRAME_BODY_MASK = (1 << _FRAME_BODY_BITS) - 1
+_ADDRESSED_BODY_BITS = SYNC_BITS + ADDRESSED_CODEWORD_BITS
+_ADDRESSED_BODY_MASK = (1 << _ADDRESSED_BODY_BITS) - 1
 
 
 class FrameStream:
-    """Frame sync over a byte stream: bytes in, 13-byte frames out. No I/O, no threads."""
+    """Frame sync over a byte stream: bytes in, 13-byte frames out (14 for an addressed one,
+    with an ``address``). No I/O, no threads."""
 
-    def __init__(self) -> None:
+    def __init__(self, address: int | None = None) -> None:
         # the agent decodes every frame again with the default sync tolerance: the stream
         # must use the same, or a frame found here could fail sync there
-        self.receiver = FrameReceiver()
+        self.receiver: FrameReceiver | AddressedReceiver = (
+            FrameReceiver() if address is None else AddressedReceiver(address)
+        )
+        self.address = address
         self._bits = 0  # stream bits the receiver may still report a frame in, oldest first
         self._len = 0  # how many
         self._base = 0  # stream offset of the oldest one
@@ -61,8 +75,13 @@ class FrameStream:
 
     def _frame_at(self, offset: int) -> bytes:
         """The frame starting at stream bit ``offset`` (its header and codeword have arrived)."""
-        shift = self._len - (offset - self._base) - _FRAME_BODY_BITS
-        body = (self._bits >> shift) & _FRAME_BODY_MASK
+        start = self._len - (offset - self._base)
+        if self.address is not None:
+            sync = (self._bits >> (start - SYNC_BITS)) & ((1 << SYNC_BITS) - 1)
+            if (sync ^ FLEET_SYNC_WORD).bit_count() < (sync ^ SYNC_WORD).bit_count():
+                body = (self._bits >> (start - _ADDRESSED_BODY_BITS)) & _ADDRESSED_BODY_MASK
+                return AddressedFrame(body << GUARD_BITS).to_bytes()
+        body = (self._bits >> (start - _FRAME_BODY_BITS)) & _FRAME_BODY_MASK
         return Frame(body << GUARD_BITS).to_bytes()
 
     def _keep_pending(self) -> None:
