@@ -323,6 +323,7 @@ def test_a_dictionary_pickles_without_its_straight_line() -> None:
     assert FrameReceiver(dictionary=copy).feed_bytes(data) == FrameReceiver().feed_bytes(data)
 
 
+@pytest.mark.slow  # 65535 frames through the bit-level path, ~1 s
 def test_every_remainder_decides_as_the_bit_level_path() -> None:
     """The straight line writes the closed form and the CRC check out: for every non-zero
     codeword remainder, the frame of the all-zero message (straight, every code 0, a valid
