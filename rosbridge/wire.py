@@ -97,6 +97,22 @@ def wire_json(message: Any) -> str:
     return strict_json(message, (", ", ": "))
 
 
+def binary_frame(data: bytes, fragment_size: object) -> bytes:
+    """A CBOR message (``cbor``, ``cbor-raw``) as the real server sends it: whole, when it fits
+    ``fragment_size`` (or the size is ``None``). The real server cannot fragment one: its send
+    fails (``'bytes' object has no attribute 'get'``, rosbridge_suite issue #844), as it does
+    for a size that is not a number: both raise :class:`FragmentError` with its words."""
+    if fragment_size is None:
+        return data
+    if not isinstance(fragment_size, int | float):
+        raise FragmentError(
+            f"'>' not supported between instances of 'int' and '{type(fragment_size).__name__}'"
+        )
+    if len(data) > fragment_size:
+        raise FragmentError("'bytes' object has no attribute 'get'")
+    return data
+
+
 def fragments(text: str, fragment_size: object, op_id: MessageId = None) -> tuple[str, ...]:
     """``text`` as the real server sends it to a client whose fragment size is
     ``fragment_size``: unchanged when it fits (or the size is ``None``), else ``fragment`` ops.
