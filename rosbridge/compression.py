@@ -27,6 +27,7 @@ from __future__ import annotations
 import base64
 import binascii
 import math
+import struct
 from collections.abc import Iterable, Mapping
 from typing import Any, Final
 
@@ -35,7 +36,13 @@ import numpy as np
 from rosbags.interfaces import Nodetype
 from rosbags.interfaces.typing import FieldDesc
 
-from rosbridge.typedefs import UnknownDefinition, fields_of, ros2_name, typestore
+from rosbridge.typedefs import (
+    UnknownDefinition,
+    fields_of,
+    message_fields,
+    ros2_name,
+    typestore,
+)
 from rosbridge.types import FIELD_DEFAULTS
 from vehicle_contract.messages import stamp
 
@@ -154,7 +161,7 @@ def cbor_values(type_name: str, message: Any) -> dict[str, Any]:
     """A typed message's values for ``cbor`` compression (the real ``extract_cbor_values``
     rules, in field order)."""
     out: dict[str, Any] = {}
-    for name, desc in fields_of(type_name):
+    for name, desc in message_fields(type_name):
         value = getattr(message, name)
         if desc[0] == Nodetype.BASE:
             out[name] = value
@@ -202,7 +209,7 @@ def cbor_raw_publish(topic: str, type_name: str, msg: object, now_s: float) -> b
     message = typed(type_name, msg)
     try:
         cdr = bytes(typestore().serialize_cdr(message, ros2_name(type_name)))
-    except (TypeError, ValueError, OverflowError, AttributeError) as exc:
+    except (TypeError, ValueError, OverflowError, AttributeError, struct.error) as exc:
         raise EncodeError(f"{type_name}: {exc}") from None
     time = stamp(now_s)
     raw = {"secs": time["sec"], "nsecs": time["nanosec"], "bytes": cdr}

@@ -42,6 +42,11 @@ EXTRA_DEFINITIONS: Final[Mapping[str, str]] = MappingProxyType(
 )
 
 
+#: The member rosidl gives an empty message (``std_msgs/Empty``) in its serialized form; no
+#: ``.msg`` file and no rclpy message has it.
+PLACEHOLDER_FIELD: Final = "structure_needs_at_least_one_member"
+
+
 class UnknownDefinition(LookupError):
     """A message type the type store does not define."""
 
@@ -81,6 +86,13 @@ def fields_of(type_name: str) -> list[tuple[str, FieldDesc]]:
         ) from None
 
 
+def message_fields(type_name: str) -> list[tuple[str, FieldDesc]]:
+    """:func:`fields_of` as a ``.msg`` file and ``rclpy`` know them: an empty message has no
+    field (the store's placeholder member is only in its CDR)."""
+    fields = fields_of(type_name)
+    return [] if [name for name, _ in fields] == [PLACEHOLDER_FIELD] else fields
+
+
 def _spelling(desc: FieldDesc) -> str:
     """A field's type as a ``.msg`` file writes it: ``float64``, ``string<=10``,
     ``std_msgs/Header``, ``uint8[]``, ``float64[36]``, ``int32[<=5]``."""
@@ -99,7 +111,7 @@ def _spelling(desc: FieldDesc) -> str:
 def msg_text(type_name: str) -> str:
     """One type's definition in ``.msg`` syntax (constants, then fields), ending in a newline
     as a file does. Raises :class:`UnknownDefinition`."""
-    fields = fields_of(type_name)
+    fields = message_fields(type_name)
     constants = typestore().fielddefs[ros2_name(type_name)][0]
     lines = [
         f"{kind} {name}={str(value).lower() if isinstance(value, bool) else value}"

@@ -7,7 +7,8 @@ Builders make the ``msg`` of the NemeSys topics that rosbridge carries (:func:`j
 :func:`service_response`); :func:`wire_json` serializes them as the real server does (NaN as
 ``null``; :func:`vehicle_contract.messages.to_json` is the compact form), and
 :func:`fragments` splits a serialized message into ``fragment`` ops exactly as the real
-server's ``Protocol.send`` does.
+server's ``Protocol.send`` does; :func:`binary_frame` checks a CBOR message against the
+fragment size as the real server's send does (it cannot fragment one).
 """
 
 from __future__ import annotations
