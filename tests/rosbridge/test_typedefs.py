@@ -6,7 +6,6 @@ publishes agreeing with the definitions it gives."""
 from __future__ import annotations
 
 import json
-import re
 from typing import Any
 
 import pytest
@@ -15,19 +14,9 @@ from rosbags.typesys import get_types_from_msg
 
 from rosbridge.graph import Graph
 from rosbridge.protocol import ClientSession
-from rosbridge.typedefs import SEPARATOR, full_text, msg_text
+from rosbridge.typedefs import full_text, msg_text
 from rosbridge.types import MESSAGE_FIELDS
-
-#: What rosapi puts between two definitions.
-_BETWEEN = re.compile(rf"\n{SEPARATOR}\nMSG: (\S+)\n")
-
-
-def sections(text: str) -> list[tuple[str | None, str]]:
-    """``(type or None for the root, its text)`` of a full definition, split on its
-    separators by rosapi's own layout (a blank line, 80 ``=``, ``MSG: pkg/Type``)."""
-    parts = _BETWEEN.split(text)
-    names: list[str | None] = [None, *parts[1::2]]
-    return list(zip(names, parts[0::2], strict=True))
+from tests.rosbridge.helpers import definition_sections as sections
 
 
 def graph_listing() -> dict[str, Any]:
