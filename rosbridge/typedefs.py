@@ -131,7 +131,7 @@ def _used_types(type_name: str) -> list[str]:
     return out
 
 
-@functools.cache
+@functools.lru_cache(maxsize=256)  # bounded: clients name the types of the topics they make
 def full_text(type_name: str) -> str:
     """``typedefs_full_text`` of a topic's type, built by the real ``rosapi``'s rule (see the
     module's docstring); the failure line for a type the store does not define."""
