@@ -48,8 +48,6 @@ from vehicle_contract.messages import stamp
 
 #: The compressions that change what is sent, strongest first (the real server's order).
 COMPRESSIONS: Final = ("cbor-raw", "cbor", "png")
-#: Compressions sent as CBOR in binary frames.
-BINARY_COMPRESSIONS: Final = frozenset({"cbor", "cbor-raw"})
 
 #: Typed-array tags (RFC 8746, little-endian) of numeric arrays, with their numpy dtype.
 TYPED_ARRAY_TAGS: Final[Mapping[str, tuple[int, str]]] = {
@@ -193,7 +191,8 @@ def _cbor_array(inner: Any, value: Any) -> Any:
 
 def cbor_publish(topic: str, type_name: str, msg: object) -> bytes:
     """The binary frame of a ``publish`` of ``msg`` (JSON form) with ``cbor`` compression. A
-    type the simulator cannot lay out goes with its values as held (it was relayed as sent)."""
+    type the store does not define goes with its values as held (it was relayed as sent).
+    Raises :class:`EncodeError`."""
     try:
         values: Any = cbor_values(type_name, typed(type_name, msg))
     except EncodeError:

@@ -214,6 +214,16 @@ def test_a_cbor_message_longer_than_fragment_size_is_logged_not_sent() -> None:
     assert len(json_session.deliver(POSE_TOPIC, pose_stamped_msg(POSE))) > 1  # JSON: fragments
 
 
+def test_cbor_of_a_type_without_a_definition_carries_the_values_as_relayed() -> None:
+    """The simulator relays a type it cannot lay out as sent; ``cbor`` sends those values
+    (``cbor-raw`` cannot: it needs the definition, below)."""
+    session = new_session()
+    kind, msg = "example_interfaces/msg/Nothing", {"x": [1, 2], "s": "a"}
+    send(session, {"op": "subscribe", "topic": "/t", "type": kind, "compression": "cbor"})
+    (binary,) = session.deliver("/t", msg)
+    assert isinstance(binary, bytes) and cbor2.loads(binary)["msg"] == msg
+
+
 @pytest.mark.parametrize(
     ("kind", "msg", "words"),
     [
