@@ -134,7 +134,7 @@ class Publisher:
         self._station: tuple[float | None, ...] | None = None
         self._belief_drawn = False  # the believed position is drawn (not the fresh fix)
         #: What a late subscriber gets sent again, by topic.
-        self.latched: dict[str, Callable[[], None]] = {TRACK.topic: self.send_track}
+        self.latched: dict[str, Callable[[], object]] = {TRACK.topic: self.send_track}
 
     # --- the news ------------------------------------------------------------------------
 
@@ -197,9 +197,9 @@ class Publisher:
             self.ch.fix.log(fix, log_time=ns)
         if self.trail.add(pose.t_s, placed):
             mono = self._monotonic()
-            if self._track_sent_s is None or mono - self._track_sent_s >= TRACK_SEND_S:
+            due = self._track_sent_s is None or mono - self._track_sent_s >= TRACK_SEND_S
+            if due and self.send_track():
                 self._track_sent_s = mono
-                self.send_track()
 
     def new_dive(self, dive: int | None) -> None:
         """A new dive: Foxglove's clients start again, the track is emptied, what stays drawn
@@ -213,14 +213,16 @@ class Publisher:
             if topic != TRACK.topic:
                 send()
 
-    def send_track(self) -> None:
+    def send_track(self) -> bool:
+        """The track so far, to its subscribers (none: nothing is built); True when sent."""
         if not self.ch.track.has_sinks() or not self.trail.poses:
-            return
+            return False
         ns = self.clock.at(self.trail.poses[-1][0])
         poses = [pose for _t, pose in self.trail.poses]
         self.ch.track.log(
             PosesInFrame(timestamp=stamp(ns), frame_id=FRAME, poses=poses), log_time=ns
         )
+        return True
 
     def belief(self, belief: Belief) -> None:
         p, ns = belief.position, self.clock.now()
