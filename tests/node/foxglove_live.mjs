@@ -65,9 +65,42 @@ function typeOf(channel) {
   const set = descriptor.FileDescriptorSet.decode(Buffer.from(channel.schema, "base64"));
   return protobuf.Root.fromDescriptor(set).lookupType(channel.schemaName);
 }
+// Messages, decoded (listening before subscribing: what stays drawn comes at once).
 const byTopic = new Map([...channels.values()].map((c) => [c.topic, c]));
 const decoders = new Map();
 const subscriptions = new Map();
+let first = null;
+let times = 0;
+let moved;
+const done = new Promise((resolve) => {
+  moved = resolve;
+});
+client.on("time", ({ timestamp }) => {
+  times += 1;
+  if (times % 20 === 1) say("time", { ns: timestamp.toString() });
+});
+client.on("message", ({ subscriptionId, timestamp, data }) => {
+  const channel = subscriptions.get(subscriptionId);
+  const logTime = timestamp.toString();
+  const bytes = new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
+  if (channel.encoding === "json") {
+    say("command", { logTime, record: JSON.parse(new TextDecoder().decode(bytes)) });
+    return;
+  }
+  const type = decoders.get(channel.id);
+  const message = type.toObject(type.decode(bytes), { longs: String, defaults: true });
+  if (channel.topic === "/log") {
+    say("log", { logTime, level: message.level, text: message.message, name: message.name });
+  } else if (channel.topic !== "/vehicle/pose") {
+    const entities = message.entities.map((e) => e.id);
+    say("scene", { topic: channel.topic, logTime, entities, deletions: message.deletions.length });
+  } else {
+    const { position, orientation } = message.pose;
+    say("pose", { logTime, stamp: message.timestamp, frameId: message.frameId, position, orientation });
+    first ??= position;
+    if (Math.hypot(position.x - first.x, position.y - first.y) >= minMove) moved();
+  }
+});
 for (const topic of ["/vehicle/pose", "/commands", "/log", "/paths/active", "/station"]) {
   const channel = byTopic.get(topic);
   if (!channel) throw new Error(`not advertised: ${topic}`);
@@ -96,45 +129,7 @@ say("ready", {
   refusal,
 });
 
-// 4. Messages, decoded, until the vehicle has moved.
-let first = null;
-let times = 0;
-const done = new Promise((resolve) => {
-  client.on("time", ({ timestamp }) => {
-    times += 1;
-    if (times % 20 === 1) say("time", { ns: timestamp.toString() });
-  });
-  client.on("message", ({ subscriptionId, timestamp, data }) => {
-    const channel = subscriptions.get(subscriptionId);
-    const bytes = new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
-    if (channel.encoding === "json") {
-      say("command", { logTime: timestamp.toString(), record: JSON.parse(new TextDecoder().decode(bytes)) });
-      return;
-    }
-    const message = decoders.get(channel.id).toObject(decoders.get(channel.id).decode(bytes), {
-      longs: String,
-      defaults: true,
-    });
-    if (channel.topic === "/log") {
-      say("log", { logTime: timestamp.toString(), level: message.level, text: message.message, name: message.name });
-      return;
-    }
-    if (channel.topic !== "/vehicle/pose") {
-      say("scene", { topic: channel.topic, logTime: timestamp.toString(), entities: message.entities.map((e) => e.id), deletions: message.deletions.length });
-      return;
-    }
-    const { position, orientation } = message.pose;
-    say("pose", {
-      logTime: timestamp.toString(),
-      stamp: message.timestamp,
-      frameId: message.frameId,
-      position,
-      orientation,
-    });
-    first ??= position;
-    if (Math.hypot(position.x - first.x, position.y - first.y) >= minMove) resolve();
-  });
-});
+// 4. Until the vehicle has moved.
 await withTimeout(done, 60000, `poses moving ${minMove} m`);
 say("done", { statuses, times });
 client.close();
