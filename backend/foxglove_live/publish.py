@@ -32,6 +32,7 @@ from pydantic import BaseModel
 
 from backend.belief.model import Belief
 from backend.chart.gps import Station
+from backend.commands.lifecycle import State
 from backend.dives import TRACK_INTERVAL_S
 from backend.foxglove_live import scene
 from backend.foxglove_live.channels import (
@@ -76,7 +77,7 @@ LEVELS: Final = (
     (logging.DEBUG, LogLevel.Debug),
 )
 #: Command states said at a warning's level in the log lines.
-TROUBLE: Final = frozenset({"rejected", "failed", "timed_out", "interrupted", "lost"})
+TROUBLE: Final = frozenset({State.REJECTED, State.TIMED_OUT, State.FAILED, State.INTERRUPTED})
 
 
 def level_of(levelno: int) -> LogLevel:
