@@ -49,6 +49,7 @@ from station.link import Link, RosbridgeLink
 from vehicle_contract.messages import pose_from_message
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
+    from backend.foxglove_live.server import FoxgloveLive
     from backend.scripts.operations import ScriptRunner
     from backend.viewer.viewer import Viewer
     from rosbridge.server import BridgeServer
@@ -99,6 +100,8 @@ class Console:
         #: The one checked path to the vehicle (every frame leaves through it).
         self.service: CommandService | None = None
         self.viewer: Viewer | None = None  # the 3D view (None: started without one)
+        #: The live Foxglove view (None: off; the app's lifespan sets it: backend.foxglove_live).
+        self.foxglove: FoxgloveLive | None = None
         self.runner: ScriptRunner | None = None  # the latest mission script run (None: none yet)
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id

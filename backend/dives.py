@@ -40,6 +40,9 @@ class Dives:
         #: The current dive's number (None: none started since this console started).
         self.current: int | None = None
         self._last_track_s: float | None = None
+        #: The dive's start on the vehicle's clock: its first track point's ``t_s`` (None:
+        #: none yet), the zero of the dive's clock.
+        self.start_t_s: float | None = None
         self._echo_flagged = False  # an echo mismatch is logged once each time it begins
 
     def ensure(self) -> int:
@@ -50,7 +53,7 @@ class Dives:
         """
         if self.current is None:
             self.current = self.log.new_dive(self.target)
-            self._last_track_s = None
+            self._last_track_s = self.start_t_s = None
             logger.info("dive %d started", self.current)
             self._started()
         return self.current
@@ -62,7 +65,7 @@ class Dives:
             LogWriteError: the new dive cannot be written (the current one stays).
         """
         self.current = self.log.new_dive(self.target)
-        self._last_track_s = None
+        self._last_track_s = self.start_t_s = None
         logger.info("dive %d started (vehicle reset)", self.current)
         self._started()
         return self.current
@@ -95,6 +98,8 @@ class Dives:
         if last is not None and last <= t_s < last + TRACK_INTERVAL_S:
             return
         self._last_track_s = t_s
+        if self.start_t_s is None:
+            self.start_t_s = t_s
         self.log.add_track(dive, *position, status=status)
 
     def event(
