@@ -30,9 +30,10 @@ LimitQ = Annotated[int, Query(ge=2, le=86_400, description="most samples returne
 def series(
     console: ConsoleDep, dive: DiveQ = None, limit: LimitQ = DEFAULT_MAX_POINTS
 ) -> DiveSeries:
-    """The dive's telemetry (depth, commanded depth, battery, speed) a sample a second of the
-    vehicle's clock, from its start: the plots load it, then append the live telemetry.
-    Without ``dive``, the current dive (``dive: null`` and no samples before one starts)."""
+    """The dive's status series (depth, commanded depth, battery, speed, heading, mode,
+    navigation validity) a sample a second of the vehicle's clock, from its start: the plots
+    load it, then append the live telemetry. Without ``dive``, the current dive (``dive: null``
+    and no samples before one starts)."""
     log = console.log
     assert log is not None
     chosen = console.dive if dive is None else dive
@@ -43,7 +44,7 @@ def series(
     row = log.dive(chosen)
     if row is None:
         raise HTTPException(404, f"no dive {chosen}")
-    doc = dive_series(log.track_rows(chosen), limit)
+    doc = dive_series(log.track_rows(chosen, positioned=False), limit)
     return DiveSeries.model_validate({"dive": chosen, "started_at": row["started_at"], **doc})
 
 

@@ -16,10 +16,10 @@ import json
 import sqlite3
 import threading
 from collections.abc import Iterator, Mapping
-from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from backend.clock import CONSOLE_UTC
 from backend.commands.lifecycle import ON_ITS_WAY, Event, State, advance
 from backend.mission_log.command_rows import (
     FINAL_STATES,
@@ -41,6 +41,7 @@ from backend.mission_log.track import (
     TrackPoint,
     track_point,
 )
+from vehicle_contract.messages import number
 
 __all__ = [
     "BUSY_TIMEOUT_S",
@@ -71,8 +72,9 @@ def _writing() -> Iterator[None]:
 
 
 def now_iso() -> str:
-    """Current UTC time, ISO 8601 with milliseconds."""
-    return datetime.now(UTC).isoformat(timespec="milliseconds")
+    """Current UTC time on the console's monotonic-anchored clock (:data:`CONSOLE_UTC`: the
+    log's stamps never go back within a run), ISO 8601 with milliseconds."""
+    return CONSOLE_UTC.now().isoformat(timespec="milliseconds")
 
 
 class MissionLog:
@@ -335,6 +337,13 @@ class MissionLog:
         position = (t_s, x_m, y_m, z_m, heading_deg)
         self._track.add(track_point(dive, position, status or {}, now_iso()))
 
+    def add_status_point(self, dive: int, t_s: float, status: Mapping[str, Any]) -> None:
+        """Buffer one track point without a position: what ``status`` says at ``t_s`` when the
+        vehicle sends no pose (its navigation not valid; the heading is the status's, null in
+        the contract's nav fault). Written as :meth:`add_track`'s points are."""
+        position = (t_s, None, None, None, number(status.get("heading_deg")))
+        self._track.add(track_point(dive, position, status, now_iso()))
+
     def _write_track(self, points: list[TrackPoint]) -> None:
         """Commit ``points`` together (the track buffer's write)."""
         cols = ", ".join(TRACK_COLUMNS)
@@ -343,20 +352,25 @@ class MissionLog:
             self._db.executemany(f"INSERT INTO track ({cols}) VALUES ({marks})", points)
 
     def track(self, dive: int) -> list[dict[str, float]]:
-        """The dive's positions in time order: ``t_s, x_m, y_m, z_m, heading_deg``."""
+        """The dive's positions in time order: ``t_s, x_m, y_m, z_m, heading_deg`` (its points
+        without a position left out)."""
         keys = ("t_s", "x_m", "y_m", "z_m", "heading_deg")
         return [{k: row[k] for k in keys} for row in self.track_rows(dive)]
 
-    def track_rows(self, dive: int) -> list[dict[str, Any]]:
-        """The dive's track points in time order with every column (``active`` parsed; an
-        older log's points have null status columns)."""
+    def track_rows(self, dive: int, *, positioned: bool = True) -> list[dict[str, Any]]:
+        """The dive's track points in time order with every column (``active`` parsed,
+        ``nav_valid`` a boolean; an older log's points have null status columns). Only the
+        points with a position unless ``positioned`` is false (the status series)."""
+        where = " AND x_m IS NOT NULL" if positioned else ""
         with self._lock:
             self._track.flush()
             rows = self._db.execute(
-                f"SELECT {', '.join(TRACK_COLUMNS[1:])} FROM track WHERE dive = ? ORDER BY t_s",
+                f"SELECT {', '.join(TRACK_COLUMNS[1:])} FROM track WHERE dive = ?{where} "
+                "ORDER BY t_s",
                 (dive,),
             ).fetchall()
         out = [dict(r) for r in rows]
         for row in out:
             row["active"] = None if row["active"] is None else json.loads(row["active"])
+            row["nav_valid"] = None if row["nav_valid"] is None else bool(row["nav_valid"])
         return out

@@ -26,6 +26,10 @@ def test_before_any_dive_the_series_is_empty(make_light_client: MakeLightClient)
         "commanded_depth_m": [],
         "battery_pct": [],
         "speed_mps": [],
+        "heading_deg": [],
+        "mode": [],
+        "nav_valid": [],
+        "nav_age_s": [],
     }
 
 
@@ -51,6 +55,24 @@ def test_the_series_is_the_dives_track_from_its_start(client: TestClient) -> Non
     # the same dive named, thinned evenly to three samples (first and last kept)
     thin = client.get("/api/series", params={"dive": 1, "limit": 3}).json()
     assert thin["t_s"] == [0.0, 4.0, 9.0] and thin["interval_s"] == 4.5
+
+
+def test_the_series_shows_a_navigation_fault_as_points_without_position(
+    client: TestClient,
+) -> None:
+    console = console_of(client)
+    assert console.log is not None and console.dive == 1
+    ok = {"nav_valid": True, "nav_age_s": 0.1, "heading_deg": 10.0, "mode": "running"}
+    console.log.add_track(1, HOLDING.t_s + 1, 1.0, 0.0, 2.0, 10.0, ok)
+    fault = {"nav_valid": False, "nav_age_s": 7.0, "heading_deg": None, "mode": "nav_fault"}
+    console.log.add_status_point(1, HOLDING.t_s + 2, fault)
+    s = client.get("/api/series").json()
+    assert s["t_s"][-2:] == [1.0, 2.0]
+    assert s["nav_valid"][-2:] == [True, False] and s["nav_age_s"][-2:] == [0.1, 7.0]
+    assert s["mode"][-2:] == ["running", "nav_fault"] and s["heading_deg"][-2:] == [10.0, None]
+    # the replay's timeline keeps the positions only
+    timeline = client.get("/api/dives/1/timeline").json()
+    assert [p["t_s"] for p in timeline["samples"]][-1] == 1.0
 
 
 @pytest.mark.parametrize(
