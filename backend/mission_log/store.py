@@ -15,7 +15,7 @@ import contextlib
 import json
 import sqlite3
 import threading
-from collections.abc import Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -80,8 +80,18 @@ def now_iso() -> str:
 class MissionLog:
     """The SQLite mission log. Thread-safe."""
 
-    def __init__(self, path: Path | str, *, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
+    def __init__(
+        self,
+        path: Path | str,
+        *,
+        busy_timeout_s: float = BUSY_TIMEOUT_S,
+        now: Callable[[], str] = now_iso,
+    ) -> None:
+        """``now``: the stamps the log writes (ISO UTC); a benchmark that fills a long dive in
+        seconds passes its own clock, the console keeps :func:`now_iso`."""
         self.path = Path(path)
+        self._now = now
+        self._busy_timeout_s = busy_timeout_s
         if str(path) != ":memory:":
             self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.RLock()  # re-entered by the writes of a transaction()
@@ -142,7 +152,7 @@ class MissionLog:
                     "' (the log was last written at ' || ? || "
                     "'); whether the vehicle received it is not known' "
                     f"WHERE state IN ({marks})",
-                    (target, now_iso(), last or "an unknown time", *on_its_way),
+                    (target, self._now(), last or "an unknown time", *on_its_way),
                 )
         return cur.rowcount
 
@@ -174,13 +184,34 @@ class MissionLog:
             self._track.close()
             self._db.close()
 
+    @contextlib.contextmanager
+    def exporting(self) -> Iterator[sqlite3.Connection]:
+        """A connection for a long read (an export) that does not hold the log's lock: a
+        read-only one of its own, the track buffer written first. An in-memory log (tests)
+        has no second connection: its own, under the lock throughout."""
+        self.flush_track()
+        if str(self.path) == ":memory:":
+            with self._lock:
+                yield self._db
+            return
+        uri = f"{self.path.resolve().as_uri()}?mode=ro"
+        db = sqlite3.connect(uri, uri=True, timeout=self._busy_timeout_s, check_same_thread=False)
+        try:
+            yield db
+        finally:
+            db.close()
+
+    def flush_track(self) -> None:
+        """Write the buffered track points now (a failure is logged, as the buffer's)."""
+        self._track.flush()
+
     # --- dives ---------------------------------------------------------------------------
 
     def new_dive(self, target: str) -> int:
         """Open a new dive (``backend.dives`` decides when); returns its number."""
         with self._lock, _writing():
             cur = self._db.execute(
-                "INSERT INTO dives (started_at, target) VALUES (?, ?)", (now_iso(), target)
+                "INSERT INTO dives (started_at, target) VALUES (?, ?)", (self._now(), target)
             )
             return int(cur.lastrowid or 0)
 
@@ -208,7 +239,7 @@ class MissionLog:
 
     def insert_command(self, dive: int, record: Mapping[str, Any]) -> dict[str, Any]:
         """Write a new command (state ``queued``) and return it with its id. Committed."""
-        stamp = now_iso()
+        stamp = self._now()
         row = {
             "dive": dive,
             "created_at": stamp,
@@ -231,7 +262,7 @@ class MissionLog:
     def update_command(self, command_id: int, **fields: Any) -> dict[str, Any]:
         """Set some fields of a command (one atomic statement); returns the new record."""
         fields = checked_update(fields)
-        fields["updated_at"] = now_iso()
+        fields["updated_at"] = self._now()
         sets = ", ".join(f"{k} = ?" for k in fields)
         values = [column_value(k, v) for k, v in fields.items()]
         with self._lock, _writing():
@@ -300,7 +331,7 @@ class MissionLog:
         self, dive: int, kind: str, detail: str, data: Mapping[str, Any] | None = None
     ) -> dict[str, Any]:
         """Write one event (committed); returns it with its id."""
-        row = (dive, now_iso(), kind, detail, None if data is None else json.dumps(data))
+        row = (dive, self._now(), kind, detail, None if data is None else json.dumps(data))
         with self._lock, _writing():
             cur = self._db.execute(
                 "INSERT INTO events (dive, at, kind, detail, data) VALUES (?, ?, ?, ?, ?)", row
@@ -335,14 +366,14 @@ class MissionLog:
         :data:`TRACK_BATCH` points, on a read and on close. A write that fails is logged and
         tried again by the timer (never raised)."""
         position = (t_s, x_m, y_m, z_m, heading_deg)
-        self._track.add(track_point(dive, position, status or {}, now_iso()))
+        self._track.add(track_point(dive, position, status or {}, self._now()))
 
     def add_status_point(self, dive: int, t_s: float, status: Mapping[str, Any]) -> None:
         """Buffer one track point without a position: what ``status`` says at ``t_s`` when the
         vehicle sends no pose (its navigation not valid; the heading is the status's, null in
         the contract's nav fault). Written as :meth:`add_track`'s points are."""
         position = (t_s, None, None, None, number(status.get("heading_deg")))
-        self._track.add(track_point(dive, position, status, now_iso()))
+        self._track.add(track_point(dive, position, status, self._now()))
 
     def _write_track(self, points: list[TrackPoint]) -> None:
         """Commit ``points`` together (the track buffer's write)."""
