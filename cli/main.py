@@ -179,6 +179,7 @@ BENCHMARKS = (
     "channel_estimate",
     "durations",
     "dead_reckoning",
+    "export",
 )
 
 

@@ -23,6 +23,7 @@ from typing import Any, Final
 
 from backend.mission_log.command_rows import command_row
 from backend.mission_log.opening import LogError, classify
+from backend.mission_log.store import EXPORT_CACHE_KIB
 from backend.mission_log.track import TRACK_COLUMNS
 
 #: Rows fetched from SQLite at a time.
@@ -61,6 +62,7 @@ def open_read_only(path: Path | str) -> sqlite3.Connection:
         db = sqlite3.connect(
             f"{where.resolve().as_uri()}?mode=ro", uri=True, check_same_thread=False
         )
+        db.execute(f"PRAGMA cache_size = -{EXPORT_CACHE_KIB}")
         db.execute("SELECT COUNT(*) FROM sqlite_master").fetchone()
     except sqlite3.Error as err:
         raise classify(where, err) from None

@@ -58,6 +58,9 @@ __all__ = [
 
 #: How long a write waits for a lock another connection holds before it fails (s).
 BUSY_TIMEOUT_S = 1.0
+#: The page cache of an export's own connection (KiB; SQLite's default is 2000): it reads
+#: once, in order (``backend.mission_log.dive_reader``).
+EXPORT_CACHE_KIB = 256
 
 
 @contextlib.contextmanager
@@ -196,6 +199,7 @@ class MissionLog:
             return
         uri = f"{self.path.resolve().as_uri()}?mode=ro"
         db = sqlite3.connect(uri, uri=True, timeout=self._busy_timeout_s, check_same_thread=False)
+        db.execute(f"PRAGMA cache_size = -{EXPORT_CACHE_KIB}")  # one pass in order
         try:
             yield db
         finally:
