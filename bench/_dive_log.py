@@ -82,8 +82,11 @@ def _record(pattern: str, params: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def fill_dive(log: MissionLog, seconds: int, clock: ManualUtc) -> Filled:
-    """Write a dive of ``seconds`` (1 Hz) into ``log``, whose stamps come from ``clock``."""
+def fill_dive(
+    log: MissionLog, seconds: int, clock: ManualUtc, command_every_s: int = COMMAND_EVERY_S
+) -> Filled:
+    """Write a dive of ``seconds`` (1 Hz) into ``log``, whose stamps come from ``clock``, a
+    command every ``command_every_s``."""
     dive = log.new_dive("sim")
     log.add_event(
         dive,
@@ -100,9 +103,9 @@ def fill_dive(log: MissionLog, seconds: int, clock: ManualUtc) -> Filled:
     for k in range(seconds):
         clock.elapsed_s = float(k)
         t_s = VEHICLE_T0_S + k
-        if k % COMMAND_EVERY_S == 0:
+        if k % command_every_s == 0:
             pattern, params = (
-                ("lawnmower", LAWNMOWER) if (k // COMMAND_EVERY_S) % 2 == 0 else ("circle", CIRCLE)
+                ("lawnmower", LAWNMOWER) if (k // command_every_s) % 2 == 0 else ("circle", CIRCLE)
             )
             rec = log.insert_command(dive, _record(pattern, params))
             n_cmd += 1
