@@ -88,7 +88,7 @@ def timeline(dive: IdPath, console: ConsoleDep) -> DiveTimeline:
         200: {
             "description": "the dive as an MCAP file (ROS 2 profile, CDR, chunked and indexed), "
             "streamed as it is written (Content-Disposition: attachment)",
-            "content": {MCAP_MEDIA_TYPE: {"schema": {"type": "string", "format": "binary"}}},
+            "content": {MCAP_MEDIA_TYPE: {"schema": {"type": "string"}}},
         },
     },
 )
