@@ -2,8 +2,8 @@
 (``--mcap FILE``) and/or a rosbag2 directory (``--rosbag2 DIR``): docs/foxglove.md.
 
 Registered by :mod:`cli.main` (:func:`add_parser`). The log is opened read-only (a console may
-be running on it; a copy on read-only media exports too) and read in one snapshot. Progress
-goes to standard error, the result to standard output. Bad input (no such log, dive or
+be running on it; an older log is read as it is, never migrated) and read in one snapshot.
+Progress goes to standard error, the result to standard output. Bad input (no such log, dive or
 directory; an output that exists without ``--force``) is one line and exit status 2, with
 nothing written.
 """

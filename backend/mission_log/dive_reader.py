@@ -50,7 +50,7 @@ class NoSuchDive(LookupError):
 
 
 def open_read_only(path: Path | str) -> sqlite3.Connection:
-    """The log at ``path`` opened read-only (a copy on read-only media can be exported too).
+    """The log at ``path`` opened read-only (nothing of it is changed, an older one not migrated).
 
     Raises:
         LogError: the file does not exist, is not a SQLite database, or cannot be read.
