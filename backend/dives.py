@@ -22,6 +22,7 @@ from typing import Any
 from backend.commands.manager import CommandManager
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.telemetry import TelemetryHub
+from vehicle_contract.messages import number
 
 logger = logging.getLogger("backend.console")
 
@@ -94,13 +95,29 @@ class Dives:
         dive = self.heard()
         if dive is None:
             return
-        t_s, last = position[0], self._last_track_s
-        if last is not None and last <= t_s < last + TRACK_INTERVAL_S:
+        if self._due(position[0]):
+            self.log.add_track(dive, *position, status=status)
+
+    def status(self, status: Mapping[str, Any]) -> None:
+        """A status heard: a track point without a position when it says the navigation is
+        not valid (no pose comes then), at most every :data:`TRACK_INTERVAL_S` as the poses'."""
+        t_s = number(status.get("t_s"))
+        if status.get("nav_valid") is not False or t_s is None:
             return
+        dive = self.heard()
+        if dive is not None and self._due(t_s):
+            self.log.add_status_point(dive, t_s, status)
+
+    def _due(self, t_s: float) -> bool:
+        """Whether a point at ``t_s`` is kept (one :data:`TRACK_INTERVAL_S` after the last;
+        a clock that went back, a vehicle restarted, starts the count again)."""
+        last = self._last_track_s
+        if last is not None and last <= t_s < last + TRACK_INTERVAL_S:
+            return False
         self._last_track_s = t_s
         if self.start_t_s is None:
             self.start_t_s = t_s
-        self.log.add_track(dive, *position, status=status)
+        return True
 
     def event(
         self, kind: str, detail: str, data: Mapping[str, Any] | None = None
