@@ -101,8 +101,9 @@ def _spread_lines(spread: DecodeSpread) -> list[str]:
     timing = spread.reports[0].onboard_decode
     protocol = (
         f"each run times, in {timing.rounds} interleaved rounds, the whole onboard decode "
-        "(13 received bytes into a new `FrameReceiver`: sync, BCH, CRC-4, dictionary and field "
-        "checks, to the checked command) and bchlib's bare BCH decode (C) of the same 9 "
+        "(13 received bytes through `codec.receive_frame`, the agent's call: sync, BCH, CRC-4, "
+        "dictionary and field checks, to the checked command) and bchlib's bare BCH decode (C) "
+        "of the same 9 "
         f"codeword bytes, over {timing.frames} frames (the scenarios' frames, 4 random draws "
         "each) with 0, 1 and 2 codeword bit errors; each case's figure is its median over "
         "the rounds, the ratio is the mean of the receiver's three medians over bchlib's, so "

@@ -9,9 +9,10 @@ split as 7 data + 2 ECC bytes, timed as the research measured it (two ``bytearra
 ``decode``, and ``correct`` when it found errors); the target is judged on that pair. The
 fast path from an int codeword (``TableDecoder.decode``, used by ``decode_frame``) and our
 Berlekamp-Massey + Chien path are shown beside them, and the whole onboard decode (13 clean
-bytes through a new ``FrameReceiver`` to the checked command) against bchlib's clean decode
-(``nemesys bench reconfig`` judges it over 0-2 errors). All cases run interleaved in one
-process; the medians of the rounds are printed, with the ratio to bchlib from the same run.
+bytes through ``codec.receive_frame``, the agent's call, to the checked command) against
+bchlib's clean decode (``nemesys bench reconfig`` judges it over 0-2 errors). All cases run
+interleaved in one process; the medians of the rounds are printed, with the ratio to bchlib
+from the same run.
 """
 
 from __future__ import annotations
@@ -121,7 +122,7 @@ def run(out: TextIO, *, quick: bool = False) -> int:
     rows.append(row("decode_frame, 100-char bits -> command", "-", us("decode_frame"), *info))
     rows.append(
         row(
-            "FrameReceiver, 13 bytes -> checked command", "-", us("receiver"), "-",
+            "receive_frame, 13 bytes -> checked command", "-", us("receiver"), "-",
             us("bchlib0"), ratio("receiver", "bchlib0"), f"{PAPER_DECODE_US:g}",
             "(info: bench reconfig)", "-",
         )

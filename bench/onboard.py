@@ -7,10 +7,11 @@ non-editable install of ``vehicle/`` with bchlib from its test extra):
 
 * the codeword decoder against bchlib: :meth:`codec.TableDecoder.decode_bytes` on the 9
   codeword bytes against bchlib's decode of the same bytes (7 data + 2 ECC), mean over
-  random codewords with 0, 1, 2 and 3 (rejected) bit errors (:func:`bench._onboard.time_codeword`);
-* the whole onboard decode against bchlib: 13 received bytes through a new
-  :class:`codec.FrameReceiver` to the checked command against bchlib's bare BCH decode of the
-  codeword, mean over the retask scenarios' frames with 0, 1 and 2 errors
+  random codewords with 0, 1, 2 and 3 (rejected) bit errors
+  (:func:`bench._onboard.time_codeword`);
+* the whole onboard decode against bchlib: 13 received bytes through
+  :func:`codec.receive_frame` (the agent's call) to the checked command against bchlib's bare
+  BCH decode of the codeword, mean over the retask scenarios' frames with 0, 1 and 2 errors
   (:func:`bench._onboard.time_decode`, as ``nemesys bench reconfig`` times it);
 * the onboard memory increment: peak RSS of the onboard decode + replan of the retask
   scenarios (:mod:`bench._reconfig_memory`) over a plain interpreter, ``python -I -S`` with the
@@ -214,7 +215,7 @@ def format_table(rows: list[OnboardRow]) -> str:
             "",
             "Codeword: TableDecoder.decode_bytes on 9 bytes vs bchlib.BCH(2, m=8) decode (+ "
             "correct) of the same 7 + 2 bytes, 256 random codewords per error count, mean over "
-            "0-3 errors (3: rejected). Whole: 13 bytes -> FrameReceiver -> checked command vs "
+            "0-3 errors (3: rejected). Whole: 13 bytes -> receive_frame -> checked command vs "
             "bchlib's decode of the codeword, the retask scenarios' frames, mean over 0-2 errors.",
             "Memory increment: peak RSS (VmHWM) of the onboard decode + replan of the retask "
             f"scenarios over that of the baseline, {PLAIN_BASELINE}; both with the checkout's "

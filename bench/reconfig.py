@@ -24,8 +24,9 @@ the mean of a round's 30 decodes and the replan figure the mean of a scenario's 
 the paper; the printed value is the median of these means over several rounds (the machine
 is shared).
 
-Onboard decode against bchlib: the whole onboard decode (13 bytes through a new
-``FrameReceiver``: sync, BCH, CRC-4, dictionary and field checks, to the checked command)
+Onboard decode against bchlib: the whole onboard decode (13 bytes through
+``codec.receive_frame``, the agent's call: sync, BCH, CRC-4, dictionary and field checks, to
+the checked command)
 and bchlib's bare BCH decode of the same codeword bytes, over the scenarios' frames with 0, 1
 and 2 codeword bit errors, interleaved in this process (:mod:`bench._onboard`); the ratio is
 taken within the run. The target is at most 3x bchlib. (``nemesys bench onboard`` gives the
@@ -301,7 +302,7 @@ def format_report(report: ReconfigReport) -> str:
         ratio_text = "n/a" if timing.ratio is None else f"{timing.ratio:.2f}x"
         lines += [
             "",
-            "Onboard decode, one frame: 13 bytes -> FrameReceiver (sync, BCH, CRC, dictionary "
+            "Onboard decode, one frame: 13 bytes -> receive_frame (sync, BCH, CRC, dictionary "
             "and field checks) -> checked command,",
             f"against bchlib's bare BCH decode of the same codeword bytes; median us per frame "
             f"over {timing.rounds} interleaved rounds, {timing.frames} frames per row",

@@ -51,7 +51,7 @@ from codec._frame import (
     decode_codeword,
 )
 from codec._scales import FIELD_BITS, ChoiceScale, NumericScale, ParamValue, Segment
-from codec._sync import Accepted, Event, FrameReceiver, Rejected
+from codec._sync import Accepted, Event, FrameReceiver, Rejected, receive_frame
 
 TYPE_CHECKING = False
 if TYPE_CHECKING:
@@ -180,6 +180,7 @@ __all__ = [
     "number_from_text",
     "parse_frame",
     "payload_of",
+    "receive_frame",
     "sections",
 ]
 

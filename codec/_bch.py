@@ -29,7 +29,7 @@ if TYPE_CHECKING:
 
     #: The closed form's tables for t = 2 (see :func:`closed_form_tables`).
     ClosedForm = tuple[
-        bytes, bytes, bytes, bytes, Sequence[int], bytes,
+        tuple[int, ...], tuple[int, ...], Sequence[int], bytes,
         tuple[int, ...], tuple[int, ...], int, int, tuple[int, ...],
     ]  # fmt: skip
 
@@ -223,9 +223,9 @@ class TableDecoder:
 def closed_form_tables(code: BCHCode) -> ClosedForm:
     """The tables of the t = 2 closed form (:func:`make_corrector`), m <= 8:
 
-    ``s1_lo, s1_hi, s3_lo, s3_hi``: S1 and S3 of the remainder's low and high byte
-    (``bytes``; S = lo ^ hi by linearity); ``log``: the field's; ``cube``: log of S1^3 from log
-    of S1. Two errors x1, x2: x1 + x2 = S1 and x1 x2 = S3 / S1 + S1^2, so with x = S1 y the
+    ``st_lo, st_hi``: S1 | S3 << 8 of the remainder's low and high byte (S = lo ^ hi by
+    linearity; one lookup per byte gives both); ``log``: the field's; ``cube``: log of S1^3
+    from log of S1. Two errors x1, x2: x1 + x2 = S1 and x1 x2 = S3 / S1 + S1^2, so with x = S1 y the
     locator becomes y^2 + y = c, c = S3 / S1^3 + 1; ``first[k]`` and ``second[k]`` are the
     logs of its two roots y0 and y0 + 1 for c = alpha^k + 1 (k = log S3 - 3 log S1, any
     sign: the tables have 2^m - 1 entries and negative indices wrap), and ``first0`` and
@@ -248,6 +248,8 @@ def closed_form_tables(code: BCHCode) -> ClosedForm:
 
     s1_lo, s1_hi = syndrome_tables(1)
     s3_lo, s3_hi = syndrome_tables(3)
+    st_lo = tuple(s1 | s3 << 8 for s1, s3 in zip(s1_lo, s3_lo, strict=True))
+    st_hi = tuple(s1 | s3 << 8 for s1, s3 in zip(s1_hi, s3_hi, strict=True))
     root_log = [_NO_ROOT] * (1 << f.m)  # c -> log of a root y of y^2 + y = c (y, y + 1)
     for y in range(2, 1 << f.m):
         root_log[f.mul(y, y) ^ y] = f.log[y]
@@ -260,7 +262,7 @@ def closed_form_tables(code: BCHCode) -> ClosedForm:
     first0, second0 = logs(1)
     bit = tuple(1 << e % order if e < 2 * order and e % order < n else 0 for e in range(3 * order))
     return (
-        s1_lo, s1_hi, s3_lo, s3_hi, f.log, bytes(3 * i % order for i in range(order)),
+        st_lo, st_hi, f.log, bytes(3 * i % order for i in range(order)),
         tuple(p[0] for p in pairs), tuple(p[1] for p in pairs), first0, second0, bit,
     )  # fmt: skip
 
@@ -306,16 +308,15 @@ def make_corrector(code: BCHCode) -> Callable[[int], int | None]:
 
 def _t2_corrector(tables: ClosedForm) -> Callable[[int], int | None]:
     """:func:`make_corrector` for t = 2, from its tables."""
-    s1_lo, s1_hi, s3_lo, s3_hi, log, cube, first, second, first0, second0, bit = tables
+    st_lo, st_hi, log, cube, first, second, first0, second0, bit = tables
 
     def correct(rem: int) -> int | None:
-        lo = rem & 0xFF
-        hi = rem >> 8
-        s1 = s1_lo[lo] ^ s1_hi[hi]
+        st = st_lo[rem & 0xFF] ^ st_hi[rem >> 8]
+        s1 = st & 0xFF
         if not s1:
             return None  # S3 != 0 with S1 = 0: at least three errors
         l1 = log[s1]
-        s3 = s3_lo[lo] ^ s3_hi[hi]
+        s3 = st >> 8
         if s3:
             k = log[s3] - cube[l1]
             if not k:  # S3 = S1^3: one error, at log S1
@@ -338,23 +339,21 @@ def _make_t2_decoders(
     """The (72, 56) t = 2 decoders, the closed form written out (a call costs more than it):
     the same decisions as :func:`make_corrector` (the tests compare every remainder)."""
     t0, t1, t2, t3, t4, t5, t6 = tables
-    s1_lo, s1_hi, s3_lo, s3_hi, log, cube, first, second, first0, second0, bit = closed_form
+    st_lo, st_hi, log, cube, first, second, first0, second0, bit = closed_form
     from_bytes = int.from_bytes
 
     def decode_bytes(b: bytes) -> tuple[int, int]:
         w = from_bytes(b, "big")
+        b0, b1, b2, b3, b4, b5, b6, _, _ = b  # quicker than indexing seven times
         # The parity bytes are their own remainder: XOR the word in and keep the low 16 bits.
-        syn = (
-            t0[b[0]] ^ t1[b[1]] ^ t2[b[2]] ^ t3[b[3]] ^ t4[b[4]] ^ t5[b[5]] ^ t6[b[6]] ^ w
-        ) & 0xFFFF
+        syn = (t0[b0] ^ t1[b1] ^ t2[b2] ^ t3[b3] ^ t4[b4] ^ t5[b5] ^ t6[b6] ^ w) & 0xFFFF
         if not syn:
             return w >> 16, 0
-        lo = syn & 0xFF
-        hi = syn >> 8
-        s1 = s1_lo[lo] ^ s1_hi[hi]
+        st = st_lo[syn & 0xFF] ^ st_hi[syn >> 8]
+        s1 = st & 0xFF
         if s1:
             l1 = log[s1]
-            s3 = s3_lo[lo] ^ s3_hi[hi]
+            s3 = st >> 8
             if s3:
                 k = log[s3] - cube[l1]
                 if not k:

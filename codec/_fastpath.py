@@ -76,8 +76,9 @@ def straight_line(dictionary: CommandDictionary) -> StraightLine:
     return line
 
 
-#: Per pattern ID: the pattern, its number of fields and the class bits its codes need.
-Entry = tuple[Pattern, int, int]
+#: Per pattern ID: the pattern, the slice of the payload's bytes that are its codes, and the
+#: class bits its codes need.
+Entry = tuple[Pattern, slice, int]
 
 
 def _field_classes(dictionary: CommandDictionary) -> tuple[bytes, list[Entry | None]] | None:
@@ -104,7 +105,7 @@ def _field_classes(dictionary: CommandDictionary) -> tuple[bytes, list[Entry | N
             )
             bit = bits.setdefault(valid, 1 << len(bits))
             mask |= bit << (8 * (FIELDS_PER_FRAME - 1 - j))
-        entries[pattern.id] = (pattern, len(pattern.fields), mask)
+        entries[pattern.id] = (pattern, slice(1, 1 + len(pattern.fields)), mask)
     if len(bits) > 8:
         return None
     classes = bytes(sum(bit for valid, bit in bits.items() if valid[code]) for code in range(256))
@@ -123,7 +124,7 @@ def _build(dictionary: CommandDictionary) -> StraightLine:  # noqa: PLR0915 (the
         max(t) >> CODE.r for t in FAST_DECODER.message_tables
     ):
         raise ValueError("the table decoder's message tables do not carry the CRC check")
-    s1_lo, s1_hi, s3_lo, s3_hi, log, cube, first, second, first0, second0, bit = closed_form
+    st_lo, st_hi, log, cube, first, second, first0, second0, bit = closed_form
     # crc_of[e]: the CRC check of the error at the position of log e (bit[e]'s), 0 for a
     # parity bit and where bit[e] is 0: the received message's check plus the errors' is the
     # corrected message's (the check is linear).
@@ -160,13 +161,12 @@ def _build(dictionary: CommandDictionary) -> StraightLine:  # noqa: PLR0915 (the
             syn = check & 0xFFFF
             if not syn:
                 return None  # no BCH error: the CRC failed
-            lo = syn & 0xFF
-            hi = syn >> 8
-            s1 = s1_lo[lo] ^ s1_hi[hi]
+            st = st_lo[syn & 0xFF] ^ st_hi[syn >> 8]  # S1 | S3 << 8
+            s1 = st & 0xFF
             if not s1:
                 return None
             l1 = log[s1]
-            s3 = s3_lo[lo] ^ s3_hi[hi]
+            s3 = st >> 8
             if s3:
                 k = log[s3] - cube[l1]
                 if not k:  # one error, at log S1
@@ -199,14 +199,14 @@ def _build(dictionary: CommandDictionary) -> StraightLine:  # noqa: PLR0915 (the
         entry = entries[p[0]]
         if entry is None:
             return None
-        pattern, n_fields, mask = entry
+        pattern, codes, mask = entry
         if from_bytes(p.translate(classes), "big") & mask != mask:
             return None  # a field check fails
         # The records, filled through their slots: Command's own __init__ would repeat the
         # checks just made, and the slot setters are about twice as fast as ``init``.
         command = new(Command)
         set_pattern(command, pattern)
-        set_codes(command, tuple(p[1 : 1 + n_fields]))
+        set_codes(command, tuple(p[codes]))
         decoded = new(Decoded)
         set_command(decoded, command)
         set_corrected(decoded, corrected)

@@ -36,8 +36,8 @@ from codec import (
     Command,
     Decoded,
     Frame,
-    FrameReceiver,
     RejectReason,
+    receive_frame,
 )
 from onboard.guidance import Guidance, Reference
 from planner import Limits, Plan, PlanError, VehicleState, plan, validate
@@ -155,7 +155,7 @@ class OnboardAgent:
             ), None
         frame = Frame(bits)
         frame_hex = frame.hex
-        events = FrameReceiver().feed_bytes(frame.to_bytes())
+        events = receive_frame(frame.to_bytes())
         event = events[0] if events else None  # one accepted event: the common case
         if type(event) is not Accepted:  # else the first accepted one, or the last rejection
             event = next((e for e in events if isinstance(e, Accepted)), event and events[-1])

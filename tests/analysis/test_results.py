@@ -216,6 +216,8 @@ def test_new_sections_state_their_method(page: tuple[Path, str]) -> None:
     assert "from 10 s after each command" in tank and "*Rise*" in tank and "*Settle*" in tank
     rec = _section(text, "Mission adaptation latency and memory")
     assert "MiB" in rec and "(MB)" not in rec
+    # The memory's baseline is named: a plain interpreter, no start-up hook preloading modules.
+    assert "increment over a plain interpreter" in rec and "`python -I -S`" in rec
     assert "over 2 reruns" in rec and "| min / median / max |" in rec
     assert "whole-frame efficiency 52/100 = 0.52" in text
     assert re.search(r"^\| 2 \| \(72, 56\) \|.*\| 0\.52 \|$", text, re.M)

@@ -24,7 +24,7 @@ def test_quick_run_prints_the_full_table() -> None:
         assert "met" in line or "MISSED" in line
     assert "bchlib (C, bytes)" in text and "paper" in text and " 27 " in text
     assert "n/a" not in text  # bchlib (the peer) was measured in the same run
-    receiver = next(ln for ln in text.splitlines() if "FrameReceiver, 13 bytes" in ln)
+    receiver = next(ln for ln in text.splitlines() if "receive_frame, 13 bytes" in ln)
     cells = [c.strip() for c in receiver.split("  ") if c.strip()]
     assert cells[1] == "-" and float(cells[2]) > 0  # us of the whole onboard decode
     assert cells[5].startswith("0.") or float(cells[5]) > 0  # ratio to bchlib, same run

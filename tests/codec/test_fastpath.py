@@ -39,6 +39,7 @@ from codec import (
     decode_frame,
     encode_frame,
     frame_of,
+    receive_frame,
 )
 from codec._fastpath import SHIFT_DISTANCE, _decline, shift_distance, straight_line
 from tests.codec.helpers import flip_frame, random_command
@@ -323,6 +324,7 @@ def test_a_dictionary_pickles_without_its_straight_line() -> None:
     assert FrameReceiver(dictionary=copy).feed_bytes(data) == FrameReceiver().feed_bytes(data)
 
 
+@pytest.mark.slow  # 65535 frames through the bit-level path, ~1 s
 def test_every_remainder_decides_as_the_bit_level_path() -> None:
     """The straight line writes the closed form and the CRC check out: for every non-zero
     codeword remainder, the frame of the all-zero message (straight, every code 0, a valid
@@ -351,3 +353,26 @@ def test_every_remainder_decides_as_the_bit_level_path() -> None:
             assert fast is not None and fast.corrected == (1 if i == j else 2), (i, j)
             (event,) = FrameReceiver(fast_path=False).feed_bytes(data)
             assert isinstance(event, Accepted) and event.decoded == fast
+
+
+@pytest.mark.parametrize(("value"), [v for _, v in FRAMES], ids=[n for n, _ in FRAMES])
+def test_receive_frame_is_a_new_receivers_events(value: int) -> None:
+    """``receive_frame`` (the agent's call) gives exactly a new receiver's events for the
+    buffer: 13 bytes accepted or rejected, with 0-3 codeword and 0-3 header errors, at bit
+    offsets 0-7, shorter and longer buffers, and the other byte-like types."""
+    rng = random.Random(value)
+    taken = 0
+    for codeword_errors in range(4):
+        for header_errors in range(4):
+            for offset in range(8):
+                received = damaged(value, rng, codeword_errors, header_errors)
+                lead = format(rng.getrandbits(offset), f"0{offset}b") if offset else ""
+                data = as_bytes(lead + format(received, f"0{FRAME_BITS}b"))
+                for buffer in (data, data[:12], data + data, bytearray(data), memoryview(data)):
+                    got = receive_frame(buffer)
+                    assert got == FrameReceiver().feed_bytes(buffer)
+                    assert [type(e) for e in got] == [
+                        type(e) for e in FrameReceiver(fast_path=False).feed_bytes(buffer)
+                    ]
+                taken += len(data) == FRAME_BYTES and isinstance(reference(received), Decoded)
+    assert taken > 0 or isinstance(reference(value), DecodeError)  # accepted ones were fed
