@@ -99,11 +99,12 @@ class OnboardAgent:
         self, guidance: Guidance, limits: Limits | None = None, address: int | None = None
     ) -> None:
         self.address = address
-        if address is not None:  # a fleet's vehicle: its receiver, loaded only then
-            from codec import AddressedReceiver, check_vehicle_address
+        if address is not None:  # a fleet's vehicle: its receive, loaded only then
+            from codec import check_vehicle_address
+            from onboard._fleet import receive_addressed
 
             check_vehicle_address(address)
-            self._receiver_class = AddressedReceiver
+            self._receive_addressed = receive_addressed
         self.guidance = guidance
         self.limits = limits or Limits()
         self.active: Plan | None = None
@@ -144,7 +145,7 @@ class OnboardAgent:
         self.seq += 1
         address = self.address
         if address is not None:
-            return self._receive_addressed(address, bits, n_bits, state, t0, navigation)
+            return self._receive_addressed(self, address, bits, n_bits, state, t0, navigation)
         if bits is None or n_bits != FRAME_BITS:
             return self._reject(
                 state,
@@ -170,47 +171,6 @@ class OnboardAgent:
         if not isinstance(event, Accepted):
             err = event.error
             return self._reject(state, frame_hex, None, err.reason.value, str(err), err.field), None
-        return self._execute(state, frame_hex, event.decoded, t0, navigation)
-
-    def _receive_addressed(
-        self,
-        address: int,
-        bits: int | None,
-        n_bits: int,
-        state: VehicleState,
-        t0: float,
-        navigation: NoNavigation | None,
-    ) -> tuple[dict[str, Any], Reference | None]:
-        """:meth:`receive` for a vehicle with an address: a 100-bit or a 108-bit frame, through
-        the addressed receiver (:class:`codec.AddressedReceiver`)."""
-        from codec import ADDRESSED_FRAME_BITS, ADDRESSED_FRAME_BYTES, AddressedFrame
-
-        if bits is None or n_bits not in (FRAME_BITS, ADDRESSED_FRAME_BITS):
-            return self._reject(
-                state,
-                None,
-                None,
-                RejectReason.MALFORMED.value,
-                f"a frame is {FRAME_BITS} bits ({FRAME_BYTES} bytes), or {ADDRESSED_FRAME_BITS} "
-                f"({ADDRESSED_FRAME_BYTES} bytes) addressed; got {n_bits} bits",
-            ), None
-        frame = Frame(bits) if n_bits == FRAME_BITS else AddressedFrame(bits)
-        frame_hex = frame.hex
-        events = self._receiver_class(address).feed_bytes(frame.to_bytes())
-        event = next((e for e in events if isinstance(e, Accepted)), events[-1] if events else None)
-        if event is None:
-            return self._reject(
-                state,
-                frame_hex,
-                None,
-                RejectReason.NO_SYNC.value,
-                "no preamble and delimiter found within the sync tolerance",
-            ), None
-        if not isinstance(event, Accepted):
-            err = event.error
-            ack = self._reject(state, frame_hex, None, err.reason.value, str(err), err.field)
-            ack["address"] = getattr(err, "address", None)
-            return ack, None
         return self._execute(state, frame_hex, event.decoded, t0, navigation)
 
     def _execute(
