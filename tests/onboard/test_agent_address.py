@@ -87,3 +87,25 @@ def test_without_an_address_it_is_todays_agent() -> None:
 def test_an_address_out_of_range_is_refused(bad: int) -> None:
     with pytest.raises(ValueError, match="a vehicle's own address is 1 to 15"):
         OnboardAgent(Guidance(), address=bad)
+
+
+def test_a_fleets_vehicle_loads_nothing_heavy_and_todays_loads_none_of_it() -> None:
+    """The addressed path stays on the onboard budget (no standard library but math, no
+    console module), and a vehicle with no address never loads it."""
+    from tests.codec.test_imports import CONSOLE_ONLY, plain_modules_after
+    from tests.onboard.test_imports import ONBOARD, ONBOARD_STDLIB
+
+    fleet = ("codec._address", "codec._address_sync", "onboard._fleet")
+    receive = (
+        "from planner import VehicleState; "
+        "agent = OnboardAgent(Guidance(), address=3); "
+        "agent.receive(int('aaaa433c1321473000000f40ee0', 16), 108, VehicleState(0.0, 0.0, 2.0))"
+    )
+    bare = plain_modules_after("pass")
+    loaded = plain_modules_after(f"{ONBOARD}; {receive}")
+    assert set(fleet) <= loaded
+    ours = ("codec", "planner", "onboard", "vehicle_contract")
+    assert {m for m in loaded - bare if m.partition(".")[0] not in ours} == ONBOARD_STDLIB
+    assert not set(CONSOLE_ONLY) & loaded
+    today = plain_modules_after(f"{ONBOARD}; OnboardAgent(Guidance())")
+    assert not set(fleet) & today
