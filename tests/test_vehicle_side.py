@@ -139,6 +139,7 @@ def test_pytest_vehicle_side_collects_that() -> None:
         "tests/onboard/test_agent_address.py",
         "tests/onboard/test_imports.py",
         "tests/vehicle_contract/test_address.py",
+        "tests/vehicle_contract/test_fleet.py",
         "tests/vehicle_contract/test_names.py",
     }
 
