@@ -108,7 +108,8 @@ from vehicle_contract import contract
 from vehicle_contract.contract import POSE_FRAME_ID, VEHICLE_NODE
 from vehicle_contract.messages import pose_stamped_msg, quaternion_from_roll_yaw, stamp, to_json
 
-#: Console -> vehicle: one packed frame (13 bytes: 100 bits MSB first, 4 zero bits).
+#: Console -> vehicle: one packed frame (13 bytes: 100 bits MSB first, 4 zero bits; a fleet's
+#: addressed frame 14: 108 bits, 4 zero bits).
 FRAME_TOPIC: Final = contract.FRAME_TOPIC
 #: Vehicle -> console: the vehicle pose (NED, frame ``map_ned``), at ``pose_hz``.
 POSE_TOPIC: Final = contract.POSE_TOPIC

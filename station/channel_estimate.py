@@ -10,17 +10,18 @@ the receiver ignores) each acknowledgement is one of:
   the codeword held exactly ``corrected_bits`` errors (0..t) and the sync word exactly
   ``sync_errors`` (0..tolerance): 96 bits observed exactly. A count the vehicle leaves out is
   known only to be within its section's reach (censored: the section's binomial CDF).
-* **not decoded** (every codec reason but ``malformed``: ``no_sync``, ``uncorrectable``,
-  ``crc_mismatch``, ``unknown_pattern``, ``field_out_of_range``, ``unused_field_set``): more
-  than ``tolerance`` sync errors *or* more than ``t`` codeword errors, nothing more. The
-  reasons are pooled on purpose: the receiver searches other bit offsets after a failed sync,
-  so a frame with 3 sync errors is sometimes reported ``uncorrectable`` at another offset, and
-  the station sends only valid frames, so a CRC or dictionary failure is a miscorrection of a
-  codeword with more than ``t`` errors. Their union is exactly "not (sync <= tolerance and
-  codeword <= t)".
-* **says nothing of the channel**: ``malformed`` (not 100 bits: a transport fault, not bit
-  errors), an unknown reason, counts outside the code's reach (another code); counted in
-  ``ignored`` and left out.
+* **not decoded** (every codec reason but ``malformed`` and ``other_vehicle``: ``no_sync``,
+  ``uncorrectable``, ``crc_mismatch``, ``unknown_pattern``, ``field_out_of_range``,
+  ``unused_field_set``): more than ``tolerance`` sync errors *or* more than ``t`` codeword
+  errors, nothing more. The reasons are pooled on purpose: the receiver searches other bit
+  offsets after a failed sync, so a frame with 3 sync errors is sometimes reported
+  ``uncorrectable`` at another offset, and the station sends only valid frames, so a CRC or
+  dictionary failure is a miscorrection of a codeword with more than ``t`` errors. Their union
+  is exactly "not (sync <= tolerance and codeword <= t)".
+* **says nothing of the channel**: ``malformed`` (not 100 bits: a transport fault, not bit errors),
+  ``other_vehicle`` (a fleet's vehicle heard a frame for another: it decoded, but its counts are of
+  the addressed frame's longer code, not this layout's), an unknown reason, counts outside the
+  code's reach (another code); counted in ``ignored`` and left out.
 
 With independent bit errors at rate ``p`` (``F(n, k; p)`` = P(Binomial(n, p) <= k)) the
 log-likelihood of the dive's frames is::
@@ -89,7 +90,11 @@ MAX_BER: Final = 0.5
 #: Reasons of a frame that decoded and was then refused by the agent.
 _DECODED_REASONS: Final = frozenset({INVALID_PLAN, LIMIT_VIOLATION})
 #: Reasons of a frame the decoder refused (see the module's doc).
-_NOT_DECODED_REASONS: Final = frozenset(r.value for r in RejectReason) - {RejectReason.MALFORMED}
+#: ``other_vehicle`` is not one: such a frame decoded fine (it was for another vehicle of a fleet).
+_NOT_DECODED_REASONS: Final = frozenset(r.value for r in RejectReason) - {
+    RejectReason.MALFORMED,
+    RejectReason.OTHER_VEHICLE,
+}
 #: The search grid: 0, then log-spaced up to MAX_BER (1.1 % steps).
 _GRID: Final = np.concatenate([[0.0], np.geomspace(1e-10, MAX_BER, 2000)])
 #: Points of the fine grids between two points of the search grid (the estimate and each end

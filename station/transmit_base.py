@@ -24,7 +24,7 @@ from websockets.exceptions import (
     InvalidURI,
 )
 
-from codec import Frame
+from codec import FRAME_BITS, Frame
 
 #: The one logger of the transmit modules, named for the public module (as before the split).
 logger = logging.getLogger("station.transmit")
@@ -197,7 +197,8 @@ class ModemTransmitter(Transmitter):
         """A copy the transport took (``detail``: how far it went), counted and logged: the
         one place a modem's copy becomes sent. Called with the transmitter's lock held."""
         sent_t = time.time()
-        self._next_t = time.monotonic() + self.gap_s
+        # the gap is this frame's airtime: gap_s is a 100-bit frame's, an addressed one is longer
+        self._next_t = time.monotonic() + self.gap_s * len(frame.bits) / FRAME_BITS
         self.frames_sent += 1
         logger.info("wrote frame %s to %s", frame.hex, self.target)
         return SendResult(
@@ -266,6 +267,7 @@ def _message(exc: BaseException) -> str:
 
 
 def frame_msg(frame: Frame) -> dict[str, Any]:
-    """The ``std_msgs/UInt8MultiArray`` a station publishes for ``frame``: its 13 bytes as
-    ``{"data": [13 ints]}`` (no layout, as roslibpy users write it)."""
+    """The ``std_msgs/UInt8MultiArray`` a station publishes for ``frame``: its bytes
+    (:meth:`codec.Frame.to_bytes`: 13, or 14 for a fleet's addressed frame) as
+    ``{"data": [13 or 14 ints]}`` (no layout, as roslibpy users write it)."""
     return {"data": list(frame.to_bytes())}

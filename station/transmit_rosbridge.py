@@ -96,12 +96,12 @@ class _LoopThread:
 class RosbridgeTransmitter(Transmitter):
     """Publishes frames to a rosbridge v2 endpoint and waits for the vehicle's acknowledgement.
 
-    On connecting it advertises the frame topic (``std_msgs/UInt8MultiArray``) and
-    subscribes to the mission topic (``std_msgs/String`` whose ``data`` is a JSON object);
-    each frame is published as ``{"data": [13 ints]}``. The connection is opened on the first
-    send and kept; a connection found closed is reopened once. Acknowledgements are matched as
-    :mod:`station.transmit_acks` says. ``namespace``: the vehicle's ROS namespace (both topics
-    under ``/<namespace>/nemesys/...``; "" for none).
+    On connecting it advertises the frame topic (``std_msgs/UInt8MultiArray``) and subscribes to
+    the mission topic (``std_msgs/String`` whose ``data`` is a JSON object); each frame is
+    published as its bytes, ``{"data": [13 ints]}`` (14 addressed). The connection is opened on
+    the first send and kept; a connection found closed is reopened once. Acknowledgements are
+    matched as :mod:`station.transmit_acks` says. ``namespace``: the vehicle's ROS namespace
+    (both topics under ``/<namespace>/nemesys/...``; "" for none).
     """
 
     transport = "rosbridge"

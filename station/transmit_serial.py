@@ -4,17 +4,18 @@ it shares with a TCP gateway (:mod:`station.transmit_tcp`). Import it from
 
 Serial and TCP wire format
 --------------------------
-Each frame is written as exactly :data:`codec.FRAME_BYTES` = 13 bytes,
-:meth:`codec.Frame.to_bytes`: the 100 frame bits, first bit on the link = most significant bit
-of byte 0, then 4 zero padding bits (the low nibble of byte 12). Nothing else is written: no
-length prefix, no checksum, no delimiter, no newline; the frame carries its own preamble and
-delimiter for synchronisation. The 13 bytes of a frame go out in one ``write`` call, followed
-by a flush (``tcdrain`` on a serial port). The modem is expected to clock out the first 100 bits
-at the link rate (36 kb/s by default), drop the 4 padding bits, and send nothing back (no echo,
-no acknowledgement: the transmitter never reads). Between two frames the station waits at least
-one frame's airtime (100 bits at ``bitrate_bps``, 2.78 ms at 36 kb/s) after the previous flush,
-so the modem never has to queue. Serial settings: ``baudrate`` (default 115200), 8N1, no flow
-control. See ``docs/transmitters.md``.
+Each frame is written as its :meth:`codec.Frame.to_bytes`: :data:`codec.FRAME_BYTES` = 13 bytes for
+today's frame (the 100 frame bits, first bit on the link = most significant bit of byte 0, then 4
+zero padding bits, the low nibble of byte 12), 14 for a fleet's addressed frame (108 bits and 4 zero
+bits: docs/protocol.md, "Addressing"). Nothing else is written: no length prefix, no checksum, no
+delimiter, no newline; the frame carries its own preamble and delimiter for synchronisation. The
+bytes of a frame go out in one ``write`` call, followed by a flush (``tcdrain`` on a serial port).
+The modem is expected to clock out the frame's bits (100 or 108) at the link rate (36 kb/s by
+default), drop the 4 padding bits, and send nothing back (no echo, no acknowledgement: the
+transmitter never reads). Between two frames the station waits at least the previous frame's airtime
+(its bits at ``bitrate_bps``: 2.78 ms for 100 bits at 36 kb/s) after the previous flush, so the
+modem never has to queue. Serial settings: ``baudrate`` (default 115200), 8N1, no flow control. See
+``docs/transmitters.md``.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import time
 
 import serial
 
-from codec import DEFAULT_BITRATE_BPS, FRAME_BYTES, Frame, airtime_s
+from codec import DEFAULT_BITRATE_BPS, Frame, airtime_s
 from station.transmit_base import (
     DEFAULT_ACK_TIMEOUT_S,
     LinkCheck,
@@ -91,8 +92,8 @@ class SerialTransmitter(ModemTransmitter):
         return self._port
 
     def send(self, frame: Frame, *, wait_ack_s: float = DEFAULT_ACK_TIMEOUT_S) -> SendResult:
-        """Write the frame's 13 bytes. ``wait_ack_s`` is ignored: the modem acknowledges
-        nothing, so a write that completes is ``ok`` with ``ack`` None."""
+        """Write the frame's bytes (13, or 14 addressed). ``wait_ack_s`` is ignored: the modem
+        acknowledges nothing, so a write that completes is ``ok`` with ``ack`` None."""
         data = frame.to_bytes()
         with self._lock:
             try:
@@ -114,7 +115,7 @@ class SerialTransmitter(ModemTransmitter):
                     "short write", f"wrote {written} of {len(data)} bytes to {self.url}"
                 )
             return self._copy_sent(
-                frame, f"wrote {FRAME_BYTES} bytes; the modem gives no acknowledgement"
+                frame, f"wrote {len(data)} bytes; the modem gives no acknowledgement"
             )
 
     def check(self) -> LinkCheck:

@@ -1,8 +1,9 @@
 """The TCP modem transmitter: an ME modem behind a TCP gateway (``tcp://host:port``), honest
 about what left. Import it from :mod:`station.transmit`.
 
-The bytes are the serial wire format (:mod:`station.transmit_serial`): 13 bytes per frame,
-one write each, at least one frame's airtime apart, nothing read back.
+The bytes are the serial wire format (:mod:`station.transmit_serial`): a frame's bytes (13, or
+14 for an addressed frame) in one write each, at least the previous frame's airtime apart,
+nothing read back.
 
 What counts as sent
 -------------------
@@ -48,7 +49,7 @@ import threading
 import time
 from typing import Final
 
-from codec import DEFAULT_BITRATE_BPS, FRAME_BYTES, Frame, airtime_s
+from codec import DEFAULT_BITRATE_BPS, Frame, airtime_s
 from station.transmit_base import (
     DEFAULT_ACK_TIMEOUT_S,
     LinkCheck,
@@ -259,8 +260,8 @@ class TcpTransmitter(ModemTransmitter):
     # --- the transmitter ------------------------------------------------------------------
 
     def send(self, frame: Frame, *, wait_ack_s: float = DEFAULT_ACK_TIMEOUT_S) -> SendResult:
-        """Write the frame's 13 bytes (``wait_ack_s`` is ignored: the modem acknowledges
-        nothing); ``ok`` only when the gateway took them (module docstring)."""
+        """Write the frame's bytes, 13 or 14 addressed (``wait_ack_s`` is ignored: the modem
+        acknowledges nothing); ``ok`` only when the gateway took them (module docstring)."""
         data = frame.to_bytes()
         with self._lock:
             try:
@@ -290,7 +291,7 @@ class TcpTransmitter(ModemTransmitter):
                 self._close_sock(reset=True)
                 return self._failed(problem.reason, problem.detail)
             return self._copy_sent(
-                frame, f"the gateway took {FRAME_BYTES} bytes; the modem gives no acknowledgement"
+                frame, f"the gateway took {len(data)} bytes; the modem gives no acknowledgement"
             )
 
     def check(self) -> LinkCheck:

@@ -18,8 +18,9 @@ MIN_SURFACE_COPIES: Final = 3
 #: ... and enough times for this delivery probability at the link's bit-error rate.
 SURFACE_DELIVERY_TARGET: Final = 0.999999
 #: Rejections that mean the channel damaged the copy (the station sends only valid frames):
-#: while copies remain, the command waits for the next one.
-DAMAGE_REASONS: Final = frozenset(r.value for r in RejectReason)
+#: while copies remain, the command waits for the next one. Not ``other_vehicle``: that frame
+#: decoded fine, at a vehicle it was not for (a fleet's; it answers none of this one's).
+DAMAGE_REASONS: Final = frozenset(r.value for r in RejectReason) - {RejectReason.OTHER_VEHICLE}
 
 
 class RateLimited(Exception):

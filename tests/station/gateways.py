@@ -14,7 +14,8 @@ says:
 :meth:`Gateway.stop` makes it go away (listener and connections closed) and
 :meth:`Gateway.restart` brings it back on the same port. ``received`` counts the bytes that
 reached the gateway (read by it, or for ``never_read`` waiting in its buffer), per connection;
-``on_frame`` is called with every whole 13-byte frame read (a modem passing it on). Waits are
+``on_frame`` is called with every whole frame read (13 bytes, or ``frame_bytes``: 14 for
+addressed frames; a modem passing it on). Waits are
 on conditions (:meth:`wait_for`), never fixed sleeps.
 """
 
@@ -44,8 +45,11 @@ class Gateway:
         *,
         one_connection: bool = False,
         on_frame: Callable[[bytes], None] | None = None,
+        frame_bytes: int = FRAME_BYTES,
     ) -> None:
         self.behaviour = behaviour
+        #: Bytes of a frame on this gateway's wire: 13, or 14 for a fleet's addressed frames.
+        self.frame_bytes = frame_bytes
         self.one_connection = one_connection
         self.on_frame = on_frame
         self._cond = threading.Condition()
@@ -88,7 +92,7 @@ class Gateway:
 
     def frames(self) -> int:
         """Whole frames that reached the gateway."""
-        return self.total() // FRAME_BYTES
+        return self.total() // self.frame_bytes
 
     def wait_for(self, what: str, check: Callable[[], bool], timeout_s: float = 10.0) -> None:
         with self._cond:
@@ -159,11 +163,12 @@ class Gateway:
 
     def _serve(self, conn: socket.socket, index: int) -> None:
         pending = bytearray()
+        size = self.frame_bytes
         # "close" and "half_close" read exactly one frame: never a byte of the next
-        limit = FRAME_BYTES if self.behaviour in ("close", "half_close") else 4096
+        limit = size if self.behaviour in ("close", "half_close") else 4096
         while not self._stop.is_set():
             try:
-                data = conn.recv(limit - len(pending) if limit == FRAME_BYTES else limit)
+                data = conn.recv(limit - len(pending) if limit == size else limit)
             except TimeoutError:
                 continue
             except OSError:
@@ -178,11 +183,11 @@ class Gateway:
             with self._cond:
                 self.received[index] += len(data)
                 self._cond.notify_all()
-            while len(pending) >= FRAME_BYTES:
-                frame, pending = bytes(pending[:FRAME_BYTES]), pending[FRAME_BYTES:]
+            while len(pending) >= size:
+                frame, pending = bytes(pending[:size]), pending[size:]
                 if self.on_frame is not None:
                     self.on_frame(frame)
-            if limit == FRAME_BYTES and self.received[index] >= FRAME_BYTES:
+            if limit == size and self.received[index] >= size:
                 if self.behaviour == "half_close":
                     conn.shutdown(socket.SHUT_WR)  # FIN; what comes next waits unread
                 else:
