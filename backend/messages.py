@@ -10,7 +10,7 @@ every ``/ws`` message, documented in ``docs/live.md``, are in
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -37,10 +37,30 @@ class Message(BaseModel):
         self.model_fields_set.add("type")
 
 
+M = TypeVar("M", bound=Message)
+
+
+def for_vehicle(message: M, vehicle: str | None) -> M:
+    """``message`` naming the fleet's ``vehicle`` it concerns (None: no fleet, the message as
+    it always was: no ``vehicle`` key at all)."""
+    if vehicle is not None:
+        message.vehicle = vehicle  # type: ignore[attr-defined]  # the messages that have one
+    return message
+
+
 def message_json(message: BaseModel) -> str:
     """A message as its JSON text: the fields set (so a record's JSON is its row's), by alias
     (an acknowledgement's ``from``); a non-finite number is ``null``."""
     return message.model_dump_json(by_alias=True, exclude_unset=True)
+
+
+def _vehicle_field() -> Any:
+    """The vehicle a message concerns, named where a fleet is configured (``NEMESYS_VEHICLES``);
+    absent without one (the single vehicle's messages are as they always were)."""
+    return Field(
+        default=None,
+        description="the fleet's vehicle it concerns (absent without a fleet: the one vehicle)",
+    )
 
 
 # --- the vehicle as the console knows it ----------------------------------------------------
@@ -138,6 +158,7 @@ class TelemetryMessage(Message):
         description="the dive the console records them in (null: none yet); a page's plots "
         "start again when it changes",
     )
+    vehicle: str | None = _vehicle_field()
 
 
 class CommandMessage(Message):
@@ -153,6 +174,7 @@ class VehicleMessage(Message):
     type: Literal["vehicle"] = "vehicle"
     active: ActiveEcho
     echo_mismatch: bool = Field(description="it differs from the last command it accepted")
+    vehicle: str | None = _vehicle_field()
 
 
 class ActivePathMessage(Message):
@@ -161,6 +183,7 @@ class ActivePathMessage(Message):
 
     type: Literal["active_path"] = "active_path"
     active_path: ActivePath | None = Field(description="null: no path is known")
+    vehicle: str | None = _vehicle_field()
 
 
 class LinkMessage(Message):
@@ -168,6 +191,7 @@ class LinkMessage(Message):
 
     type: Literal["link"] = "link"
     link: LinkHealth = Field(description="what the station knows of its link to the vehicle")
+    vehicle: str | None = _vehicle_field()
 
 
 class EventMessage(Message):
@@ -215,5 +239,6 @@ __all__ = [
     "VehicleMessage",
     "VehicleStatus",
     "VehicleView",
+    "for_vehicle",
     "message_json",
 ]

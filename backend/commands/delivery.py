@@ -87,6 +87,17 @@ class Delivery:
     last_failure: str | None = None
     wake: asyncio.Event = field(default_factory=asyncio.Event)
     task: asyncio.Task[None] | None = None
+    #: The records its frame carries, each with whether its vehicle's acknowledgement is
+    #: expected: the command's own (``command_id``); a Surface to all, one per vehicle.
+    members: dict[int, bool] = field(default_factory=dict)
+    #: Its frame is addressed to all vehicles (a fleet's Surface to all, address 0).
+    to_all: bool = False
+    #: When its next copy may leave (the manager's clock, s): the airtime budget's schedule.
+    next_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.members:
+            self.members = {self.command_id: self.two_way}
 
     def more(self) -> bool:
         return self.copies is None or self.tried < self.copies

@@ -34,23 +34,40 @@ class CommandRecords:
     def __init__(self, log: MissionLog, hub: TelemetryHub) -> None:
         self.log = log
         self.hub = hub
-        self._live: dict[int, Delivery] = {}  # copies still going out
+        #: Copies still going out, by record (a Surface to all: its records share one).
+        self._live: dict[int, Delivery] = {}
         self._awaiting: OrderedDict[int, Encoded] = OrderedDict()  # id -> frame, oldest first
         self._timeouts: dict[int, Timer] = {}  # acknowledgement timeouts
-        self.ledger = FrameLedger()
+        #: The vehicle of each record this manager began (a fleet's; absent: the first one).
+        self._vehicle_of: dict[int, str] = {}
+        #: Each vehicle's frames and their fate, by name (the manager fills it).
+        self._ledgers: dict[str, FrameLedger] = {}
         self._held: list[dict[str, Any]] | None = None  # announcements awaiting a commit
+
+    def _ledger_of(self, command_id: int) -> FrameLedger:
+        """The ledger of the vehicle a record is for."""
+        name = self._vehicle_of.get(command_id)
+        if name is None:
+            return next(iter(self._ledgers.values()))
+        return self._ledgers[name]
+
+    def _carries(self, d: Delivery) -> list[int]:
+        """The records ``d`` still delivers (those no other event ended)."""
+        return [cid for cid in d.members if self._live.get(cid) is d]
 
     def _end(self, command_id: int, event: Event, outcome: Outcome, **fields: Any) -> None:
         """The one way a record ends: its repetition stops, its timer goes, its frames are
         settled in the ledger and its terminal state is written."""
         d = self._live.pop(command_id, None)
-        if d is not None and d.task is not None and d.task is not asyncio.current_task():
+        # a Surface to all goes on while it carries another vehicle's record
+        alone = d is not None and not self._carries(d)
+        if alone and d is not None and d.task is not None and d.task is not asyncio.current_task():
             d.task.cancel()
         self._awaiting.pop(command_id, None)
         handle = self._timeouts.pop(command_id, None)
         if handle is not None:
             handle.cancel()
-        self.ledger.settle(command_id, outcome)
+        self._ledger_of(command_id).settle(command_id, outcome)
         record = self.log.command(command_id)
         assert record is not None
         try:

@@ -64,6 +64,7 @@ def commands_query(
     pattern: str | None,
     target: str | None,
     dive: int | None,
+    vehicle: str | None = None,
     since: str | None,
     until: str | None,
     limit: int,
@@ -76,6 +77,7 @@ def commands_query(
         ("pattern = ?", pattern),
         ("target = ?", target),
         ("dive = ?", dive),
+        ("vehicle = ?", vehicle),
         ("created_at >= ?", since),
         ("created_at <= ?", until),
     )
@@ -90,8 +92,11 @@ def commands_query(
 
 
 def command_row(row: sqlite3.Row) -> dict[str, Any]:
-    """A command's row as a dict: its JSON columns parsed, its booleans as bool."""
+    """A command's row as a dict: its JSON columns parsed, its booleans as bool; ``vehicle``
+    only where it names one (a fleet's: without a fleet the record is as it always was)."""
     out = dict(row)
+    if out.get("vehicle", "") is None:
+        del out["vehicle"]
     for col in JSON_COLUMNS:
         if out.get(col) is not None:
             out[col] = json.loads(out[col])

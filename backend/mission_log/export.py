@@ -33,12 +33,22 @@ CSV_COLUMNS = (
 )
 
 
-def csv_rows(records: Iterable[Mapping[str, Any]]) -> Iterable[list[str]]:
-    """The log as CSV rows (header first, :data:`CSV_COLUMNS`); JSON columns as JSON text."""
-    yield list(CSV_COLUMNS)
+def csv_columns(fleet: bool = False) -> tuple[str, ...]:
+    """The CSV export's columns: :data:`CSV_COLUMNS`, and with a fleet the ``vehicle`` each
+    record is for, after ``target``."""
+    if not fleet:
+        return CSV_COLUMNS
+    at = CSV_COLUMNS.index("target") + 1
+    return (*CSV_COLUMNS[:at], "vehicle", *CSV_COLUMNS[at:])
+
+
+def csv_rows(records: Iterable[Mapping[str, Any]], *, fleet: bool = False) -> Iterable[list[str]]:
+    """The log as CSV rows (header first, :func:`csv_columns`); JSON columns as JSON text."""
+    columns = csv_columns(fleet)
+    yield list(columns)
     for r in records:
         ack = r.get("ack") or {}
-        values = (ack.get(c) if c in CSV_ACK_COLUMNS else r.get(c) for c in CSV_COLUMNS)
+        values = (ack.get(c) if c in CSV_ACK_COLUMNS else r.get(c) for c in columns)
         yield [
             json.dumps(v) if isinstance(v, dict | list) else "" if v is None else str(v)
             for v in values

@@ -133,6 +133,10 @@ class CommandRecord(BaseModel):
     first_sent_at: str | None = Field(
         None, description="when its first copy left (ISO 8601, UTC): the log's wire order"
     )
+    vehicle: str | None = Field(
+        None,
+        description="the fleet's vehicle it is for (NEMESYS_VEHICLES); absent without a fleet",
+    )
 
 
 def command_record(row: Mapping[str, Any]) -> CommandRecord:
@@ -153,6 +157,10 @@ class LogEvent(BaseModel):
     kind: str = Field(description="echo_mismatch, datum, copies_from, script_stopped")
     detail: str = Field(description="what happened, in words")
     data: dict[str, JsonValue] | None = Field(description="the kind's figures (null: none)")
+    vehicle: str | None = Field(
+        None,
+        description="the fleet's vehicle it concerns; absent without a fleet, or for them all",
+    )
 
 
 def log_event(row: Mapping[str, Any]) -> LogEvent:

@@ -23,7 +23,8 @@ CREATE TABLE IF NOT EXISTS track (
     at TEXT,
     commanded_depth_m REAL,
     nav_valid INTEGER,
-    nav_age_s REAL
+    nav_age_s REAL,
+    vehicle TEXT
 );
 """
 TRACK_INDEX = "CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);\n"
@@ -63,7 +64,8 @@ CREATE TABLE IF NOT EXISTS commands (
     origin TEXT,
     retry_of INTEGER,
     overrides TEXT,
-    first_sent_at TEXT
+    first_sent_at TEXT,
+    vehicle TEXT
 );
 CREATE INDEX IF NOT EXISTS commands_dive ON commands(dive);
 """
@@ -74,7 +76,8 @@ CREATE TABLE IF NOT EXISTS events (
     at TEXT NOT NULL,
     kind TEXT NOT NULL,
     detail TEXT NOT NULL,
-    data TEXT
+    data TEXT,
+    vehicle TEXT
 );
 CREATE INDEX IF NOT EXISTS events_dive ON events(dive);
 """
@@ -95,6 +98,8 @@ ADDED_COLUMNS = (
     ("retry_of", "INTEGER"),
     ("overrides", "TEXT"),
     ("first_sent_at", "TEXT"),
+    # issue 23: the fleet's vehicle a command is for (its name; null without a fleet)
+    ("vehicle", "TEXT"),
 )
 #: Columns of the track added since (issue 20: the plots and the replay read the dive back
 #: from the log): the status at the point (null where the vehicle did not say), the active
@@ -111,7 +116,12 @@ ADDED_TRACK_COLUMNS = (
     ("commanded_depth_m", "REAL"),
     ("nav_valid", "INTEGER"),
     ("nav_age_s", "REAL"),
+    # issue 23: the fleet's vehicle the point is of (null without a fleet)
+    ("vehicle", "TEXT"),
 )
+#: Columns of the events added since (issue 23: the fleet's vehicle an event concerns; null
+#: without a fleet, or for the whole fleet, e.g. the operator's choice of the copies' BER).
+ADDED_EVENT_COLUMNS = (("vehicle", "TEXT"),)
 #: The track's position columns, NOT NULL before issue 22.
 POSITION_COLUMNS = ("x_m", "y_m", "z_m", "heading_deg")
 
@@ -120,7 +130,11 @@ def create_or_migrate(db: sqlite3.Connection) -> None:
     """Create the tables a new log lacks, add the columns an older log lacks (values of old
     rows: the declared defaults), and let an older track's position be null."""
     db.executescript(SCHEMA)
-    for table, added in (("commands", ADDED_COLUMNS), ("track", ADDED_TRACK_COLUMNS)):
+    for table, added in (
+        ("commands", ADDED_COLUMNS),
+        ("track", ADDED_TRACK_COLUMNS),
+        ("events", ADDED_EVENT_COLUMNS),
+    ):
         have = {row[1] for row in db.execute(f"PRAGMA table_info({table})")}
         for name, declaration in added:
             if name not in have:

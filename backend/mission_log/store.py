@@ -37,6 +37,7 @@ from backend.mission_log.track import (
     TRACK_BUFFER_MAX,
     TRACK_COLUMNS,
     TRACK_FLUSH_S,
+    TRACK_WRITE_COLUMNS,
     TrackBuffer,
     TrackPoint,
     track_point,
@@ -292,6 +293,7 @@ class MissionLog:
         pattern: str | None = None,
         target: str | None = None,
         dive: int | None = None,
+        vehicle: str | None = None,
         since: str | None = None,
         until: str | None = None,
         limit: int = 200,
@@ -302,6 +304,7 @@ class MissionLog:
             pattern=pattern,
             target=target,
             dive=dive,
+            vehicle=vehicle,
             since=since,
             until=until,
             limit=limit,
@@ -311,13 +314,16 @@ class MissionLog:
             rows = self._db.execute(sql, args).fetchall()
         return [command_row(r) for r in rows]
 
-    def last_sent(self) -> dict[str, Any] | None:
-        """The command whose first copy left most recently (of any dive), as
-        ``{id, pattern, pattern_id, params}``; None: nothing has left yet."""
+    def last_sent(self, vehicle: str | None = None) -> dict[str, Any] | None:
+        """The command whose first copy left most recently (of any dive; to a fleet's
+        ``vehicle``), as ``{id, pattern, pattern_id, params}``; None: nothing has left yet."""
+        which = "" if vehicle is None else "AND vehicle = ? "
         with self._lock:
             row = self._db.execute(
                 "SELECT id, pattern, pattern_id, params FROM commands "
-                "WHERE first_sent_at IS NOT NULL ORDER BY first_sent_at DESC, id DESC LIMIT 1"
+                f"WHERE first_sent_at IS NOT NULL {which}"
+                "ORDER BY first_sent_at DESC, id DESC LIMIT 1",
+                () if vehicle is None else (vehicle,),
             ).fetchone()
         if row is None:
             return None
@@ -332,16 +338,27 @@ class MissionLog:
     # --- events: what the vehicle did that the console did not cause ------------------------
 
     def add_event(
-        self, dive: int, kind: str, detail: str, data: Mapping[str, Any] | None = None
+        self,
+        dive: int,
+        kind: str,
+        detail: str,
+        data: Mapping[str, Any] | None = None,
+        vehicle: str | None = None,
     ) -> dict[str, Any]:
-        """Write one event (committed); returns it with its id."""
-        row = (dive, self._now(), kind, detail, None if data is None else json.dumps(data))
+        """Write one event (committed; ``vehicle``: the fleet's vehicle it concerns); returns
+        it with its id (``vehicle`` in it only when it names one)."""
+        text = None if data is None else json.dumps(data)
+        row = (dive, self._now(), kind, detail, text, vehicle)
         with self._lock, _writing():
             cur = self._db.execute(
-                "INSERT INTO events (dive, at, kind, detail, data) VALUES (?, ?, ?, ?, ?)", row
+                "INSERT INTO events (dive, at, kind, detail, data, vehicle) "
+                "VALUES (?, ?, ?, ?, ?, ?)",
+                row,
             )
         keys = ("dive", "at", "kind", "detail")
-        return {"id": int(cur.lastrowid or 0), **dict(zip(keys, row, strict=False)), "data": data}
+        named = {} if vehicle is None else {"vehicle": vehicle}
+        event = {"id": int(cur.lastrowid or 0), **dict(zip(keys, row, strict=False))}
+        return {**event, "data": data, **named}
 
     def events(self, dive: int | None = None) -> list[dict[str, Any]]:
         """Events, oldest first (of one dive)."""
@@ -351,6 +368,8 @@ class MissionLog:
             out = [dict(r) for r in rows.fetchall()]
         for event in out:
             event["data"] = None if event["data"] is None else json.loads(event["data"])
+            if event.get("vehicle", "") is None:
+                del event["vehicle"]
         return out
 
     # --- track ---------------------------------------------------------------------------
@@ -364,45 +383,55 @@ class MissionLog:
         z_m: float,
         heading_deg: float,
         status: Mapping[str, Any] | None = None,
+        vehicle: str | None = None,
     ) -> None:
-        """Buffer one track point with what ``status`` says then (``track_point``); written
+        """Buffer one track point (of a fleet's ``vehicle``) with what ``status`` says then
+        (``track_point``); written
         (one commit) within :data:`TRACK_FLUSH_S` of the first point buffered, at
         :data:`TRACK_BATCH` points, on a read and on close. A write that fails is logged and
         tried again by the timer (never raised)."""
         position = (t_s, x_m, y_m, z_m, heading_deg)
-        self._track.add(track_point(dive, position, status or {}, self._now()))
+        self._track.add(track_point(dive, position, status or {}, self._now(), vehicle))
 
-    def add_status_point(self, dive: int, t_s: float, status: Mapping[str, Any]) -> None:
+    def add_status_point(
+        self, dive: int, t_s: float, status: Mapping[str, Any], vehicle: str | None = None
+    ) -> None:
         """Buffer one track point without a position: what ``status`` says at ``t_s`` when the
         vehicle sends no pose (its navigation not valid; the heading is the status's, null in
         the contract's nav fault). Written as :meth:`add_track`'s points are."""
         position = (t_s, None, None, None, number(status.get("heading_deg")))
-        self._track.add(track_point(dive, position, status, self._now()))
+        self._track.add(track_point(dive, position, status, self._now(), vehicle))
 
     def _write_track(self, points: list[TrackPoint]) -> None:
         """Commit ``points`` together (the track buffer's write)."""
-        cols = ", ".join(TRACK_COLUMNS)
-        marks = ", ".join("?" * len(TRACK_COLUMNS))
+        cols = ", ".join(TRACK_WRITE_COLUMNS)
+        marks = ", ".join("?" * len(TRACK_WRITE_COLUMNS))
         with self.transaction(), _writing():
             self._db.executemany(f"INSERT INTO track ({cols}) VALUES ({marks})", points)
 
-    def track(self, dive: int) -> list[dict[str, float]]:
+    def track(self, dive: int, vehicle: str | None = None) -> list[dict[str, float]]:
         """The dive's positions in time order: ``t_s, x_m, y_m, z_m, heading_deg`` (its points
-        without a position left out)."""
+        without a position left out; of a fleet's ``vehicle`` only)."""
         keys = ("t_s", "x_m", "y_m", "z_m", "heading_deg")
-        return [{k: row[k] for k in keys} for row in self.track_rows(dive)]
+        return [{k: row[k] for k in keys} for row in self.track_rows(dive, vehicle=vehicle)]
 
-    def track_rows(self, dive: int, *, positioned: bool = True) -> list[dict[str, Any]]:
+    def track_rows(
+        self, dive: int, *, positioned: bool = True, vehicle: str | None = None
+    ) -> list[dict[str, Any]]:
         """The dive's track points in time order with every column (``active`` parsed,
         ``nav_valid`` a boolean; an older log's points have null status columns). Only the
-        points with a position unless ``positioned`` is false (the status series)."""
+        points with a position unless ``positioned`` is false (the status series); only a
+        fleet's ``vehicle``'s when given."""
         where = " AND x_m IS NOT NULL" if positioned else ""
+        args: tuple[Any, ...] = (dive,)
+        if vehicle is not None:
+            where, args = where + " AND vehicle = ?", (dive, vehicle)
         with self._lock:
             self._track.flush()
             rows = self._db.execute(
                 f"SELECT {', '.join(TRACK_COLUMNS[1:])} FROM track WHERE dive = ?{where} "
                 "ORDER BY t_s",
-                (dive,),
+                args,
             ).fetchall()
         out = [dict(r) for r in rows]
         for row in out:

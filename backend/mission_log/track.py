@@ -34,7 +34,8 @@ TRACK_BUFFER_MAX = 3600
 #: made from a status without navigation), then what the status said (depth_m, speed_mps,
 #: battery_pct, mode; None: not said), the active command the vehicle reported (JSON text,
 #: None: none or not said), the station's clock (ISO, :data:`backend.clock.CONSOLE_UTC`), the
-#: depth that command asks for, whether the navigation was valid and its age (s).
+#: depth that command asks for, whether the navigation was valid and its age (s), and the
+#: fleet's vehicle it is of (None without a fleet).
 TrackPoint = tuple[
     int,
     float,
@@ -51,8 +52,10 @@ TrackPoint = tuple[
     float | None,
     bool | None,
     float | None,
+    str | None,
 ]
-#: The track table's columns, in :data:`TrackPoint`'s order.
+#: The track table's columns a dive is read back with, in :data:`TrackPoint`'s order (its
+#: vehicle, :data:`TRACK_WRITE_COLUMNS`' last, is read as a filter).
 TRACK_COLUMNS = (
     "dive",
     "t_s",
@@ -70,16 +73,21 @@ TRACK_COLUMNS = (
     "nav_valid",
     "nav_age_s",
 )
+#: Every column a track point is written with, in :data:`TrackPoint`'s order.
+TRACK_WRITE_COLUMNS = (*TRACK_COLUMNS, "vehicle")
 #: A point's position: t_s, then x_m, y_m, z_m, heading_deg (None: no navigation).
 Position = tuple[float, float | None, float | None, float | None, float | None]
 
 
-def track_point(dive: int, position: Position, status: Mapping[str, Any], at: str) -> TrackPoint:
+def track_point(
+    dive: int, position: Position, status: Mapping[str, Any], at: str, vehicle: str | None = None
+) -> TrackPoint:
     """The row of one point: ``position`` (t_s, x_m, y_m, z_m, heading_deg), what ``status``
     says (a number it does not hold, or a mode that is not text: null; an ``active`` that is
     not a command object: null; a ``nav_valid`` that is not a boolean: null, a 1.x vehicle's
     "taken as true"), the commanded depth of its ``active`` command
-    (:func:`~backend.mission_log.series.commanded_depth_m`) and the station's clock ``at``."""
+    (:func:`~backend.mission_log.series.commanded_depth_m`), the station's clock ``at`` and the
+    fleet's ``vehicle`` it is of."""
     t_s, x_m, y_m, z_m, heading_deg = position
     mode = status.get("mode")
     active = status.get("active")
@@ -100,6 +108,7 @@ def track_point(dive: int, position: Position, status: Mapping[str, Any], at: st
         commanded_depth_m(active if isinstance(active, dict) else None),
         nav_valid if isinstance(nav_valid, bool) else None,
         number(status.get("nav_age_s")),
+        vehicle,
     )
 
 
