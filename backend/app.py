@@ -22,12 +22,13 @@ from starlette.types import Scope
 
 from backend.api import authoring, chart, commands, errors_db, live, predict, scripts, training
 from backend.api import dives as dives_api
+from backend.api import vehicles as vehicles_api
 from backend.api import view as view_api
 from backend.api.openapi import security_schemes
 from backend.bounded_input import BodyLimit, shorten, validation_errors
 from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.manager import RateLimited
-from backend.commands.service import SendRefused, refusal_detail
+from backend.commands.service import SendRefused, VehicleRefused, refusal_detail
 from backend.console import Console
 from backend.foxglove_live import live_view
 from backend.security import HostGuard, allowed_hosts, install_redaction
@@ -99,6 +100,7 @@ def create_app(
         chart.router,
         predict.router,
         dives_api.router,
+        vehicles_api.router,
     ):
         app.include_router(router)
     app.include_router(view_api.router)  # a page's own 3D view
@@ -130,7 +132,11 @@ def _errors(app: FastAPI) -> None:
 
     @app.exception_handler(SendRefused)
     async def send_refused(_request: Request, err: SendRefused) -> JSONResponse:
-        """The command service's refusals, with the status every path gives them."""
+        """The command service's refusals, with the status every path gives them (a request
+        naming no vehicle of the console's: a validation error at its ``vehicle``)."""
+        if isinstance(err, VehicleRefused):
+            where = {"loc": ["body", "vehicle"], "msg": err.message, "type": "vehicle"}
+            return JSONResponse({"detail": [where]}, status_code=422)
         return JSONResponse({"detail": refusal_detail(err)}, status_code=err.status)
 
     @app.exception_handler(RateLimited)

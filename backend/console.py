@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import functools
 import logging
 from collections.abc import Coroutine, Mapping
 from dataclasses import replace
@@ -23,18 +24,19 @@ from backend.belief.model import BelievedPosition
 from backend.belief.tracker import Beliefs
 from backend.chart.geo import Datum, initial_datum
 from backend.chart.gps import GpsFix, GpsReader, Station, parse_gps, station_of
-from backend.chart.reach import active_path_doc, with_lat_lon
 from backend.chart.tiles import TileSource, open_tiles
 from backend.chart.vehicle_datum import DatumWatch
 from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.checks import SendViolation
-from backend.commands.health import LinkHealth, link_health_of
+from backend.commands.health import LinkHealth
 from backend.commands.link_ber import BerChoice, CopiesFrom
 from backend.commands.link_settings import ber_now, change_link
 from backend.commands.manager import CommandManager
-from backend.commands.service import Assessment, CommandService
+from backend.commands.service import Assessment, CommandService, check_vehicle
 from backend.dives import Dives
-from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMessage, VehicleView
+from backend.fleet import telemetry, views
+from backend.fleet.state import Fleet, members, vehicle_links
+from backend.messages import ActivePath, EventMessage, VehicleView
 from backend.mission_log.opening import open_checked
 from backend.mission_log.records import log_event
 from backend.mission_log.store import MissionLog
@@ -46,7 +48,6 @@ from backend.viewer.draw_queue import PreviewDrawer
 from codec import Encoded, airtime_s
 from planner import Limits, Plan, VehicleState
 from station.link import Link, RosbridgeLink
-from vehicle_contract.messages import pose_from_message
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
     from backend.foxglove_live.server import FoxgloveLive
@@ -95,6 +96,8 @@ class Console:
         self.bridge: BridgeServer | None = None  # training mode: its rosbridge server
         self.link: Link | None = None
         self.hub = TelemetryHub(settings.telemetry_hz)
+        #: Every vehicle (a fleet's, or the single one): its hub, its link, its path.
+        self.fleet = Fleet(settings.fleet, self.hub)
         self.commands: CommandManager | None = None
         self.beliefs: Beliefs | None = None  # what each vehicle is believed to do
         #: The one checked path to the vehicle (every frame leaves through it).
@@ -131,15 +134,16 @@ class Console:
             logger.warning(
                 "%d commands an earlier run left on their way are interrupted", recovered
             )
-        dives = self.dives = Dives(self.log, s.target, self.hub)
+        fleet = self.fleet
+        extra = [v.hub for v in fleet.vehicles.values() if v.hub is not self.hub]
+        dives = self.dives = Dives(self.log, s.target, self.hub, extra)
         if self._given_link is not None:
             link: Link = self._given_link
         else:
             link, self.sim, self.bridge = await open_vehicle_link(s, self.limits)
         self.link = link
-        link.on_pose = self._on_pose
-        link.on_status = self._on_status
-        link.on_datum = self._on_datum
+        for vehicle, its_link in vehicle_links(fleet, link):
+            telemetry.listen(self, vehicle, its_link)
         self.commands = CommandManager(
             self.log,
             link,
@@ -156,13 +160,16 @@ class Console:
             airtime_s=airtime_s(s.bitrate_bps),
             target=s.target,
             clock=self.clock,
+            fleet=members(fleet),
+            link_ber_of=self.link_ber if fleet.configured else None,
         )
         self.service = CommandService(self.commands, self.assess, s.operator)
         self.service.watch(self.script_guard)
-        self.beliefs = Beliefs(self)
+        self.beliefs = Beliefs(self, tuple(fleet.names))
         self.beliefs.start()
-        link.on_mission = self._on_mission
-        self.commands.vehicle.on_plan = self._show_active
+        for vehicle in fleet.vehicles.values():
+            mirror = self.commands.addressee(fleet.news_name(vehicle)).mirror
+            mirror.on_plan = functools.partial(telemetry.show_active, self, vehicle)
         await link.start()
         if isinstance(link, RosbridgeLink) and s.training:
             await link.wait_connected(5.0)
@@ -210,28 +217,7 @@ class Console:
 
     # --- telemetry -----------------------------------------------------------------------
 
-    def _on_status(self, msg: dict[str, Any]) -> None:
-        if self.dives is not None:
-            self.dives.heard()
-        self.hub.set_status(msg)
-        if self.dives is not None:
-            self.dives.status(self._status_of_track(msg))
-        self._check_echo()
-
-    def _on_mission(self, ack: dict[str, Any]) -> None:
-        assert self.commands is not None and self.dives is not None
-        self.dives.heard()
-        self.commands.on_mission(ack)
-        self._check_echo()
-
-    def _check_echo(self) -> None:
-        """An echo mismatch goes into the mission log, once each time it begins."""
-        if self.dives is not None and self.commands is not None:
-            event = self.dives.echo_mismatch(self.commands)
-            if event is not None:
-                self.hub.publish(EventMessage(event=log_event(event)))
-
-    def _on_datum(self, msg: dict[str, Any]) -> None:
+    def on_datum(self, msg: dict[str, Any]) -> None:
         """The vehicle's datum: taken when the console has none, else compared (a mismatch is
         a link health problem, and an event each time it begins)."""
         event = self.datum_watch.on_message(msg, self.datum)
@@ -254,87 +240,46 @@ class Console:
         s, fix = self.settings, self.gps.fix if self.gps is not None else None
         return station_of(self.datum, fix, s.station_lat_deg, s.station_lon_deg)
 
-    def _on_pose(self, msg: dict[str, Any]) -> None:
-        pose = with_lat_lon(pose_from_message(msg), self.datum)
-        self.hub.set_pose(pose)
-        t_s, x, y, z = pose["t_s"], pose["x_m"], pose["y_m"], pose["z_m"]
-        heading, roll = pose["heading_deg"], pose["roll_deg"]
-        if t_s is None or x is None or y is None or z is None or heading is None:
-            return  # an unknown number: shown as unknown, counted in link health, not drawn
-        if self.viewer is not None:
-            self.viewer.update_pose(t_s, x, y, z, roll or 0.0, heading)
-        if self.dives is not None:
-            self.dives.track((t_s, x, y, z, heading), self._status_of_track(self.hub.status))
-
-    def _status_of_track(self, status: Mapping[str, Any] | None) -> Mapping[str, Any]:
-        """The status a track point keeps: ``status``, with the command the console believes
-        the vehicle runs (its echo) when the vehicle does not say ``active``."""
-        status = status or {}
-        if "active" not in status and self.commands is not None:  # the echo instead
-            status = {**status, "active": self.commands.vehicle_active}
-        return status
-
-    def _show_active(self, active: Plan | None) -> None:
-        """The path the vehicle flies (as the station mirrors it): in the 3D view, and for
-        every page's chart (``/api/vehicle`` and an ``active_path`` message on /ws)."""
-        self.active_path = (
-            None
-            if active is None
-            else ActivePath.model_validate(active_path_doc(active, self.datum))
-        )
-        self.hub.publish(ActivePathMessage(active_path=self.active_path))
-        if self.viewer is None:
-            return
-        if active is None:
-            self.viewer.clear_active()
-        else:
-            p = active.path
-            self.viewer.show_active(p.xs, p.ys, p.zs, f"active: {active.pattern}")
-
-    def link_ber(self) -> tuple[float, float]:
-        """(bit-error rate, whole-frame loss) the copies are chosen from: the emulated
-        channel's in training, else the operator's choice (:mod:`backend.commands.link_ber`)."""
-        now = ber_now(self)
+    def link_ber(self, vehicle: str | None = None) -> tuple[float, float]:
+        """(bit-error rate, whole-frame loss) the copies (to a fleet's ``vehicle``) are
+        chosen from: the emulated channel's in training, else the operator's choice
+        (:mod:`backend.commands.link_ber`)."""
+        now = ber_now(self, vehicle)
         return now.ber, now.loss
 
-    def vehicle_state(self) -> VehicleState:
-        """Where previews, predictions and joins start: the believed position (NED)."""
-        return self.vehicle_start()[0]
+    def vehicle_state(self, vehicle: str | None = None) -> VehicleState:
+        """Where previews, predictions and joins start: the believed position (NED) of the
+        vehicle (a fleet's ``vehicle``; None: the single one, or a fleet's first)."""
+        return self.vehicle_start(vehicle)[0]
 
-    def vehicle_start(self) -> tuple[VehicleState, BelievedPosition]:
-        """The believed state, and what it rests on (telemetry, dead reckoning, assumed)."""
+    def vehicle_start(self, vehicle: str | None = None) -> tuple[VehicleState, BelievedPosition]:
+        """The believed state, and what it rests on (telemetry, dead reckoning, assumed).
+
+        Raises:
+            UnknownVehicle: a vehicle the console does not have, naming those it has.
+        """
         assert self.beliefs is not None, "the console has not started"
-        return self.beliefs.default.state()
+        return self.beliefs[self.fleet.get(vehicle).name].state()
 
-    def vehicle(self) -> VehicleView:
-        """Pose, status, the vehicle's echoed active command vs the last sent, link health."""
-        cm = self.commands
-        return VehicleView.model_validate(
-            {
-                "pose": self.hub.pose,
-                "status": self.hub.status,
-                "active": cm.vehicle_active if cm else None,
-                "last_sent": cm.last_sent if cm else None,
-                "active_path": self.active_path,
-                "echo_mismatch": cm.echo_mismatch if cm else False,
-                "age_s": self.hub.age_s(),
-                "link": self.link_health(),
-                "belief": self.beliefs.default.current() if self.beliefs else None,
-            }
+    def vehicle(self, name: str | None = None) -> VehicleView:
+        """Pose, status, the vehicle's echoed active command vs the last sent, link health
+        (of a fleet's vehicle ``name``: :mod:`backend.fleet.views`)."""
+        return views.vehicle_view(self, name)
+
+    def checked_vehicle(self, name: str | None, *, surface: bool = False) -> str | None:
+        """The vehicle a request names, checked (:func:`backend.commands.service.check_vehicle`:
+        a fleet's name, ``"all"`` for Surface; None without a fleet).
+
+        Raises:
+            VehicleRefused: naming the vehicles.
+        """
+        return check_vehicle(
+            name, self.fleet.names if self.fleet.configured else [], surface=surface
         )
 
-    def link_health(self) -> LinkHealth:
+    def link_health(self, vehicle: str | None = None) -> LinkHealth:
         """What the station knows of its link to the vehicle (not the page's websocket)."""
-        assert self.link is not None and self.commands is not None
-        return link_health_of(
-            self.link,
-            self.commands,
-            self.hub,
-            self.settings.target,
-            ber_now(self),
-            self.ber_choice.copies_from,
-            datum_problem=self.datum_watch.problem(self.datum),
-        )
+        return views.link_health(self, vehicle)
 
     def set_link(
         self,
@@ -351,7 +296,8 @@ class Console:
         while True:
             await asyncio.sleep(HEALTH_PUSH_INTERVAL_S)
             if self.hub.client_count:
-                self.hub.publish(LinkMessage(link=self.link_health()))
+                for news in views.link_news(self):
+                    self.hub.publish(news)
 
     # --- authoring (backend.authoring.operations) ---------------------------------------
 
@@ -360,29 +306,38 @@ class Console:
         return operations.encode(self, pattern, params)
 
     def preview(
-        self, pattern: str, params: dict[str, Any], *, show: bool = True, view: str | None = None
+        self,
+        pattern: str,
+        params: dict[str, Any],
+        *,
+        show: bool = True,
+        view: str | None = None,
+        vehicle: str | None = None,
     ) -> dict[str, Any]:
-        """The frame and the path the vehicle would fly from where it is now; drawn (``show``)
-        in the 3D view of page ``view`` only (None: in none).
+        """The frame and the path the vehicle (a fleet's ``vehicle``) would fly from where it
+        is now; drawn (``show``) in the 3D view of page ``view`` only (None: in none).
 
         Raises:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
         shown = show and view is not None
-        return operations.preview(self, pattern, params, show=shown, view=view)[1]
+        return operations.preview(self, pattern, params, show=shown, view=view, vehicle=vehicle)[1]
 
-    def plan_violations(self, new: Plan) -> tuple[SendViolation, ...]:
+    def plan_violations(self, new: Plan, vehicle: str | None = None) -> tuple[SendViolation, ...]:
         """The send policy's checks of a planned command (a mission script's step), with the
-        battery as it is now."""
-        return operations.plan_violations(self, new)
+        battery (of a fleet's ``vehicle``) as it is now."""
+        return operations.plan_violations(self, new, vehicle)
 
-    def assess(self, pattern: str, params: Mapping[str, Any]) -> Assessment:
-        """The checks of a send from where the vehicle is now (the command service's).
+    def assess(
+        self, pattern: str, params: Mapping[str, Any], vehicle: str | None = None
+    ) -> Assessment:
+        """The checks of a send from where the vehicle (a fleet's ``vehicle``) is now (the
+        command service's); the frame carries its address.
 
         Raises:
             codec.EncodeError / planner.PlanError: naming the parameter at fault.
         """
-        return operations.assess(self, pattern, params)
+        return operations.assess(self, pattern, params, vehicle)
 
     # --- training ------------------------------------------------------------------------
 
@@ -396,10 +351,12 @@ class Console:
             self.sim.reset()
         else:
             self.sim.reset(replace(self.sim.config, start_z_m=start_z_m))
-        self.hub.reset()
+        for vehicle in self.fleet.vehicles.values():
+            vehicle.hub.reset()
         if self.commands is not None:
             self.commands.reset_vehicle()
         if self.viewer is not None:
             self.viewer.reset_track()
-        self._show_active(None)
+        for vehicle in self.fleet.vehicles.values():
+            telemetry.show_active(self, vehicle, None)
         return dive

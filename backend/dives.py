@@ -11,6 +11,10 @@ A dive starts at the first of:
 A console that starts and stops with none of these adds no dive (it used to add one at every
 start). The dive's start on the vehicle's clock is its first track point (the first pose
 heard in it): the plots' and the replay's zero.
+
+A fleet (``NEMESYS_VEHICLES``) dives together: one dive, its first vehicle heard starting it;
+each vehicle's track points are kept at the interval of its own clock and name it, as do its
+events.
 """
 
 from __future__ import annotations
@@ -34,17 +38,27 @@ class Dives:
     """The console's current dive in the mission log ``log`` (None until one starts), named
     in ``hub``'s telemetry (every page's plots follow it)."""
 
-    def __init__(self, log: MissionLog, target: str, hub: TelemetryHub | None = None) -> None:
+    def __init__(
+        self,
+        log: MissionLog,
+        target: str,
+        hub: TelemetryHub | None = None,
+        vehicle_hubs: list[TelemetryHub] | None = None,
+    ) -> None:
+        """``vehicle_hubs``: a fleet's vehicles' hubs (their telemetry names the dive too)."""
         self.log = log
         self.target = target
         self.hub = hub
+        self.vehicle_hubs = vehicle_hubs or []
         #: The current dive's number (None: none started since this console started).
         self.current: int | None = None
-        self._last_track_s: float | None = None
+        #: The last kept point's time on each vehicle's clock (None: the single vehicle).
+        self._last_track: dict[str | None, float] = {}
         #: The dive's start on the vehicle's clock: its first track point's ``t_s`` (None:
         #: none yet), the zero of the dive's clock.
         self.start_t_s: float | None = None
-        self._echo_flagged = False  # an echo mismatch is logged once each time it begins
+        #: An echo mismatch is logged once each time it begins (per vehicle).
+        self._echo_flagged: dict[str | None, bool] = {}
 
     def ensure(self) -> int:
         """The current dive, started now if there is none.
@@ -54,7 +68,8 @@ class Dives:
         """
         if self.current is None:
             self.current = self.log.new_dive(self.target)
-            self._last_track_s = self.start_t_s = None
+            self._last_track.clear()
+            self.start_t_s = None
             logger.info("dive %d started", self.current)
             self._started()
         return self.current
@@ -66,14 +81,15 @@ class Dives:
             LogWriteError: the new dive cannot be written (the current one stays).
         """
         self.current = self.log.new_dive(self.target)
-        self._last_track_s = self.start_t_s = None
+        self._last_track.clear()
+        self.start_t_s = None
         logger.info("dive %d started (vehicle reset)", self.current)
         self._started()
         return self.current
 
     def _started(self) -> None:
-        if self.hub is not None:
-            self.hub.dive = self.current
+        for hub in [*([] if self.hub is None else [self.hub]), *self.vehicle_hubs]:
+            hub.dive = self.current
 
     def heard(self) -> int | None:
         """The vehicle was heard: the current dive (started now if none); None when the log
@@ -88,71 +104,90 @@ class Dives:
         self,
         position: tuple[float, float, float, float, float],
         status: Mapping[str, Any],
+        vehicle: str | None = None,
     ) -> None:
-        """A pose heard, ``(t_s, x_m, y_m, z_m, heading_deg)``, with the status then: kept as
-        a track point at most every :data:`TRACK_INTERVAL_S` of the vehicle's clock (a clock
-        that went back, a vehicle restarted, starts the count again)."""
+        """A pose heard (of a fleet's ``vehicle``), ``(t_s, x_m, y_m, z_m, heading_deg)``,
+        with the status then: kept as a track point at most every :data:`TRACK_INTERVAL_S` of
+        the vehicle's clock (a clock that went back, a vehicle restarted, starts the count
+        again)."""
         dive = self.heard()
         if dive is None:
             return
-        if self._due(position[0]):
-            self.log.add_track(dive, *position, status=status)
+        if self._due(position[0], vehicle):
+            self.log.add_track(dive, *position, status=status, vehicle=vehicle)
 
-    def status(self, status: Mapping[str, Any]) -> None:
-        """A status heard: a track point without a position when it says the navigation is
-        not valid (no pose comes then), at most every :data:`TRACK_INTERVAL_S` as the poses'."""
+    def status(self, status: Mapping[str, Any], vehicle: str | None = None) -> None:
+        """A status heard (of a fleet's ``vehicle``): a track point without a position when
+        it says the navigation is not valid (no pose comes then), at most every
+        :data:`TRACK_INTERVAL_S` as the poses'."""
         t_s = number(status.get("t_s"))
         if status.get("nav_valid") is not False or t_s is None:
             return
         dive = self.heard()
-        if dive is not None and self._due(t_s):
-            self.log.add_status_point(dive, t_s, status)
+        if dive is not None and self._due(t_s, vehicle):
+            self.log.add_status_point(dive, t_s, status, vehicle)
 
-    def _due(self, t_s: float) -> bool:
-        """Whether a point at ``t_s`` is kept (one :data:`TRACK_INTERVAL_S` after the last;
-        a clock that went back, a vehicle restarted, starts the count again)."""
-        last = self._last_track_s
+    def _due(self, t_s: float, vehicle: str | None = None) -> bool:
+        """Whether a point at ``t_s`` is kept (one :data:`TRACK_INTERVAL_S` after the last
+        of its vehicle; a clock that went back, a vehicle restarted, starts the count
+        again)."""
+        last = self._last_track.get(vehicle)
         if last is not None and last <= t_s < last + TRACK_INTERVAL_S:
             return False
-        self._last_track_s = t_s
+        self._last_track[vehicle] = t_s
         if self.start_t_s is None:
             self.start_t_s = t_s
         return True
 
     def event(
-        self, kind: str, detail: str, data: Mapping[str, Any] | None = None
+        self,
+        kind: str,
+        detail: str,
+        data: Mapping[str, Any] | None = None,
+        vehicle: str | None = None,
     ) -> dict[str, Any]:
-        """Write an event into the current dive (started now if none); returns it.
+        """Write an event (of a fleet's ``vehicle``) into the current dive (started now if
+        none); returns it.
 
         Raises:
             LogWriteError: it cannot be written.
         """
-        return self.log.add_event(self.ensure(), kind, detail, data)
+        return self.log.add_event(self.ensure(), kind, detail, data, vehicle)
 
     def note(
-        self, kind: str, detail: str, data: Mapping[str, Any], *, level: int = logging.INFO
+        self,
+        kind: str,
+        detail: str,
+        data: Mapping[str, Any],
+        *,
+        level: int = logging.INFO,
+        vehicle: str | None = None,
     ) -> dict[str, Any] | None:
         """:meth:`event`, said in the console's log at ``level``; a log that cannot be written
         is said as an error instead (None: nothing was written)."""
         try:
-            event = self.event(kind, detail, data)
+            event = self.event(kind, detail, data, vehicle)
         except LogWriteError as err:
             logger.error("could not log %s: %s", kind, err)
             return None
         logger.log(level, "%s", detail)
         return event
 
-    def echo_mismatch(self, commands: CommandManager) -> dict[str, Any] | None:
-        """Vehicle activity this console did not cause (an echo mismatch): written as an
-        event once each time it begins; returns the event when one was written."""
-        mismatch = commands.echo_mismatch
-        if not mismatch or self._echo_flagged:
-            self._echo_flagged = mismatch
+    def echo_mismatch(
+        self, commands: CommandManager, vehicle: str | None = None
+    ) -> dict[str, Any] | None:
+        """Vehicle activity this console did not cause (an echo mismatch of the single
+        vehicle, or a fleet's ``vehicle``): written as an event once each time it begins;
+        returns the event when one was written."""
+        mirror = commands.vehicle if vehicle is None else commands.vehicles[vehicle].mirror
+        mismatch = mirror.echo_mismatch
+        if not mismatch or self._echo_flagged.get(vehicle, False):
+            self._echo_flagged[vehicle] = mismatch
             return None
-        self._echo_flagged = True
-        detail, data = commands.vehicle.mismatch_event()
+        self._echo_flagged[vehicle] = True
+        detail, data = mirror.mismatch_event()
         try:
-            event = self.event("echo_mismatch", detail, data)
+            event = self.event("echo_mismatch", detail, data, vehicle)
         except LogWriteError as err:
             logger.error("could not log an echo mismatch: %s", err)
             return None

@@ -20,6 +20,7 @@ from pydantic import BeforeValidator, Field, WithJsonSchema, field_validator, mo
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from codec import ASCII_DIGITS, number_from_text
+from vehicle_contract.fleet import FleetVehicle
 
 #: The target meaning "the embedded simulator" (training mode).
 SIM_TARGET = "sim"
@@ -101,6 +102,10 @@ class Settings(BaseSettings):
     #: The vehicle's ROS namespace: its topics are /<it>/nemesys/... (several vehicles in one
     #: graph; the reference node's vehicle_namespace parameter). "": /nemesys/...
     vehicle_namespace: str = ""
+    #: A fleet on one ME link (docs/protocol.md, "Addressing"): a count (``3``: vehicles auv1,
+    #: auv2, auv3 at addresses 1, 2, 3) or a JSON list of ``{"name", "address"}``
+    #: (:func:`vehicle_contract.fleet.parse_vehicles`). "": the single vehicle, as always.
+    vehicles: str = ""
     #: Port of the embedded simulator's rosbridge (0: any free port), loopback only.
     sim_port: Annotated[int, Field(ge=0, le=65535)] = 0
     sim_seed: int = 0
@@ -211,6 +216,38 @@ class Settings(BaseSettings):
         from vehicle_contract.names import check_namespace
 
         return check_namespace(value)  # ValueError naming what a namespace may hold
+
+    @field_validator("vehicles")
+    @classmethod
+    def _vehicles(cls, value: str) -> str:
+        from vehicle_contract.fleet import parse_vehicles
+
+        parse_vehicles(value)  # a FleetError (a ValueError) naming the fault and what is allowed
+        return value.strip()
+
+    @model_validator(mode="after")
+    def _fleet_fits(self) -> Settings:
+        if not self.fleet:
+            return self
+        if self.vehicle_namespace:
+            raise ValueError(
+                f"vehicle_namespace {self.vehicle_namespace!r} names one vehicle; with a fleet "
+                "(vehicles) each vehicle's namespace is its name: leave vehicle_namespace empty"
+            )
+        if self.training:
+            raise ValueError(
+                "a fleet (vehicles) in training needs the fleet simulator, which this console "
+                "does not have yet: leave vehicles empty for training, or give a target (an ME "
+                "modem, with telemetry for a rosbridge, or a rosbridge)"
+            )
+        return self
+
+    @property
+    def fleet(self) -> tuple[FleetVehicle, ...]:
+        """The fleet the ``vehicles`` setting names (empty: the single vehicle)."""
+        from vehicle_contract.fleet import parse_vehicles
+
+        return parse_vehicles(self.vehicles)
 
     @field_validator("gps")
     @classmethod

@@ -4,6 +4,11 @@ Each client gets the newest pose/status at most ``rate_hz`` times a second (neve
 a slow client just sees fewer, newer values) and every event (command state changes, vehicle
 echo changes) in order, through a bounded queue; a client that cannot keep up with events is
 disconnected rather than allowed to grow memory.
+
+A fleet (``NEMESYS_VEHICLES``) has a hub per vehicle holding its pose and status (``vehicle``:
+its name, in its telemetry), and the console's hub serves every page: their telemetry as
+:attr:`TelemetryHub.feeds` (each serialised once per change, latest value wins, each vehicle's
+in turn) and the events, which are published on it alone.
 """
 
 from __future__ import annotations
@@ -33,19 +38,29 @@ Pose = PoseFields
 
 
 class _Client:
-    __slots__ = ("events", "sender", "sent_version")
+    __slots__ = ("events", "feed_versions", "sender", "sent_version")
 
     def __init__(self, sender: Sender, max_events: int) -> None:
         self.sender = sender
         self.events: asyncio.Queue[str] = asyncio.Queue(max_events)
         self.sent_version = -1
+        #: The version of each feed's telemetry sent last (by the feed's place in the list).
+        self.feed_versions: list[int] = []
 
 
 class TelemetryHub:
     """Latest pose and status, and the connected page clients."""
 
-    def __init__(self, rate_hz: float = 10.0, max_events: int = 1000) -> None:
+    def __init__(
+        self, rate_hz: float = 10.0, max_events: int = 1000, vehicle: str | None = None
+    ) -> None:
+        """``vehicle``: a fleet's vehicle whose pose and status this hub holds (named in its
+        telemetry); None: the single vehicle's, or the console's hub of a fleet."""
         self.period_s = 1.0 / rate_hz
+        self.vehicle = vehicle
+        #: The fleet's vehicles' hubs, whose telemetry this hub's pages get (then this hub
+        #: holds no vehicle's pose and status, and sends no telemetry of its own).
+        self.feeds: list[TelemetryHub] = []
         self.max_events = max_events
         self.pose: Pose | None = None
         #: The last pose whose position was known (for previews and joins).
@@ -122,8 +137,15 @@ class TelemetryHub:
         self._version += 1
 
     def telemetry(self) -> TelemetryMessage:
+        named = {} if self.vehicle is None else {"vehicle": self.vehicle}
         return TelemetryMessage.model_validate(
-            {"pose": self.pose, "status": self.status, "age_s": self.age_s(), "dive": self.dive}
+            {
+                "pose": self.pose,
+                "status": self.status,
+                "age_s": self.age_s(),
+                "dive": self.dive,
+                **named,
+            }
         )
 
     def telemetry_json(self) -> str:
@@ -161,8 +183,18 @@ class TelemetryHub:
                     await sender.send_text(text)
                     while not client.events.empty():
                         await sender.send_text(client.events.get_nowait())
-                if client.sent_version != self._version:
+                if not self.feeds and client.sent_version != self._version:
                     client.sent_version = self._version
                     await sender.send_text(self.telemetry_json())
+                await self._send_feeds(client)
         finally:
             self._clients.discard(client)
+
+    async def _send_feeds(self, client: _Client) -> None:
+        """Each fleet vehicle's telemetry that changed since this client last got it."""
+        sent = client.feed_versions
+        sent.extend([-1] * (len(self.feeds) - len(sent)))
+        for i, feed in enumerate(self.feeds):
+            if sent[i] != feed._version:
+                sent[i] = feed._version
+                await client.sender.send_text(feed.telemetry_json())

@@ -3,7 +3,9 @@
 Training: the simulated vehicle and its rosbridge server on loopback, reached through the same
 rosbridge client a real vehicle gets (frames only from this console: a per-start secret for
 the rosbridge auth op). Otherwise: the target the settings name (a rosbridge URL, an ME modem,
-or a modem with telemetry over rosbridge: :func:`station.link_modem.open_link`).
+or a modem with telemetry over rosbridge: :func:`station.link_modem.open_link`). A fleet
+(``NEMESYS_VEHICLES``) on one of those: :func:`station.link_fleet.open_fleet_link`, one
+transmitter and each vehicle's own link for what it reports.
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ from typing import TYPE_CHECKING
 from backend.settings import Settings
 from planner import Limits
 from station.link import Link, RosbridgeLink
+from station.link_fleet import open_fleet_link
 from station.link_modem import open_link
 
 if TYPE_CHECKING:  # the heavy ones, imported when training starts
@@ -30,6 +33,9 @@ async def open_vehicle_link(
         ValueError: a target or telemetry setting that names no link (the message says
             which forms are allowed).
     """
+    if s.fleet and not s.training:  # a fleet in training needs the fleet simulator (settings)
+        fleet = open_fleet_link(s.target, s.bitrate_bps, s.fleet, s.telemetry or None)
+        return fleet, None, None
     if not s.training:
         link = open_link(
             s.target, s.bitrate_bps, s.telemetry or None, namespace=s.vehicle_namespace

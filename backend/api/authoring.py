@@ -23,6 +23,7 @@ from backend.api.schemas import (
 from backend.api.schemas.authoring import LinkCapability, SessionLimits, VehicleProfileDoc
 from backend.api.schemas.chart import DatumDoc
 from backend.api.view import ViewHeader
+from backend.authoring import operations
 from backend.mission_log.records import CommandJson
 from codec import DecodeError, decode_frame, describe_dictionary
 from onboard.agent import command_json
@@ -92,8 +93,10 @@ async def preview(
 ) -> DocResponse:
     """The frame (bits, sections, hex, airtime) and the path the vehicle would fly from where it
     is now, expanded from the decoded packet, with estimates, limit violations and the diff
-    against the active pattern. Also drawn in the caller's own 3D view (``X-Nemesys-View``)."""
-    doc = console.preview(body.pattern, dict(body.params), view=x_nemesys_view)
+    against the active pattern. Also drawn in the caller's own 3D view (``X-Nemesys-View``).
+    With a fleet, of ``vehicle`` (required: 422 naming the vehicles), its frame addressed."""
+    vehicle = console.checked_vehicle(body.vehicle)
+    doc = console.preview(body.pattern, dict(body.params), view=x_nemesys_view, vehicle=vehicle)
     return DocResponse(PreviewDoc.model_validate(doc))
 
 
@@ -101,8 +104,13 @@ async def preview(
     "/encode", response_class=DocResponse, response_model=EncodeDoc, responses=errors((413, 422))
 )
 async def encode(body: CommandIn, console: ConsoleDep) -> DocResponse:
-    """The frame only: snapped values, bits by section, hex, airtime."""
-    _, doc = console.encode(body.pattern, dict(body.params))
+    """The frame only: snapped values, bits by section, hex, airtime. With a fleet,
+    ``vehicle`` (or ``"all"``) gives the addressed frame; omitted, the unaddressed one."""
+    surface = body.pattern == "surface"
+    vehicle = (
+        None if body.vehicle is None else console.checked_vehicle(body.vehicle, surface=surface)
+    )
+    _, doc = operations.encode(console, body.pattern, dict(body.params), vehicle)
     return DocResponse(EncodeDoc.model_validate(doc))
 
 

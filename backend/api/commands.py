@@ -11,7 +11,7 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
 from backend.api.deps import ConsoleDep, IdField, IdPath, OperatorDep, ServiceDep
-from backend.api.models import LinkIn, RetryIn, SendIn
+from backend.api.models import LinkIn, RetryIn, SendIn, SurfaceIn
 from backend.api.schemas import (
     OPERATOR,
     Ack,
@@ -31,6 +31,8 @@ from backend.chart.reach import track_lat_lon
 from backend.commands.health import LinkHealth, LinkTestResult
 from backend.commands.link_settings import test_link
 from backend.commands.service import SendRequest
+from backend.commands.vehicles import ALL_VEHICLES
+from backend.fleet.models import FleetSurface
 from backend.mission_log.export import csv_rows
 from backend.mission_log.records import command_record
 from backend.mission_log.store import STATES
@@ -54,10 +56,16 @@ router = APIRouter(prefix="/api", tags=["commands"])
 )
 async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRecord:
     """Queue a command for transmission (logged first), through the command service's checks.
-    422: limits that cannot be overridden or bad values; 409: overridable limits without
-    ``override`` (an override is recorded in the log with who gave it); 429: rate limit."""
+    422: limits that cannot be overridden or bad values, or (with a fleet) no ``vehicle`` or
+    one the fleet has not (naming its vehicles); 409: overridable limits without ``override``
+    (an override is recorded in the log with who gave it); 429: rate limit."""
     request = SendRequest(
-        body.pattern, body.params, "api", override=body.override, copies=body.copies
+        body.pattern,
+        body.params,
+        "api",
+        override=body.override,
+        copies=body.copies,
+        vehicle=body.vehicle,
     )
     return (await service.send(request)).record
 
@@ -65,15 +73,24 @@ async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRe
 @router.post(
     "/surface",
     status_code=status.HTTP_202_ACCEPTED,
-    response_model=CommandRecord,
+    response_model=CommandRecord | FleetSurface,
     response_model_exclude_unset=True,
-    responses=errors((*OPERATOR, 503)),
+    responses=errors((*OPERATOR, 413, 422, 503)),
 )
-async def surface(service: ServiceDep, _op: OperatorDep) -> CommandRecord:
+async def surface(
+    service: ServiceDep, _op: OperatorDep, body: SurfaceIn | None = None
+) -> CommandRecord | FleetSurface:
     """Abort: send surface now and again every ``surface_repeat_s``: until acknowledged on a
     two-way link, a bounded number of times on a one-way link. It replaces any command still
-    being repeated; pressed while another Surface is on its way, it joins that one."""
-    return (await service.surface("surface")).record
+    being repeated (to that vehicle); pressed while another Surface is on its way, it joins
+    that one. With a fleet, ``vehicle`` names one vehicle, or ``"all"``: one frame to address
+    0 that every vehicle accepts, one record per vehicle, replacing every vehicle's commands
+    (422 without it, naming the vehicles)."""
+    vehicle = body.vehicle if body is not None else None
+    outcome = await service.surface("surface", vehicle=vehicle)
+    if vehicle == ALL_VEHICLES:
+        return FleetSurface(vehicle=vehicle, commands=list(outcome.records))
+    return outcome.record
 
 
 @router.post(
@@ -99,10 +116,14 @@ async def retry(
 ) -> CommandRecord:
     """A new command with the values of an interrupted, timed-out, failed, rejected or
     superseded one (a new record, created now, ``retry_of`` naming it), checked as any send
-    from where the vehicle is now; it replaces any command still being repeated."""
+    from where the vehicle is now; it replaces any command still being repeated (to that
+    vehicle). With a fleet, ``vehicle`` names the vehicle it goes to (422 without it)."""
     override = body.override if body else False
     copies = body.copies if body else None
-    return (await service.retry(command_id, override=override, copies=copies)).record
+    vehicle = body.vehicle if body else None
+    return (
+        await service.retry(command_id, override=override, copies=copies, vehicle=vehicle)
+    ).record
 
 
 StateQ = Annotated[str | None, Query(pattern="^(" + "|".join(STATES) + ")$")]
@@ -115,6 +136,9 @@ class LogFilter(BaseModel):
     pattern: Annotated[str | None, Field(max_length=32)] = None
     target: Annotated[str | None, Field(max_length=200)] = None
     dive: IdField | None = None
+    vehicle: Annotated[
+        str | None, Field(max_length=32, description="a fleet's vehicle's records only")
+    ] = None
     since: Annotated[str | None, Field(max_length=40, description="ISO time, UTC")] = None
     until: Annotated[str | None, Field(max_length=40, description="ISO time, UTC")] = None
 
@@ -187,9 +211,11 @@ def log_json(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_00
     },
 )
 def log_csv(console: ConsoleDep, filters: FilterQ, limit: ExportLimitQ = 100_000) -> Response:
-    """The log as a CSV file (oldest first), with the acknowledgement's figures as columns."""
+    """The log as a CSV file (oldest first), with the acknowledgement's figures as columns
+    (with a fleet, each record's ``vehicle`` after ``target``)."""
     buf = io.StringIO()
-    csv.writer(buf).writerows(csv_rows(reversed(_rows(console, filters, limit))))
+    rows = reversed(_rows(console, filters, limit))
+    csv.writer(buf).writerows(csv_rows(rows, fleet=console.fleet.configured))
     return Response(
         buf.getvalue(),
         media_type="text/csv",
@@ -203,12 +229,12 @@ def dives(console: ConsoleDep) -> list[DiveSummary]:
     return [DiveSummary.model_validate(row) for row in console.log.dives()]
 
 
-def _dive(console: ConsoleDep, dive: int) -> DiveDetail:
+def _dive(console: ConsoleDep, dive: int, vehicle: str | None = None) -> DiveDetail:
     assert console.log is not None
     if not console.log.dive_exists(dive):
         raise HTTPException(404, f"no dive {dive}")
-    track = track_lat_lon(console.log.track(dive), console.datum)
-    rows = console.log.commands(dive=dive, limit=100_000, oldest_first=True)
+    track = track_lat_lon(console.log.track(dive, vehicle), console.datum)
+    rows = console.log.commands(dive=dive, vehicle=vehicle, limit=100_000, oldest_first=True)
     return DiveDetail(
         dive=dive,
         track=[TrackPoint.model_validate(point) for point in track],
@@ -222,9 +248,16 @@ def _dive(console: ConsoleDep, dive: int) -> DiveDetail:
     response_model_exclude_unset=True,
     responses=errors((404, 422)),
 )
-def dive(dive: IdPath, console: ConsoleDep) -> DiveDetail:
-    """A dive's track (1 Hz) and its commands, for replay."""
-    return _dive(console, dive)
+def dive(
+    dive: IdPath,
+    console: ConsoleDep,
+    vehicle: Annotated[
+        str | None, Query(max_length=32, description="a fleet's vehicle's track and commands")
+    ] = None,
+) -> DiveDetail:
+    """A dive's track (1 Hz) and its commands, for replay (of a fleet's ``vehicle``: its
+    track points and records only)."""
+    return _dive(console, dive, vehicle)
 
 
 @router.post(
@@ -249,7 +282,8 @@ def replay(
 
 @router.get("/vehicle", response_model=VehicleView, response_model_exclude_unset=True)
 def vehicle(console: ConsoleDep) -> VehicleView:
-    """Pose, status, the vehicle's echoed active command vs the last sent, link state."""
+    """Pose, status, the vehicle's echoed active command vs the last sent, link state (with a
+    fleet: its first vehicle's; each one's is ``/api/vehicles/{name}``)."""
     return console.vehicle()
 
 

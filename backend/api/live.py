@@ -25,7 +25,7 @@ from backend.api.schemas.live import (
 )
 from backend.bounded_input import shorten
 from backend.commands.manager import RateLimited
-from backend.commands.service import SendRefused, SendRequest
+from backend.commands.service import SendRefused, SendRequest, VehicleRefused
 from backend.console import Console
 from backend.messages import message_json
 from backend.mission_log.store import LogWriteError
@@ -158,15 +158,22 @@ async def _control(console: Console, text: str, authed: bool) -> Reply:
     assert service is not None
     try:
         if isinstance(parsed, SurfaceMessage):
-            outcome = await service.surface("ws")
+            outcome = await service.surface("ws", vehicle=parsed.vehicle)
         else:
             request = SendRequest(
-                parsed.pattern, parsed.params, "ws", override=parsed.override, copies=parsed.copies
+                parsed.pattern,
+                parsed.params,
+                "ws",
+                override=parsed.override,
+                copies=parsed.copies,
+                vehicle=parsed.vehicle,
             )
             outcome = await service.send(request)
     except (CodecError, PlanError) as err:
         field = getattr(err, "field", None)
         return ErrorReply(detail=shorten(str(err)), field=field, status=422)
+    except VehicleRefused as err:
+        return ErrorReply(detail=err.message, field=err.field, status=err.status)
     except SendRefused as err:
         violations = [LimitViolation.model_validate(v.as_json()) for v in err.violations]
         detail = "; ".join([err.message, *(v.message for v in violations)])
@@ -175,6 +182,8 @@ async def _control(console: Console, text: str, authed: bool) -> Reply:
         return ErrorReply(detail=str(err), status=429)
     except LogWriteError as err:
         return ErrorReply(detail=str(err), status=503)
+    if len(outcome.records) > 1:  # a Surface to all: every vehicle's record
+        return Queued(command=outcome.record, commands=list(outcome.records))
     return Queued(command=outcome.record)
 
 

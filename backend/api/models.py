@@ -59,13 +59,33 @@ class Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False)
 
 
+#: The vehicle a request is for: a fleet's (``NEMESYS_VEHICLES``), checked against it by the
+#: command service (422 naming the vehicles); without a fleet absent or ``nemesys``.
+VehicleIn = Annotated[
+    str | None,
+    Field(
+        max_length=32,
+        description="the vehicle it is for: required with a fleet (one of GET /api/vehicles' "
+        'names; "all" for Surface only); without one, omitted or "nemesys"',
+    ),
+]
+
+
 class CommandIn(Strict):
-    """A pattern and its parameters by name (units as in /api/dictionary)."""
+    """A pattern and its parameters by name (units as in /api/dictionary), and the vehicle it
+    is for (a fleet's)."""
 
     pattern: Annotated[str, Field(min_length=1, max_length=32)]
     params: dict[Annotated[str, Field(max_length=32)], ParamIn] = Field(
         default_factory=dict, max_length=6
     )
+    vehicle: VehicleIn = None
+
+
+class SurfaceIn(Strict):
+    """Surface: to one vehicle of a fleet, or ``"all"`` (one frame to address 0)."""
+
+    vehicle: VehicleIn = None
 
 
 def check_copies(value: object) -> object:
@@ -101,6 +121,9 @@ class RetryIn(Strict):
     #: the operator accepts the overridable limits the retry breaks from where it is now
     override: bool = False
     copies: CopiesIn = None
+    #: a fleet's vehicle it goes to (named, as every send; it may be another than the one
+    #: the retried command was for)
+    vehicle: VehicleIn = None
 
 
 class DecodeIn(Strict):

@@ -57,10 +57,14 @@ def predict_track(
     """Run the twin from the vehicle's state now with the command's frame (through the onboard
     decode), faster than real time, over ``horizon_s`` (or until a finite pattern completes
     and settles): the track it flies against the planned path. One prediction at a time; 503
-    with Retry-After when a few are already waiting."""
+    with Retry-After when a few are already waiting. With a fleet, of ``vehicle`` (required:
+    422 naming the vehicles)."""
     try:
         with _gate(console).slot():
-            doc: dict[str, Any] = predict(console, body.pattern, dict(body.params), horizon_s)
+            vehicle = console.checked_vehicle(body.vehicle)
+            doc: dict[str, Any] = predict(
+                console, body.pattern, dict(body.params), horizon_s, vehicle
+            )
     except PredictorBusy as err:
         return JSONResponse(
             {"detail": str(err)},

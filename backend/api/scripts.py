@@ -1,8 +1,14 @@
-"""Mission scripts: preview (one 3D path and a timeline), onboard export, and runs."""
+"""Mission scripts: preview (one 3D path and a timeline), onboard export, and runs.
+
+With a fleet every step names its vehicle, the same one throughout (a script drives one
+vehicle: :func:`script_vehicle`, 422 at the step otherwise); the script is expanded from
+where that vehicle is, its steps sent to it, and only a command to it (or a Surface to all)
+ends its run."""
 
 from __future__ import annotations
 
 import asyncio
+import functools
 from collections.abc import Callable
 from typing import Any, Literal
 
@@ -26,6 +32,7 @@ from backend.commands.service import SendRequest
 from backend.console import Console
 from backend.mission_log.store import FINAL_STATES
 from backend.scripts.checks import refuse_unsafe, step_violations
+from backend.scripts.fleet import address_of, mirror_of, script_vehicle
 from backend.scripts.guard import RunOver
 from backend.scripts.operations import (
     CompletionBy,
@@ -92,10 +99,12 @@ def script_preview(
     """The whole script as one path (NED) with its timeline, from where the vehicle is now,
     timed as the vehicle's profile flies it (estimated); drawn in the caller's own 3D view
     (``X-Nemesys-View``)."""
-    mirror = console.commands.mirror if console.commands else None
+    vehicle = script_vehicle(console, script)
+    mirror = mirror_of(console, vehicle)
     timing = flown_timing(console.profile)
+    checks = functools.partial(console.plan_violations, vehicle=vehicle)
     try:
-        doc = preview(script, console.vehicle_state(), mirror, console.plan_violations, timing)
+        doc = preview(script, console.vehicle_state(vehicle), mirror, checks, timing)
     except ScriptError as err:
         raise _plan_error(err) from None
     if console.viewer is not None:
@@ -135,25 +144,28 @@ def script_export(
     """The onboard script the paper's field trials used: a timed list of frames. A step "on
     completion" is refused (422 at its trigger): the onboard script cannot carry it
     (:mod:`backend.scripts.onboard`)."""
-    mirror = console.commands.mirror if console.commands else None
+    vehicle = script_vehicle(console, script)
+    mirror, address = mirror_of(console, vehicle), address_of(console, vehicle)
+    state = console.vehicle_state(vehicle)
     name = "".join(c if c.isalnum() else "-" for c in script.name)
     timing = flown_timing(console.profile)
     try:
-        expanded = expand(script, console.vehicle_state(), mirror, timing)
+        expanded = expand(script, state, mirror, timing, address)
         refusal = completion_refusal(expanded)
         if refusal is not None:
             raise refusal
     except ScriptError as err:
         raise _plan_error(err) from None
-    refuse_unsafe(script, step_violations(expanded, console.plan_violations))
+    checks = functools.partial(console.plan_violations, vehicle=vehicle)
+    refuse_unsafe(script, step_violations(expanded, checks))
     try:
         if format == "csv":
             return Response(
-                onboard_csv(script, console.vehicle_state(), mirror, timing),
+                onboard_csv(script, state, mirror, timing, address),
                 media_type="text/csv",
                 headers={"Content-Disposition": f'attachment; filename="{name}-onboard.csv"'},
             )
-        doc = export_onboard(script, console.vehicle_state(), mirror, timing)
+        doc = export_onboard(script, state, mirror, timing, address)
     except ScriptError as err:
         raise _plan_error(err) from None
     return JSONResponse(
@@ -193,21 +205,23 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> RunState:
     proposes each step and waits for the operator's go (``/run/next``)."""
     if console.runner is not None and console.runner.running:
         raise HTTPException(409, "a script is already running; stop it first")
-    mirror = console.commands.mirror if console.commands else None
+    vehicle = script_vehicle(console, body.script, ("body", "script"))
+    mirror = mirror_of(console, vehicle)
     timing = flown_timing(console.profile)
     try:  # timed by the same expansion as the preview and the export
-        expanded = expand(body.script, console.vehicle_state(), mirror, timing)
+        expanded = expand(body.script, console.vehicle_state(vehicle), mirror, timing)
     except ScriptError as err:
         raise HTTPException(
             422, [{**e, "loc": ["body", "script", *e["loc"]]} for e in err.errors()]
         ) from None
-    refuse_unsafe(body.script, step_violations(expanded, console.plan_violations))
+    checks = functools.partial(console.plan_violations, vehicle=vehicle)
+    refuse_unsafe(body.script, step_violations(expanded, checks))
     console.runner = ScriptRunner.planned(
         body.script,
         expanded,
         body.mode,
         clock=run_clock(console),
-        completion_by=_completion_by(console, "estimate"),
+        completion_by=_completion_by(console, "estimate", vehicle),
     )
     console.script_commands = {}
     console.start_script_loop(_loop(console))
@@ -240,7 +254,12 @@ async def _send(console: Console, runner: ScriptRunner, index: int) -> None:
     step = runner.script.steps[index]
     assert console.service is not None
     request = SendRequest(
-        step.pattern, step.params, "script", override=step.override, kind="script"
+        step.pattern,
+        step.params,
+        "script",
+        override=step.override,
+        kind="script",
+        vehicle=step.vehicle,
     )
     try:  # checked again now: the vehicle may have moved since the script was authored
         with console.script_guard.step(request, runner):  # a step: it does not stop the run
@@ -292,11 +311,12 @@ def run_clock(console: Console) -> Callable[[], float]:
     return now
 
 
-def _completion_by(console: Console, was: CompletionBy) -> CompletionBy:
-    """How a run knows a step completed: from the vehicle's status where the link carries
-    it, else by the estimate. A link whose capability is not known (yet, or again while it
-    reconnects) changes nothing: a vehicle that reports is not taken for one that does not."""
-    link = console.link
+def _completion_by(console: Console, was: CompletionBy, vehicle: str | None = None) -> CompletionBy:
+    """How a run knows a step completed: from the vehicle's status (a fleet's ``vehicle``'s)
+    where its link carries it, else by the estimate. A link whose capability is not known
+    (yet, or again while it reconnects) changes nothing: a vehicle that reports is not taken
+    for one that does not."""
+    link = console.fleet.get(vehicle).link
     if link is None or link.capability is Capability.UNKNOWN:
         return was
     return "vehicle" if link.telemetry else "estimate"
@@ -333,8 +353,10 @@ def _sleep_s(console: Console, runner: ScriptRunner) -> float:
 async def _loop(console: Console) -> None:
     runner = console.runner
     assert runner is not None and console.log is not None
+    vehicle = runner.script.steps[0].vehicle if console.fleet.configured else None
+    hub = console.fleet.get(vehicle).hub
     while runner.running:
-        runner.completion_by = _completion_by(console, runner.completion_by)
+        runner.completion_by = _completion_by(console, runner.completion_by, vehicle)
         # only the steps on their way are looked up in the log (one at a time, in practice)
         for index, command_id in list(console.script_commands.items()):
             if runner.step_state(index) != "sent":
@@ -353,7 +375,7 @@ async def _loop(console: Console) -> None:
             elif record["state"] in FINAL_STATES:  # rejected, timed_out, failed, ...
                 runner.mark_failed(index, f"{record['state']}: {record['reason']}")
         # the completion the run waits for, as reported: a step on completion may go at once
-        runner.observe(console.hub.status)
+        runner.observe(hub.status)
         for index in runner.poll():
             await _send(console, runner, index)
         await _sleep(console.clock, _sleep_s(console, runner))

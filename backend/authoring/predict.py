@@ -206,19 +206,27 @@ def decimate(n: int, most: int = MAX_POINTS) -> list[int]:
 
 
 def predict(
-    console: Any, pattern: str, params: dict[str, Any], horizon_s: float = MAX_HORIZON_S
+    console: Any,
+    pattern: str,
+    params: dict[str, Any],
+    horizon_s: float = MAX_HORIZON_S,
+    vehicle: str | None = None,
 ) -> dict[str, Any]:
-    """The predicted track of ``pattern``/``params`` from the vehicle's state now.
+    """The predicted track of ``pattern``/``params`` from the vehicle's state now (a fleet's
+    ``vehicle``: its state, path and battery; the twin takes the frame unaddressed, as the
+    one vehicle it is).
 
     Raises:
         codec.EncodeError / planner.PlanError: naming the parameter at fault (422).
     """
     enc = encode_frame(pattern, params)
     cmd = decode_frame(enc.frame.bits).command  # what the vehicle will decode
-    state: VehicleState = console.vehicle_state()
-    mirror: Plan | None = console.commands.mirror if console.commands is not None else None
+    state: VehicleState = console.vehicle_state(vehicle)
+    mirror: Plan | None = None
+    if console.commands is not None:
+        mirror = console.commands.addressee(vehicle).mirror.plan
     planned = plan(cmd, state, mirror)
-    status = console.hub.status or {}
+    status = console.fleet.get(vehicle).hub.status or {}
     soc = status.get("battery_pct")
     soc_pct = float(soc) if isinstance(soc, int | float) and math.isfinite(soc) else None
     mode = status.get("mode") if isinstance(status.get("mode"), str) else None

@@ -17,9 +17,11 @@ from planner import Limits, Plan, compare
 
 
 def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
-    """The frame: the command, the values asked for and sent, the bits by section, airtime."""
+    """The frame: the command, the values asked for and sent, the bits by section, airtime (a
+    fleet's addressed frame: its own sections and its 108 bits' airtime)."""
     cmd, frame = enc.command, enc.frame
     bits = frame.bits
+    addressed = len(bits) != FRAME_BITS
     return {
         **command_json(cmd),
         "requested": {s.field: s.requested for s in enc.snaps},
@@ -43,9 +45,9 @@ def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
                 "length": sec.length,
                 "bits": bits[sec.start : sec.start + sec.length],
             }
-            for sec in sections(cmd.pattern)
+            for sec in sections(cmd.pattern, addressed=addressed)
         ],
-        "airtime_ms": airtime_s(bitrate_bps) * 1e3,
+        "airtime_ms": airtime_s(bitrate_bps, len(bits)) * 1e3,
         "bitrate_bps": bitrate_bps,
         "frame_bits": FRAME_BITS,
     }

@@ -6,7 +6,8 @@ the records in the mission log), the belief served on request and pushed to ever
 A command's state change, an acknowledgement or a status pushes at once (the hub's news wakes
 the tracker); a new position at most every :data:`POSITION_PUSH_S`; while the position is
 dead-reckoned or assumed, at least every :data:`RECKONING_PUSH_S`. One tracker per vehicle,
-keyed by its name in :class:`Beliefs` (one today).
+keyed by its name in :class:`Beliefs`: the single vehicle's, or one per vehicle of a fleet,
+each reading that vehicle's hub, mirror and records.
 """
 
 from __future__ import annotations
@@ -36,6 +37,8 @@ from station.link import Link
 from vehicle_contract.messages import number
 
 if TYPE_CHECKING:
+    from backend.commands.vehicles import Addressee
+    from backend.fleet.state import Fleet
     from backend.viewer.viewer import Viewer
     from rosbridge.server import BridgeServer
     from sim.simulation import Simulation
@@ -69,6 +72,7 @@ class Runtime(Protocol):
     datum: Datum | None
     profile: VehicleProfile
     viewer: Viewer | None
+    fleet: Fleet
 
     @property
     def dive(self) -> int | None: ...
@@ -129,10 +133,21 @@ class BeliefTracker:
 
     # --- the evidence --------------------------------------------------------------------------
 
+    def _hub(self) -> TelemetryHub:
+        """The hub holding this vehicle's pose and status."""
+        return self.rt.fleet.get(self.vehicle).hub
+
+    def _delivery(self) -> Addressee | None:
+        """What the command manager keeps of this vehicle (None: not started)."""
+        cm = self.rt.commands
+        if cm is None:
+            return None
+        return cm.addressee(self.vehicle if self.rt.fleet.configured else None)
+
     def _heard(self) -> tuple[Fix | None, Echo | None]:
         """The last fix (a pose, or the state an accepted acknowledgement planned from) and the
         vehicle's last word on what it runs (its status, or an acknowledgement)."""
-        hub, cm = self.rt.hub, self.rt.commands
+        hub, delivery = self._hub(), self._delivery()
         now, mono = self._now(), time.monotonic()
         fixes: list[Fix] = []
         echoes: list[Echo] = []
@@ -145,7 +160,7 @@ class BeliefTracker:
         if hub.status is not None and hub.status_s is not None:
             echo = _echo_of(hub.status, now - (mono - hub.status_s), "status")
             echoes += [echo] if echo is not None else []
-        mirror = cm.vehicle if cm is not None else None
+        mirror = delivery.mirror if delivery is not None else None
         if mirror is not None and mirror.heard_s is not None:
             at = now - (mono - mirror.heard_s)
             echoes.append(Echo(_command_of(mirror.active), at, "acknowledgement"))
@@ -161,7 +176,7 @@ class BeliefTracker:
     # --- the belief ----------------------------------------------------------------------------
 
     def evidence(self) -> Evidence:
-        rt, cm = self.rt, self.rt.commands
+        rt, cm, delivery = self.rt, self.rt.commands, self._delivery()
         now = self._now()
         fix, echo = self._heard()
         records: list[dict[str, Any]] = []
@@ -170,7 +185,10 @@ class BeliefTracker:
             # vehicle runs on across dives and console restarts
             dive = rt.dive if rt.sim is not None else None
             if rt.sim is None or dive is not None:
-                newest = rt.log.commands(target=cm.target, dive=dive, limit=RECORDS_WINDOW)
+                vehicle = self.vehicle if rt.fleet.configured else None
+                newest = rt.log.commands(
+                    target=cm.target, dive=dive, vehicle=vehicle, limit=RECORDS_WINDOW
+                )
                 records = newest[::-1]
         sim = rt.sim
         if sim is not None:
@@ -199,12 +217,12 @@ class BeliefTracker:
             vehicle=self.vehicle,
             now_s=now,
             time_scale=scale,
-            two_way=rt.link.acknowledges if rt.link is not None else False,
+            two_way=delivery.acknowledges if delivery is not None else False,
             records=records,
-            last_sent=cm.last_sent if cm is not None else None,
-            accepted=cm.vehicle.accepted if cm is not None else None,
+            last_sent=delivery.last_sent if delivery is not None else None,
+            accepted=delivery.mirror.accepted if delivery is not None else None,
             echo=echo,
-            mirror=cm.mirror if cm is not None else None,
+            mirror=delivery.mirror.plan if delivery is not None else None,
             fix=fix,
             start=start,
             current=current,

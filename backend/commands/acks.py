@@ -45,7 +45,7 @@ class CommandAcks(CommandRecords):
     #: Frames are addressed (a fleet), and records and news name their vehicle.
     fleet: bool
 
-    def _vehicle(self, name: str | None) -> Addressee:
+    def addressee(self, name: str | None) -> Addressee:
         """The vehicle ``name`` (None: the first, the single vehicle's)."""
         if name is None:
             return next(iter(self.vehicles.values()))
@@ -55,22 +55,22 @@ class CommandAcks(CommandRecords):
 
     @property
     def vehicle(self) -> VehicleMirror:
-        return self._vehicle(None).mirror
+        return self.addressee(None).mirror
 
     @property
     def ledger(self) -> FrameLedger:
-        return self._vehicle(None).ledger
+        return self.addressee(None).ledger
 
     @property
     def last_sent(self) -> dict[str, Any] | None:
         """The command whose first copy left most recently (wire order), from the log at
         start (a fleet: the first vehicle's; each vehicle's is its :class:`Addressee`'s)."""
-        return self._vehicle(None).last_sent
+        return self.addressee(None).last_sent
 
     @property
     def last_ack_s(self) -> float | None:
         """Arrival of the last acknowledgement (clock s)."""
-        return self._vehicle(None).last_ack_s
+        return self.addressee(None).last_ack_s
 
     @property
     def mirror(self) -> Plan | None:
@@ -116,7 +116,7 @@ class CommandAcks(CommandRecords):
             fields.update(state=advance(record["state"], Event.COPY_SENT), reason=None)
         self._ledger_of(cid).frame_out(cid, answer_expected=live and two_way)
         if first:
-            vehicle = self._vehicle(self._vehicle_of.get(cid))
+            vehicle = self.addressee(self._vehicle_of.get(cid))
             vehicle.last_sent = {"id": cid, **command_json(d.enc.command)}
         self._update(cid, **fields)
         if live and two_way:
@@ -175,7 +175,7 @@ class CommandAcks(CommandRecords):
     def on_mission(self, ack: dict[str, Any], vehicle: str | None = None) -> None:
         """An acknowledgement from ``vehicle`` (None: the single vehicle): settle the command
         of that vehicle's it answers."""
-        v = self._vehicle(vehicle)
+        v = self.addressee(vehicle)
         v.last_ack_s = self.clock.monotonic()
         v.ledger.channel.observe(ack)  # every acknowledgement is a frame the vehicle heard
         record = None

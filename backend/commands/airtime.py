@@ -14,7 +14,7 @@ import asyncio
 import contextlib
 import heapq
 import itertools
-from collections.abc import AsyncIterator, Iterable
+from collections.abc import AsyncIterator, Sequence
 from dataclasses import dataclass
 from typing import Final
 
@@ -94,18 +94,20 @@ class _Pending:
     q: Queued
 
 
-def airtime_budget_s(queued: Iterable[Queued]) -> float:
-    """Seconds from now until the last bounded copy has left the transmitter, as the manager
-    schedules them: each command's next copy at its due time, ``interval_s`` after the end of
-    its previous one; one frame at a time, a Surface first among those due, then the one due
-    longest. Copies repeated until acknowledged are not counted (they have no end).
+def copies_out_s(queued: Sequence[Queued]) -> list[float]:
+    """For each of ``queued``, seconds from now until its last copy has left the transmitter
+    (0: none to count), as the manager schedules them: each command's next copy at its due
+    time, ``interval_s`` after the end of its previous one; one frame at a time, a Surface
+    first among those due, then the one due longest. Copies repeated until acknowledged are
+    not counted (they have no end).
     """
+    ends = [0.0] * len(queued)
     pending = [
         _Pending(q.due_in_s, (0 if q.surface else 1, i), q.copies_left, q)
         for i, q in enumerate(queued)
         if q.copies_left is not None and q.copies_left > 0
     ]
-    t = end = 0.0
+    t = 0.0
     while pending:
         due = [p for p in pending if p.due_s <= t]
         if not due:
@@ -113,13 +115,26 @@ def airtime_budget_s(queued: Iterable[Queued]) -> float:
             continue
         pick = min(due, key=lambda p: (p.order[0], p.due_s, p.order[1]))
         t += pick.q.airtime_s
-        end = t
+        ends[pick.order[1]] = t
         pick.left -= 1
         if pick.left <= 0:
             pending.remove(pick)
         else:
             pick.due_s = t + pick.q.interval_s
-    return end
+    return ends
 
 
-__all__ = ["IN_TURN", "SURFACE_FIRST", "Queued", "TransmitTurns", "airtime_budget_s"]
+def airtime_budget_s(queued: Sequence[Queued]) -> float:
+    """Seconds from now until every bounded copy of ``queued`` has left the transmitter
+    (:func:`copies_out_s`' latest; 0: none queued)."""
+    return max(copies_out_s(queued), default=0.0)
+
+
+__all__ = [
+    "IN_TURN",
+    "SURFACE_FIRST",
+    "Queued",
+    "TransmitTurns",
+    "airtime_budget_s",
+    "copies_out_s",
+]

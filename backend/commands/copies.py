@@ -42,7 +42,7 @@ class CopyPlanning(CommandAcks):
 
     def copies_now(self, vehicle: str | None = None) -> int:
         """Copies a command to ``vehicle`` gets now (one on a two-way link)."""
-        v = self._vehicle(vehicle)
+        v = self.addressee(vehicle)
         copies = planned_copies("command", v.acknowledges, *self._ber(v.name), self.delivery_target)
         assert copies is not None
         return copies
@@ -55,7 +55,7 @@ class CopyPlanning(CommandAcks):
             counts = [self.surface_copies_now(name) for name in self.vehicles]
             bounded = [c for c in counts if c is not None]
             return max(bounded) if bounded else None
-        v = self._vehicle(vehicle)
+        v = self.addressee(vehicle)
         return planned_copies("surface", v.acknowledges, *self._ber(v.name), self.delivery_target)
 
     # --- a Surface pressed again -----------------------------------------------------------
@@ -64,7 +64,7 @@ class CopyPlanning(CommandAcks):
         """A Surface pressed while one to the same vehicle (or to all, for all) is on its
         way: the same records, sent again now, with their full count of copies to go."""
         to_all = vehicle == ALL_VEHICLES
-        name = None if to_all else self._vehicle(vehicle).name
+        name = None if to_all else self.addressee(vehicle).name
         first = next(iter(self.vehicles))
         for d in reversed(self._deliveries()):
             carried = self._carries(d)

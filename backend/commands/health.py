@@ -167,12 +167,15 @@ def link_health_of(
     ber: BerNow,
     copies_from: CopiesFrom,
     datum_problem: str | None = None,
+    vehicle: str | None = None,
 ) -> LinkHealth:
     """What the station knows of its link to the vehicle (not the page's websocket): the
-    link's own facts, the command ledger's and the telemetry's ages, and the assessment."""
-    totals = cm.ledger.totals()
+    link's own facts, the command ledger's and the telemetry's ages, and the assessment. A
+    fleet's ``vehicle``: ``link`` and ``hub`` are its own, and so are the ledger's counts."""
+    v = cm.addressee(vehicle)
+    totals = v.ledger.totals()
     telemetry_age_s = hub.age_s()
-    ack_age_s = None if cm.last_ack_s is None else cm.clock.monotonic() - cm.last_ack_s
+    ack_age_s = None if v.last_ack_s is None else cm.clock.monotonic() - v.last_ack_s
     level, problems = assess(
         connected=link.connected,
         connection_problem=link.connection_problem,
@@ -198,8 +201,8 @@ def link_health_of(
         ber=ber.ber,
         ber_source=ber.source,
         copies_from=copies_from,
-        channel=estimate_view(cm.ledger.channel),
+        channel=estimate_view(v.ledger.channel),
         delivery_target=cm.delivery_target,
-        copies=cm.copies_now(),
-        surface_copies=cm.surface_copies_now(),
+        copies=cm.copies_now(vehicle),
+        surface_copies=cm.surface_copies_now(vehicle),
     )

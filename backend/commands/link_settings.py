@@ -16,14 +16,15 @@ if TYPE_CHECKING:
     from backend.console import Console
 
 
-def ber_now(console: Console) -> BerNow:
-    """The BER the console's copies follow now (the estimate is the dive's, so far)."""
+def ber_now(console: Console, vehicle: str | None = None) -> BerNow:
+    """The BER the console's copies (to a fleet's ``vehicle``) follow now (the estimate is
+    the dive's, so far: that vehicle's acknowledgements')."""
     emulated = None
     if console.sim is not None:
         config = console.sim.channel.config
         emulated = float(config.ber), float(config.loss)
     cm = console.commands
-    estimate = None if cm is None else cm.ledger.channel.estimate()
+    estimate = None if cm is None else cm.addressee(vehicle).ledger.channel.estimate()
     return console.ber_choice.now(emulated, estimate)
 
 

@@ -232,7 +232,7 @@ class CommandManager(CopyPlanning):
         to_all = vehicle == ALL_VEHICLES
         if to_all and kind != "surface":
             raise ValueError(f"only Surface goes to {ALL_VEHICLES!r} vehicles")
-        names = list(self.vehicles) if to_all else [self._vehicle(vehicle).name]
+        names = list(self.vehicles) if to_all else [self.addressee(vehicle).name]
         if kind == "surface":
             joined = self._join_surface(vehicle)
             if joined:

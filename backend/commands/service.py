@@ -20,6 +20,13 @@ shortcut, the API or ``/ws``, a retry, a mission script's step, a training scena
 
 Surface is never refused by the checks: it is the way out.
 
+**A fleet** (``NEMESYS_VEHICLES``): every request names its vehicle (``vehicle``), never an
+implicit one: a request without it, or naming no vehicle of the fleet, is refused
+(:class:`VehicleRefused`, 422, naming the vehicles); ``"all"`` only for Surface (one frame to
+address 0, one record per vehicle). The checks are that vehicle's (where it is, what it flies)
+and its frame carries its address. Without a fleet, ``vehicle`` is absent or the single
+vehicle's name, and everything is as it always was.
+
 **Watchers** (:class:`SendWatcher`, :meth:`CommandService.watch`) are told of every command
 the service hands to the manager, whatever the path: ``admit`` just before the record is
 written (it may refuse), ``sent`` once it is written and its delivery begun, before its first
@@ -40,6 +47,7 @@ from typing import Any, Literal, Protocol
 from backend.commands.checks import CheckLine, SendViolation
 from backend.commands.lifecycle import RETRYABLE
 from backend.commands.manager import CommandManager
+from backend.commands.vehicles import ALL_VEHICLES, SINGLE_VEHICLE
 from backend.mission_log.records import CommandRecord, command_record
 from codec import Encoded, encode_frame
 
@@ -115,6 +123,14 @@ class NotRetryableCommand(SendRefused):
     status = 409
 
 
+class VehicleRefused(SendRefused):
+    """A request that names no vehicle of the console's (or none, with a fleet), or ``"all"``
+    for anything but Surface; the message names the vehicles. ``field``: ``vehicle``."""
+
+    status = 422
+    field = "vehicle"
+
+
 def decide(assessment: Assessment, override: bool) -> tuple[SendViolation, ...]:
     """The policy on what the checks found: the violations the operator overrode (empty when
     there were none).
@@ -141,6 +157,8 @@ class SendRequest:
         copies: the operator's number of copies (None: chosen from the link).
         kind: the record's kind (``script`` for a script's step).
         retry_of: the command this one retries.
+        vehicle: the fleet's vehicle it is for (``"all"``: a Surface to every vehicle); None
+            without a fleet (the single vehicle's name is taken too).
     """
 
     pattern: str
@@ -150,18 +168,58 @@ class SendRequest:
     copies: int | None = None
     kind: Literal["command", "script"] = "command"
     retry_of: int | None = None
+    vehicle: str | None = None
 
 
 @dataclass(frozen=True)
 class SendOutcome:
-    """The record as written (queued, or a Surface joined), and what the operator overrode."""
+    """The record as written (queued, or a Surface joined), and what the operator overrode;
+    ``records``: every record it wrote (a Surface to all: one per vehicle, ``record`` the
+    first)."""
 
     record: CommandRecord
     overridden: tuple[SendViolation, ...] = field(default=())
+    records: tuple[CommandRecord, ...] = field(default=())
+
+
+def check_vehicle(name: str | None, fleet: Sequence[str], *, surface: bool = False) -> str | None:
+    """The vehicle a request names, checked against the ``fleet``'s names (empty: no fleet):
+    a fleet's name, or ``"all"`` for a ``surface``; None without a fleet, where only the
+    single vehicle's name (or none) is taken.
+
+    Raises:
+        VehicleRefused: naming what is allowed.
+    """
+    if not fleet:
+        if name is None or name == SINGLE_VEHICLE:
+            return None
+        raise VehicleRefused(
+            f"vehicle {name!r:.40}: this console drives one vehicle, {SINGLE_VEHICLE!r} (no "
+            "fleet is configured): leave vehicle out or name it"
+        )
+    known = ", ".join(fleet)
+    also = f", or {ALL_VEHICLES!r}" if surface else ""
+    if name is None:
+        raise VehicleRefused(
+            f"vehicle is required: a fleet is configured, and every command names the vehicle "
+            f"it is for ({known}{also})"
+        )
+    if name == ALL_VEHICLES:
+        if surface:
+            return name
+        raise VehicleRefused(f"vehicle {ALL_VEHICLES!r} is for Surface only: name one of {known}")
+    if name not in fleet:
+        raise VehicleRefused(f"no vehicle {name!r:.40}: the fleet's vehicles are {known}{also}")
+    return name
 
 
 class Assessor(Protocol):
-    def __call__(self, pattern: str, params: Mapping[str, Any]) -> Assessment: ...
+    """The checks of a send (the console's): ``vehicle``, a fleet's, is given only there;
+    the frame it returns carries that vehicle's address."""
+
+    def __call__(
+        self, pattern: str, params: Mapping[str, Any], vehicle: str | None = None
+    ) -> Assessment: ...
 
 
 class SendWatcher(Protocol):
@@ -199,19 +257,51 @@ class CommandService:
             RateLimited: too many transmissions in the last minute (never Surface).
             LogWriteError: the mission log cannot be written; nothing was transmitted.
         """
+        vehicle = self.vehicle_of(request.vehicle, surface=request.pattern == "surface")
         if request.pattern == "surface":
-            return await self._surface(request)
-        assessment = self.assess(request.pattern, dict(request.params))
+            return await self._surface(request, vehicle)
+        if vehicle is None:
+            assessment = self.assess(request.pattern, dict(request.params))
+        else:
+            assessment = self.assess(request.pattern, dict(request.params), vehicle)
         overridden = decide(assessment, request.override)
-        return await self._submit(request, assessment.enc, request.kind, request.copies, overridden)
+        return await self._submit(
+            request, assessment.enc, request.kind, request.copies, overridden, vehicle
+        )
 
-    async def surface(self, origin: Origin = "surface", retry_of: int | None = None) -> SendOutcome:
-        """Surface: never refused by the checks (pressed while another Surface is on its way,
-        it joins that one)."""
-        return await self._surface(SendRequest("surface", {}, origin, retry_of=retry_of))
+    async def surface(
+        self, origin: Origin = "surface", retry_of: int | None = None, vehicle: str | None = None
+    ) -> SendOutcome:
+        """Surface (of a fleet's ``vehicle``, or ``"all"``): never refused by the checks
+        (pressed while another Surface to it is on its way, it joins that one).
 
-    async def _surface(self, request: SendRequest) -> SendOutcome:
-        return await self._submit(request, encode_frame("surface", {}), "surface", None, ())
+        Raises:
+            VehicleRefused: a fleet's Surface that names no vehicle of it, nor all.
+        """
+        request = SendRequest("surface", {}, origin, retry_of=retry_of, vehicle=vehicle)
+        return await self._surface(request, self.vehicle_of(vehicle, surface=True))
+
+    async def _surface(self, request: SendRequest, vehicle: str | None) -> SendOutcome:
+        address = self._address(vehicle)
+        enc = encode_frame("surface", {}, address=address)
+        return await self._submit(request, enc, "surface", None, (), vehicle)
+
+    def vehicle_of(self, name: str | None, *, surface: bool = False) -> str | None:
+        """The vehicle a request names, checked (:func:`check_vehicle`).
+
+        Raises:
+            VehicleRefused: naming what is allowed.
+        """
+        cm = self.manager
+        return check_vehicle(name, list(cm.vehicles) if cm.fleet else [], surface=surface)
+
+    def _address(self, vehicle: str | None) -> int | None:
+        """The frame address of a checked vehicle (None: the single vehicle's, unaddressed)."""
+        if vehicle is None:
+            return None
+        if vehicle == ALL_VEHICLES:
+            return 0
+        return self.manager.vehicles[vehicle].address
 
     async def _submit(
         self,
@@ -220,21 +310,24 @@ class CommandService:
         kind: str,
         copies: int | None,
         overridden: Sequence[SendViolation],
+        vehicle: str | None = None,
     ) -> SendOutcome:
         """The watchers' ``admit``, the manager's record and delivery, the watchers' ``sent``:
         no ``await`` that yields between them (the manager's ``submit`` does not), so the
         watchers hear of the command before its first copy can leave."""
         for watcher in self._watchers:
             watcher.admit(request)
-        record = await self.manager.submit(
+        rows = await self.manager.submit_all(
             enc,
             kind=kind,
             copies=copies,
             origin=request.origin,
             retry_of=request.retry_of,
             overrides=self._overrides(overridden),
+            vehicle=vehicle,
         )
-        outcome = SendOutcome(command_record(record), tuple(overridden))
+        records = tuple(command_record(row) for row in rows)
+        outcome = SendOutcome(records[0], tuple(overridden), records)
         for watcher in self._watchers:
             try:
                 watcher.sent(request, outcome)
@@ -243,10 +336,16 @@ class CommandService:
         return outcome
 
     async def retry(
-        self, command_id: int, *, override: bool = False, copies: int | None = None
+        self,
+        command_id: int,
+        *,
+        override: bool = False,
+        copies: int | None = None,
+        vehicle: str | None = None,
     ) -> SendOutcome:
         """A new command with the values of ``command_id`` (a retryable record), checked as
-        any other send from where the vehicle is now.
+        any other send from where the vehicle is now (a fleet's: ``vehicle``, named as every
+        send names it; it may be another than the record's).
 
         Raises:
             UnknownCommand: no such record. NotRetryableCommand: not in a retryable state.
@@ -271,6 +370,7 @@ class CommandService:
                 copies=copies,
                 kind=kind,
                 retry_of=command_id,
+                vehicle=vehicle,
             )
         )
 
@@ -298,6 +398,8 @@ __all__ = [
     "SendRequest",
     "SendWatcher",
     "UnknownCommand",
+    "VehicleRefused",
+    "check_vehicle",
     "decide",
     "refusal_detail",
 ]

@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 
 from backend.scripts.model import Loc, MissionScript, ScriptError, ScriptStep, Trigger
 from backend.scripts.timing import StepTiming, Timing, flown_timing
-from codec import DecodeError, Encoded, decode_frame, encode_frame
+from codec import DecodeError, Encoded, decode_addressed_frame, decode_frame, encode_frame
 from planner import Path, Plan, PlanError, VehicleState, plan
 
 
@@ -188,6 +188,7 @@ def expand(
     start: VehicleState,
     current: Plan | None = None,
     timing: Timing | None = None,
+    address: int | None = None,
 ) -> list[ExpandedStep]:
     """Plan every step of ``script`` in order, as the vehicle would fly them.
 
@@ -198,6 +199,7 @@ def expand(
             anchor (orbits stay around the same point) and is flown until step 0 triggers.
         timing: how the vehicle flies a plan (:func:`backend.scripts.timing.flown_timing` of
             its profile); default: a vehicle of unknown figures (flown at the plans' speeds).
+        address: a fleet's vehicle's: the steps' frames carry it (None: today's frames).
 
     Raises:
         ScriptError: the planner cannot expand a step (e.g. more waypoints than the vehicle
@@ -208,9 +210,12 @@ def expand(
     in_force = current
     timing = timing if timing is not None else flown_timing(None)
     for i, step in enumerate(script.steps):
-        encoded = encode_frame(step.pattern, step.params)
+        encoded = encode_frame(step.pattern, step.params, address=address)
         try:
-            command = decode_frame(encoded.frame.bits).command
+            if address is None:
+                command = decode_frame(encoded.frame.bits).command
+            else:
+                command = decode_addressed_frame(encoded.frame).command
         except DecodeError as e:  # pragma: no cover - the codec round-trips every command
             raise ScriptError(f"the frame does not decode: {e}", ("steps", i)) from e
         warnings: list[str] = []

@@ -17,6 +17,9 @@ once; the service tells it of every command on every path, so every caller gets 
 
 A step is known by its request (the object the run hands to the service, registered with
 :meth:`RunGuard.step`), not by its origin: only the run that sent it may send it.
+
+With a fleet a run drives one vehicle (its steps name it): a command to another vehicle does
+not concern it and leaves it running; one to its vehicle, or a Surface to all, ends it.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from contextlib import contextmanager
 from typing import TYPE_CHECKING, Protocol
 
 from backend.commands.service import SendOutcome, SendRefused, SendRequest
+from backend.commands.vehicles import ALL_VEHICLES
 from backend.messages import EventMessage
 from backend.mission_log.records import CommandRecord, log_event
 from backend.mission_log.store import LogWriteError
@@ -116,6 +120,10 @@ class RunGuard:
         run = self._host.runner
         if run is None or not run.running or self._run_of(request) is run:
             return
+        drives = run.script.steps[0].vehicle
+        to = outcome.record.vehicle  # a fleet's record names its vehicle (none without one)
+        if to is not None and request.vehicle != ALL_VEHICLES and to != drives:
+            return  # a fleet's other vehicle: not this run's
         reason = stop_reason(request, outcome.record)
         run.stop(reason)  # first: nothing more is handed out, whatever the log does
         self._log(run, reason, request, outcome.record)

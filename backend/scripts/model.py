@@ -6,6 +6,8 @@ see :mod:`backend.scripts.operations`). Every step's pattern and parameters are 
 them
 (:func:`codec.encode_frame`); a step "on completion" after a repeating pattern is refused
 (:mod:`backend.scripts.completion`). Errors name their place, e.g. ``steps.1.params.radius``.
+With a fleet (``NEMESYS_VEHICLES``) every step names its ``vehicle``, the same one throughout
+(a run drives one vehicle; the console checks the name: :mod:`backend.api.scripts`).
 """
 
 from __future__ import annotations
@@ -96,6 +98,12 @@ class ScriptStep(BaseModel):
         False,
         description="the operator accepts this step's overridable limit violations (recorded "
         "with its command); a hard one refuses the script whatever this says",
+    )
+    vehicle: str | None = Field(
+        None,
+        max_length=32,
+        description="the fleet's vehicle the step is for: required with a fleet, the same in "
+        'every step (a run drives one vehicle); without one, omitted or "nemesys"',
     )
 
     @field_validator("params", mode="before")

@@ -82,19 +82,21 @@ def export_onboard(
     start: VehicleState,
     current: Plan | None = None,
     timing: Timing | None = None,
+    address: int | None = None,
 ) -> dict[str, Any]:
     """The onboard script: the timed frames the vehicle injects itself (the field trials').
 
     ``{"format": "nemesys-onboard-script", "version": 1, "name", "frames": [{"t_s", "pattern",
     "hex", "bits", "note"?}]}``; times are the preview's trigger times (s from the start), so
     an ``operator`` step becomes its estimated time, with a ``note``; ``timing``: how the
-    vehicle flies a plan (see :func:`expand`).
+    vehicle flies a plan (see :func:`expand`); ``address``: a fleet's vehicle's (its frames
+    addressed, as it takes them).
 
     Raises:
         ScriptError: the planner cannot expand a step, or a step waits for the previous one
             to complete (:func:`completion_refusal`).
     """
-    return _onboard(script, expand(script, start, current, timing))
+    return _onboard(script, expand(script, start, current, timing, address))
 
 
 def onboard_csv(
@@ -102,10 +104,11 @@ def onboard_csv(
     start: VehicleState,
     current: Plan | None = None,
     timing: Timing | None = None,
+    address: int | None = None,
 ) -> str:
     """The onboard script as CSV: ``t_s,pattern,hex``, one frame per line (the same refusal
     as :func:`export_onboard`)."""
     rows = ["t_s,pattern,hex"]
-    for f in export_onboard(script, start, current, timing)["frames"]:
+    for f in export_onboard(script, start, current, timing, address)["frames"]:
         rows.append(f"{f['t_s']:.3f},{f['pattern']},{f['hex']}")
     return "\n".join(rows) + "\n"

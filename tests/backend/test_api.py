@@ -87,6 +87,9 @@ API_PATHS = {
     "/api/replay",
     "/api/replay/at",
     "/api/predict",
+    "/api/vehicles",  # issue 23: every vehicle, and the one transmitter
+    "/api/vehicles/{name}",
+    "/api/transmitter",
 }
 SCRIPT: dict[str, Any] = {
     "format": "nemesys-mission-script",

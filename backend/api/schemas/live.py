@@ -14,7 +14,7 @@ from typing import Annotated, Any, Literal, get_args
 
 from pydantic import BaseModel, Field, TypeAdapter
 
-from backend.api.models import SendIn
+from backend.api.models import SendIn, VehicleIn
 from backend.api.schemas.common import LimitViolation
 from backend.messages import (
     ActivePathMessage,
@@ -47,10 +47,13 @@ class AuthRefused(Message):
 
 class Queued(Message):
     """A ``surface`` or ``send`` went through the command service: its record as written
-    (queued, or a Surface joined)."""
+    (queued, or a Surface joined); a fleet's Surface to all: every vehicle's record."""
 
     type: Literal["queued"] = "queued"
-    command: CommandRecord = Field(description="the record as written")
+    command: CommandRecord = Field(description="the record as written (to all: the first)")
+    commands: list[CommandRecord] | None = Field(
+        default=None, description='a Surface to "all": the records, one per vehicle'
+    )
 
 
 class ErrorReply(Message):
@@ -83,14 +86,17 @@ class AuthMessage(BaseModel):
 
 
 class SurfaceMessage(BaseModel):
-    """Surface now (as the Surface button): never refused by the checks."""
+    """Surface now (as the Surface button): never refused by the checks. With a fleet,
+    ``vehicle`` names one vehicle or ``"all"`` (required)."""
 
     type: Literal["surface"]
+    vehicle: VehicleIn = None
 
 
 class SendMessage(SendIn):
     """A command, checked as ``POST /api/commands`` checks it (the same fields and rules:
-    ``override`` accepts the soft violations, ``copies`` 1-20 or omitted; no other field)."""
+    ``override`` accepts the soft violations, ``copies`` 1-20 or omitted, ``vehicle`` with a
+    fleet; no other field)."""
 
     type: Literal["send"]
 
