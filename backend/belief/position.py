@@ -37,7 +37,7 @@ from backend.belief.reckoning import (
 )
 from backend.chart.geo import Datum
 from backend.chart.reach import point_lat_lon
-from codec import decode_frame
+from codec import ADDRESSED_FRAME_BITS, decode_addressed_frame, decode_frame
 from onboard.agent import command_json
 from onboard.guidance import GuidanceConfig
 from planner import Plan, PlanError, VehicleState, plan
@@ -74,8 +74,10 @@ class Start:
 
 @functools.lru_cache(maxsize=64)
 def _planned(bits: str, state: VehicleState, base: Plan | None) -> Plan:
-    """A record's command (decoded from its bits, as the vehicle decodes it) planned from
-    ``state`` while running ``base``."""
+    """A record's command (decoded from its bits, as the vehicle decodes it: a fleet's frame
+    is addressed) planned from ``state`` while running ``base``."""
+    if len(bits) == ADDRESSED_FRAME_BITS:
+        return plan(decode_addressed_frame(bits).command, state, base)
     return plan(decode_frame(bits).command, state, base)
 
 
