@@ -23,11 +23,17 @@ puts them together.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any, NoReturn
+from typing import NoReturn
 
 from codec import Frame
 from station.link import Capability, Link, RosbridgeLink
-from station.link_modem import ModemLink, parse_telemetry
+from station.link_modem import (
+    BACKOFF_S,
+    MAX_BACKOFF_S,
+    PROBE_S,
+    ModemLink,
+    parse_telemetry,
+)
 from station.transmit import LinkCheck
 from vehicle_contract.fleet import FleetVehicle
 
@@ -147,12 +153,16 @@ def open_fleet_link(
     bitrate_bps: float,
     vehicles: Sequence[FleetVehicle],
     telemetry: str | None = None,
-    **modem: Any,
+    *,
+    probe_s: float = PROBE_S,
+    backoff_s: float = BACKOFF_S,
+    max_backoff_s: float = MAX_BACKOFF_S,
 ) -> FleetLink:
     """The fleet's link for a target (see the module's doc): ``ws://`` -> frames on the
     fleet's channel topic and each vehicle's telemetry under its namespace; anything else ->
     the ME modem, with each vehicle's telemetry over ``telemetry`` (a rosbridge) when given.
-    ``modem``: :class:`station.link_modem.ModemLink`'s timing options.
+    ``probe_s``, ``backoff_s``, ``max_backoff_s``: the modem's watch
+    (:class:`station.link_modem.ModemLink`).
 
     Raises:
         ValueError: ``telemetry`` with a rosbridge target, or a malformed target or
@@ -169,7 +179,9 @@ def open_fleet_link(
             v.name: RosbridgeLink(target, namespace=v.name, frames=False) for v in vehicles
         }
         return FleetLink(channel, own)
-    frames = ModemLink(target, bitrate_bps, **modem)
+    frames = ModemLink(
+        target, bitrate_bps, probe_s=probe_s, backoff_s=backoff_s, max_backoff_s=max_backoff_s
+    )
     if telemetry:
         url = parse_telemetry(telemetry)
         own = {v.name: RosbridgeLink(url, namespace=v.name, frames=False) for v in vehicles}
