@@ -181,9 +181,7 @@ class PgServer:
         if (self.data / "postmaster.pid").exists():
             deadline = time.monotonic() + 30
             try:
-                self._run(
-                    str(self.bin / "pg_ctl"), "-D", str(self.data), "-m", "immediate", "stop"
-                )
+                self._run(str(self.bin / "pg_ctl"), "-D", str(self.data), "-m", "immediate", "stop")
             except (RuntimeError, subprocess.TimeoutExpired):
                 while (self.data / "postmaster.pid").exists() and time.monotonic() < deadline:
                     time.sleep(0.1)

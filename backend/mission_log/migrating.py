@@ -41,7 +41,7 @@ from backend.mission_log.database import LogDatabase
 #: The revisions' folder.
 MIGRATIONS = Path(__file__).with_name("migrations")
 #: An 8-byte float column on both databases.
-REAL = sa.Double().with_variant(sa.REAL(), "sqlite")
+REAL: sa.types.TypeEngine[float] = sa.Double().with_variant(sa.REAL(), "sqlite")
 
 
 def id_column() -> sa.Column[int]:

@@ -195,7 +195,7 @@ def classify_postgres(where: str, err: psycopg.Error) -> LogError:
         if "password authentication failed" in text or "no password supplied" in text:
             return LogLoginRefused(
                 where,
-                f"refused the login ({text})",
+                f"cannot be opened: the server refused the login ({text})",
                 f"check the user and password in the URL {ELSEWHERE_PG}",
             )
         if "does not exist" in text and "database" in text:

@@ -1,7 +1,9 @@
 """Recovery of what a stopped console left on its way: ``MissionLog.recover_interrupted`` on
-every state, an old-format log migrated at open, and end to end a SIGKILLed ``nemesys
-console`` on a one-way TCP link whose transmitted command is interrupted at the next start and
-retried to ``sent``, its frames decoded on the loopback listener."""
+every state, and end to end a SIGKILLed ``nemesys console`` on a one-way TCP link whose
+transmitted command is interrupted at the next start and retried to ``sent``, its frames
+decoded on the loopback listener: both on SQLite and on PostgreSQL (``log_backend``). Older
+SQLite logs (the first release's format, and the previous version's, migrated by columns
+added at open and with no migration version) are brought to the newest migration at open."""
 
 from __future__ import annotations
 
@@ -15,10 +17,12 @@ import httpx
 import pytest
 
 from backend.commands.lifecycle import ON_ITS_WAY, State
+from backend.mission_log.migrating import head
 from backend.mission_log.store import MissionLog
 from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import CIRCLE, TOKEN, clear_nemesys_env, command_fields, wait_until
+from tests.backend.log_backend import LogBackend
 
 #: `nemesys console` subprocesses, killed and restarted: make test, not make test-fast.
 pytestmark = pytest.mark.slow
@@ -72,13 +76,79 @@ CREATE TABLE track (
 CREATE INDEX track_dive ON track(dive, t_s);
 """
 NEW_COLUMNS = ("copies", "copies_sent", "p_delivered", "ber", "two_way", "superseded_by")
+#: The previous version's tables, written out (``git show 1a02d10:backend/mission_log/schema.py``,
+#: its ``SCHEMA``): every column, made and completed by ``create_or_migrate`` at open, and no
+#: migration version.
+PREVIOUS_SCHEMA = """
+CREATE TABLE IF NOT EXISTS dives (
+    id INTEGER PRIMARY KEY,
+    started_at TEXT NOT NULL,
+    target TEXT NOT NULL
+);
+CREATE TABLE IF NOT EXISTS commands (
+    id INTEGER PRIMARY KEY,
+    dive INTEGER NOT NULL REFERENCES dives(id),
+    created_at TEXT NOT NULL,
+    updated_at TEXT NOT NULL,
+    operator TEXT NOT NULL,
+    target TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    pattern TEXT NOT NULL,
+    pattern_id INTEGER NOT NULL,
+    params TEXT NOT NULL,
+    requested TEXT NOT NULL,
+    bits TEXT NOT NULL,
+    hex TEXT NOT NULL,
+    state TEXT NOT NULL,
+    attempts INTEGER NOT NULL DEFAULT 0,
+    sent_at TEXT,
+    acked_at TEXT,
+    ack TEXT,
+    reason TEXT,
+    copies INTEGER,
+    copies_sent INTEGER NOT NULL DEFAULT 0,
+    p_delivered REAL NOT NULL DEFAULT 0,
+    ber REAL,
+    two_way INTEGER,
+    superseded_by INTEGER,
+    origin TEXT,
+    retry_of INTEGER,
+    overrides TEXT,
+    first_sent_at TEXT
+);
+CREATE INDEX IF NOT EXISTS commands_dive ON commands(dive);
+CREATE TABLE IF NOT EXISTS track (
+    dive INTEGER NOT NULL REFERENCES dives(id),
+    t_s REAL NOT NULL,
+    x_m REAL NOT NULL,
+    y_m REAL NOT NULL,
+    z_m REAL NOT NULL,
+    heading_deg REAL NOT NULL,
+    depth_m REAL,
+    speed_mps REAL,
+    battery_pct REAL,
+    mode TEXT,
+    active TEXT,
+    at TEXT
+);
+CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);
+CREATE TABLE IF NOT EXISTS events (
+    id INTEGER PRIMARY KEY,
+    dive INTEGER NOT NULL REFERENCES dives(id),
+    at TEXT NOT NULL,
+    kind TEXT NOT NULL,
+    detail TEXT NOT NULL,
+    data TEXT
+);
+CREATE INDEX IF NOT EXISTS events_dive ON events(dive);
+"""
 
 
 # --- (a) the log's recovery --------------------------------------------------------------
 
 
-def test_recovery_interrupts_exactly_what_was_on_its_way(tmp_path: Path) -> None:
-    log = MissionLog(tmp_path / "missions.sqlite3")
+def test_recovery_interrupts_exactly_what_was_on_its_way(log_backend: LogBackend) -> None:
+    log = log_backend.open()
     try:
         dive = log.new_dive("tcp://127.0.0.1:9")
         ids: dict[State, int] = {}
@@ -115,8 +185,8 @@ def test_recovery_interrupts_exactly_what_was_on_its_way(tmp_path: Path) -> None
         log.close()
 
 
-def test_recovery_of_an_empty_log_is_nothing(tmp_path: Path) -> None:
-    log = MissionLog(tmp_path / "missions.sqlite3")
+def test_recovery_of_an_empty_log_is_nothing(log_backend: LogBackend) -> None:
+    log = log_backend.open()
     try:
         assert log.recover_interrupted() == 0
     finally:
@@ -173,6 +243,7 @@ def test_an_old_format_log_is_migrated_and_readable(tmp_path: Path) -> None:
         assert acked["copies"] is None and acked["ber"] is None and acked["two_way"] is None
         assert acked["copies_sent"] == 0 and acked["p_delivered"] == 0
         assert acked["superseded_by"] is None
+        assert log.events() == []  # a table the first release did not have
         assert [r["id"] for r in log.commands()] == [2, 1]
         # the old run left command 2 transmitted: recovered like any other
         assert log.recover_interrupted() == 1
@@ -192,6 +263,88 @@ def test_an_old_format_log_is_migrated_and_readable(tmp_path: Path) -> None:
     finally:
         log.close()
     MissionLog(db).close()  # opening a migrated log again changes nothing and does not fail
+    with sqlite3.connect(db) as raw:
+        assert raw.execute("SELECT version_num FROM alembic_version").fetchall() == [(head(),)]
+    raw.close()
+
+
+def table_sql(db: Path) -> dict[str, str]:
+    with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as raw:
+        rows = raw.execute("SELECT name, sql FROM sqlite_master WHERE sql IS NOT NULL").fetchall()
+    raw.close()
+    return dict(rows)
+
+
+def test_a_log_of_the_previous_version_is_stamped_and_keeps_its_rows(tmp_path: Path) -> None:
+    db = tmp_path / "previous.sqlite3"
+    fields = command_fields()
+    with sqlite3.connect(db) as raw:
+        raw.executescript(PREVIOUS_SCHEMA)
+        raw.execute("INSERT INTO dives VALUES (1, '2026-01-01T10:00:00.000+00:00', 'sim')")
+        raw.execute(
+            "INSERT INTO commands (dive, created_at, updated_at, operator, target, kind, pattern, "
+            "pattern_id, params, requested, bits, hex, state, copies, origin, first_sent_at) "
+            "VALUES (1, 't0', 't1', 'operator', 'sim', 'command', ?, ?, '{}', '{}', ?, ?, "
+            "'acknowledged', 3, 'api', 't0')",
+            (fields["pattern"], fields["pattern_id"], fields["bits"], fields["hex"]),
+        )
+        raw.execute("INSERT INTO events (dive, at, kind, detail) VALUES (1, 't2', 'datum', 'x')")
+        raw.execute(
+            "INSERT INTO track (dive, t_s, x_m, y_m, z_m, heading_deg, depth_m, mode, at) "
+            "VALUES (1, 1.5, 1, 2, 3, 90, 2.5, 'auto', 't1')"
+        )
+    raw.close()
+    before = table_sql(db)
+
+    MissionLog(db).close()
+
+    after = table_sql(db)
+    assert {name: after[name] for name in before} == before  # not a column added or changed
+    assert set(after) - set(before) == {"alembic_version"}
+    log = MissionLog(db)
+    try:
+        (rec,) = log.commands()
+        assert rec["state"] == "acknowledged" and rec["copies"] == 3 and rec["origin"] == "api"
+        assert rec["hex"] == fields["hex"]
+        assert [e["kind"] for e in log.events()] == ["datum"]
+        (point,) = log.track_rows(1)
+        assert point["depth_m"] == 2.5 and point["mode"] == "auto" and point["t_s"] == 1.5
+    finally:
+        log.close()
+    with sqlite3.connect(db) as raw:
+        assert raw.execute("SELECT version_num FROM alembic_version").fetchall() == [(head(),)]
+    raw.close()
+
+
+def test_a_migration_that_fails_leaves_the_log_as_it_was(
+    log_backend: LogBackend, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The migrations run in one transaction: a console killed (here: a step raising) after
+    some of them leaves no table and no version behind, and the next open does them all."""
+    from backend.mission_log.migrating import scripts
+
+    step = scripts().get_revision("0004")
+    assert step is not None
+
+    def dies() -> None:
+        raise RuntimeError("the console dies half-way through the migrations")
+
+    monkeypatch.setattr(step.module, "upgrade", dies)
+    with pytest.raises(RuntimeError, match="half-way"):
+        log_backend.open()
+    tables = (
+        "SELECT COUNT(*) FROM sqlite_master WHERE type = 'table'"
+        if log_backend.kind == "sqlite"
+        else "SELECT COUNT(*) FROM information_schema.tables WHERE table_schema = 'public'"
+    )
+    assert log_backend.scalar(tables) == 0  # 0001-0003 ran, and were rolled back
+    monkeypatch.undo()
+    log = log_backend.open()
+    try:
+        assert log.new_dive("sim") == 1 and log.events() == []
+    finally:
+        log.close()
+    assert log_backend.query("SELECT version_num FROM alembic_version") == [(head(),)]
 
 
 # --- (c) end to end: SIGKILL, restart, retry ---------------------------------------------
@@ -206,18 +359,27 @@ def listener() -> Iterator[FrameGateway]:
 
 @pytest.fixture
 def start_server(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, listener: FrameGateway
-) -> Iterator[Callable[[Path], ConsoleProcess]]:
-    """``nemesys console`` on a one-way TCP link to ``listener``, copies 0.5 s apart."""
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    listener: FrameGateway,
+    log_backend: LogBackend,
+) -> Iterator[Callable[[], ConsoleProcess]]:
+    """``nemesys console`` on a one-way TCP link to ``listener``, copies 0.5 s apart, its log
+    on ``log_backend``."""
     clear_nemesys_env(monkeypatch)
     servers: list[ConsoleProcess] = []
 
-    def start(db: Path) -> ConsoleProcess:
+    def start() -> ConsoleProcess:
         server = start_console(
             tmp_path / f"console-{len(servers)}.log",
             TOKEN,
-            *("--db", str(db), "--target", f"tcp://127.0.0.1:{listener.port}"),
-            env={"NEMESYS_COPY_INTERVAL_S": "0.5", "NO_PROXY": "127.0.0.1,localhost"},
+            *log_backend.console_args(),
+            *("--target", f"tcp://127.0.0.1:{listener.port}"),
+            env={
+                "NEMESYS_COPY_INTERVAL_S": "0.5",
+                "NO_PROXY": "127.0.0.1,localhost",
+                **log_backend.console_env(),
+            },
         )
         servers.append(server)
         assert server.host == "127.0.0.1"
@@ -236,10 +398,9 @@ def get(c: httpx.Client, command_id: int) -> dict[str, Any]:
 
 
 def test_a_killed_console_interrupts_and_retries_on_restart(
-    tmp_path: Path, start_server: Callable[[Path], ConsoleProcess], listener: FrameGateway
+    start_server: Callable[[], ConsoleProcess], listener: FrameGateway, log_backend: LogBackend
 ) -> None:
-    db = tmp_path / "missions.sqlite3"
-    first = start_server(db)
+    first = start_server()
     with first.client() as c:
         r = c.post(
             "/api/commands",
@@ -263,9 +424,12 @@ def test_a_killed_console_interrupts_and_retries_on_restart(
     wait_until(lambda: listener.closed == 1, what="the killed console's connection closed")
     before_kill = listener.frames(0)
     assert before_kill and set(before_kill) == {cmd["hex"]}
-    assert log_state(db, cmd["id"]) == "transmitted"  # as the kill left it
+    # as the kill left it, read over a connection of its own
+    assert log_backend.query("SELECT state FROM commands WHERE id = ?", (cmd["id"],)) == [
+        ("transmitted",)
+    ]
 
-    second = start_server(db)
+    second = start_server()
     printed = second.log_path.read_text()
     recovered, url = RECOVERED_LINE.search(printed), URL_LINE.search(printed)
     assert recovered is not None and url is not None, printed
@@ -298,11 +462,3 @@ def test_a_killed_console_interrupts_and_retries_on_restart(
     # the listener got the retry's two copies on the restarted console's connection
     assert listener.connections == 2 and not listener.rejected
     assert listener.frames(1) == [cmd["hex"]] * 2
-
-
-def log_state(db: Path, command_id: int) -> str:
-    """A record's state read straight from the file (read-only)."""
-    with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as raw:
-        row = raw.execute("SELECT state FROM commands WHERE id = ?", (command_id,)).fetchone()
-    raw.close()
-    return str(row[0])
