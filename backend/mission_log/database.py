@@ -297,7 +297,13 @@ class PostgresDatabase(LogDatabase):
     def in_transaction(self) -> bool:
         from psycopg.pq import TransactionStatus
 
-        return self._db.info.transaction_status != TransactionStatus.IDLE
+        # a dropped connection's status is UNKNOWN: no transaction to finish (the next
+        # statement outside one opens the connection again)
+        return self._db.info.transaction_status in (
+            TransactionStatus.ACTIVE,
+            TransactionStatus.INTRANS,
+            TransactionStatus.INERROR,
+        )
 
     def execute(self, sql: str, params: Sequence[Any] = ()) -> Cursor:
         from psycopg.rows import dict_row

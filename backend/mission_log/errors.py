@@ -6,8 +6,9 @@ from __future__ import annotations
 
 class LogWriteError(Exception):
     """The mission log cannot be written (disk full, file or directory made read-only, locked
-    by another process, I/O error): SQLite's ``reason``. ``outcome``: what the caller did
-    about it (e.g. "nothing was transmitted"), added to the message."""
+    by another process, I/O error, the PostgreSQL server gone): the database's ``reason``.
+    ``outcome``: what the caller did about it (e.g. "nothing was transmitted"), added to the
+    message."""
 
     def __init__(self, reason: str, outcome: str | None = None) -> None:
         super().__init__(reason)

@@ -17,7 +17,7 @@ import pytest
 
 from backend.mission_log.export import csv_rows
 from backend.mission_log.migrating import head
-from backend.mission_log.store import FINAL_STATES, STATES, MissionLog, now_iso
+from backend.mission_log.store import FINAL_STATES, STATES, LogWriteError, MissionLog, now_iso
 from tests.backend.conftest import SQUARE, command_fields
 from tests.backend.log_backend import LogBackend
 
@@ -410,3 +410,50 @@ def test_a_transaction_writes_all_or_nothing(log: MissionLog, log_backend: LogBa
         assert other.command(new["id"]) is not None
     finally:
         other.close()
+
+
+def test_a_dropped_connection_fails_that_write_and_the_next_is_written(
+    log: MissionLog, log_backend: LogBackend
+) -> None:
+    """PostgreSQL: the server ends the log's session (a restart, an administrator): the write
+    that finds it gone is a LogWriteError (503 to a send, nothing transmitted), and the next
+    opens a new connection. (SQLite has no session to lose: the write simply goes through.)"""
+    dive = log.new_dive("sim")
+    if log_backend.postgres:
+        log_backend.query(
+            "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
+            "WHERE application_name = 'nemesys-console' AND datname = current_database()"
+        )
+        with pytest.raises(LogWriteError, match="the mission log cannot be written: "):
+            log.insert_command(dive, command_fields())
+        assert log_backend.scalar("SELECT COUNT(*) FROM commands") == 0
+    rec = log.insert_command(dive, command_fields())
+    assert log.command(rec["id"]) == rec
+    assert log_backend.scalar("SELECT COUNT(*) FROM commands") == 1
+
+
+def test_consoles_opening_a_new_log_together_migrate_it_once(log_backend: LogBackend) -> None:
+    """Several consoles starting at once on one new database: one migrates (the others wait
+    for its transaction: PostgreSQL's advisory lock, SQLite's write lock), all open it."""
+    opened: list[MissionLog] = []
+    errors: list[BaseException] = []
+
+    def open_one() -> None:
+        try:
+            opened.append(log_backend.open())
+        except BaseException as err:  # pragma: no cover - reported below
+            errors.append(err)
+
+    threads = [threading.Thread(target=open_one) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    try:
+        assert errors == [] and len(opened) == 3
+        dives = [log.new_dive("sim") for log in opened]
+        assert sorted(dives) == [1, 2, 3]
+    finally:
+        for log in opened:
+            log.close()
+    assert log_backend.query("SELECT version_num FROM alembic_version") == [(head(),)]
