@@ -355,6 +355,17 @@ def test_a_postgres_login_refused_or_database_missing(tmp_path: Path, pg_server:
     assert_names_the_url(line, missing)
 
 
+@pytest.mark.slow  # a `nemesys console` subprocess
+def test_a_database_url_of_another_kind_is_refused_without_its_password(tmp_path: Path) -> None:
+    line = assert_refused(
+        run_console(tmp_path / "missions.sqlite3", database_url="mysql://op:hunter2@db/log"),
+        "setting database_url",
+        "postgresql://user:password@host:port/database",
+        "scheme 'mysql'",
+    )
+    assert "hunter2" not in line
+
+
 # --- at start: the port, the URL ----------------------------------------------------------
 
 
