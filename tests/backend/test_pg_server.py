@@ -4,7 +4,9 @@ that says how to install it (never a skip); running, it listens on 127.0.0.1 onl
 
 from __future__ import annotations
 
+import glob
 import os
+import shutil
 import subprocess
 from pathlib import Path
 
@@ -18,8 +20,8 @@ from tests.pg_server import PgServer, PostgresMissing
 def test_without_postgres_the_tests_say_how_to_install_it(
     monkeypatch: pytest.MonkeyPatch, tmp_path: Path
 ) -> None:
-    monkeypatch.setattr(pg_server.shutil, "which", lambda _name: None)
-    monkeypatch.setattr(pg_server.glob, "glob", lambda _pattern: [str(tmp_path / "15" / "bin")])
+    monkeypatch.setattr(shutil, "which", lambda _name: None)
+    monkeypatch.setattr(glob, "glob", lambda _pattern: [str(tmp_path / "15" / "bin")])
     with pytest.raises(PostgresMissing) as missing:
         pg_server.bindir()
     assert "apt-get install postgresql" in str(missing.value)
