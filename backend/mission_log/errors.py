@@ -18,3 +18,14 @@ class LogWriteError(Exception):
     def __str__(self) -> str:
         tail = f"; {self.outcome}" if self.outcome else ""
         return f"the mission log cannot be written: {self.reason}{tail}"
+
+
+class LogSchemaNewer(Exception):
+    """The log is at migration ``at``, which this console does not know (a newer console
+    migrated it: a database shared by consoles of different versions); this one knows up to
+    ``head``. Nothing was changed."""
+
+    def __init__(self, at: str, head: str) -> None:
+        super().__init__(f"the log is at migration {at}, newer than this console's {head}")
+        self.at = at
+        self.head = head

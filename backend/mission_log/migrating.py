@@ -37,6 +37,7 @@ from alembic.script import ScriptDirectory
 from sqlalchemy.pool import StaticPool
 
 from backend.mission_log.database import LogDatabase
+from backend.mission_log.errors import LogSchemaNewer
 
 #: The revisions' folder.
 MIGRATIONS = Path(__file__).with_name("migrations")
@@ -89,12 +90,16 @@ def migrate(db: LogDatabase) -> None:
     """Bring the log to :func:`head` (nothing to do: one read). One write transaction.
 
     Raises:
+        LogSchemaNewer: a newer console migrated the log past what this one knows.
         The driver's error (sqlite3.Error, psycopg.Error) of a statement that failed; the
         log is as it was.
     """
-    if current(db) == head():
+    at = current(db)
+    if at == head():
         return
     script = scripts()
+    if at is not None and at not in {rev.revision for rev in script.walk_revisions()}:
+        raise LogSchemaNewer(at, head())
 
     def upgrade(rev: Any, _context: Any) -> Any:
         return script._upgrade_revs("head", rev)

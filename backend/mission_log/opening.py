@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from backend.mission_log.database import is_postgres_url, masked, one_line
+from backend.mission_log.errors import LogSchemaNewer
 from backend.mission_log.store import MissionLog
 
 if TYPE_CHECKING:
@@ -65,6 +66,19 @@ class LogLocked(LogError):
     """Another process holds the log's write lock."""
 
 
+class LogTooNew(LogError):
+    """A newer console migrated the log past what this one knows."""
+
+
+def too_new(path: Path | str, err: LogSchemaNewer) -> LogTooNew:
+    return LogTooNew(
+        path,
+        f"was brought to a newer schema by a newer console (migration {err.at}; this console "
+        f"knows up to {err.head})",
+        f"run the newer console {elsewhere(path)}",
+    )
+
+
 class LogUnreachable(LogError):
     """The PostgreSQL server cannot be reached."""
 
@@ -103,6 +117,8 @@ def open_checked(path: Path | str) -> MissionLog:
         log = MissionLog(where, busy_timeout_s=CHECK_BUSY_TIMEOUT_S)
     except sqlite3.Error as err:
         raise classify(where, err) from None
+    except LogSchemaNewer as err:
+        raise too_new(where, err) from None
     try:
         problems = log.check()
     except sqlite3.Error as err:
@@ -176,6 +192,8 @@ def _open_postgres(url: str) -> MissionLog:
         log = MissionLog(url, busy_timeout_s=CHECK_BUSY_TIMEOUT_S)
     except psycopg.Error as err:
         raise classify_postgres(where, err) from None
+    except LogSchemaNewer as err:
+        raise too_new(where, err) from None
     try:
         log.check()
     except psycopg.Error as err:

@@ -347,6 +347,28 @@ def test_a_migration_that_fails_leaves_the_log_as_it_was(
     assert log_backend.query("SELECT version_num FROM alembic_version") == [(head(),)]
 
 
+def test_a_log_a_newer_console_migrated_is_refused_unchanged(log_backend: LogBackend) -> None:
+    """Consoles of two versions on one database: the older one does not start on a log the
+    newer migrated past what it knows (one line naming the log, the password masked), and
+    changes nothing."""
+    from backend.mission_log.opening import LogTooNew, open_checked
+
+    log_backend.open().close()
+    newer = "9999"
+    conn = log_backend.open()
+    with conn.transaction():
+        conn._db.execute("UPDATE alembic_version SET version_num = ?", (newer,))
+    conn.close()
+    with pytest.raises(LogTooNew) as refused:
+        open_checked(log_backend.where)
+    message = str(refused.value)
+    assert f"migration {newer}; this console knows up to {head()}" in message
+    assert "run the newer console" in message
+    if log_backend.postgres:
+        assert ":***@" in message and log_backend.url not in message
+    assert log_backend.query("SELECT version_num FROM alembic_version") == [(newer,)]
+
+
 # --- (c) end to end: SIGKILL, restart, retry ---------------------------------------------
 
 
