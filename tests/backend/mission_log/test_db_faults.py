@@ -2,12 +2,10 @@
 a database, a corrupted one, a read-only one, one locked by another process, a directory that
 cannot be made, and a busy port each give one line on stderr naming the file (or port) and
 exit 2, with no URL and no traceback; a missing directory is created; the URL is printed only
-once the server answers. On PostgreSQL (``NEMESYS_DATABASE_URL``): a server that cannot be
-reached, a refused login and a missing database each give one line naming the URL with its
-password masked, and exit 2. While running, on both back-ends (``log_backend``): a write that
-fails fails the send with 503 and its reason, and no frame leaves that the log does not hold;
-a write failing after a frame left stops that delivery, logged. Track points are on disk
-within a second of their arrival.
+once the server answers (on PostgreSQL: test_postgres_start.py). While running, on both
+back-ends (``log_backend``): a write that fails fails the send with 503 and its reason, and no
+frame leaves that the log does not hold; a write failing after a frame left stops that
+delivery, logged. Track points are on disk within a second of their arrival.
 
 Running as root, chmod does not make a file read-only; the read-only case is then run with
 SQLite's own read-only open (``mode=ro``, what SQLite falls back to on a file it may not
@@ -57,8 +55,6 @@ from tests.backend.conftest import (
 )
 from tests.backend.log_backend import LogBackend
 from tests.manual_clock import ManualClock
-from tests.pg_server import PASSWORD, PgServer
-from tests.pg_server import free_port as free_pg_port
 
 #: The line with the operator URL (viser prints a URL of its own, without a token).
 URL_LINE = re.compile(r"(http://[^/\s]+)/\?token=\S+")
@@ -311,59 +307,6 @@ def test_a_directory_that_cannot_be_made(tmp_path: Path) -> None:
     db = blocker / "logs" / "missions.sqlite3"
     line = assert_refused(run_console(db), str(db), "cannot be created", "create the directory")
     assert str(db.parent) in line
-
-
-# --- at start: the log on PostgreSQL -----------------------------------------------------
-
-
-def assert_names_the_url(line: str, url: str) -> None:
-    """The line names ``url`` with its password masked, and never the password."""
-    assert url.replace(f":{PASSWORD}@", ":***@") in line, line
-    assert PASSWORD not in line
-    assert "NEMESYS_DATABASE_URL" in line
-
-
-@pytest.mark.slow  # a `nemesys console` subprocess
-def test_a_postgres_server_that_cannot_be_reached(tmp_path: Path) -> None:
-    url = f"postgresql://nemesys:{PASSWORD}@127.0.0.1:{free_pg_port()}/nemesys"
-    line = assert_refused(
-        run_console(tmp_path / "missions.sqlite3", database_url=url),
-        "cannot be reached",
-        "Connection refused",
-        "start PostgreSQL there",
-    )
-    assert_names_the_url(line, url)
-    assert not (tmp_path / "missions.sqlite3").exists()  # no SQLite log instead
-
-
-@pytest.mark.slow  # `nemesys console` subprocesses
-def test_a_postgres_login_refused_or_database_missing(tmp_path: Path, pg_server: PgServer) -> None:
-    wrong = pg_server.url("postgres").replace(PASSWORD, "not-the-password")
-    line = assert_refused(
-        run_console(tmp_path / "missions.sqlite3", database_url=wrong),
-        "the server refused the login",
-        "password authentication failed",
-        "check the user and password",
-    )
-    assert "not-the-password" not in line and ":***@" in line
-    missing = pg_server.url("no_such_database")
-    line = assert_refused(
-        run_console(tmp_path / "missions.sqlite3", database_url=missing),
-        "does not exist on the server",
-        "create it",
-    )
-    assert_names_the_url(line, missing)
-
-
-@pytest.mark.slow  # a `nemesys console` subprocess
-def test_a_database_url_of_another_kind_is_refused_without_its_password(tmp_path: Path) -> None:
-    line = assert_refused(
-        run_console(tmp_path / "missions.sqlite3", database_url="mysql://op:hunter2@db/log"),
-        "setting database_url",
-        "postgresql://user:password@host:port/database",
-        "scheme 'mysql'",
-    )
-    assert "hunter2" not in line
 
 
 # --- at start: the port, the URL ----------------------------------------------------------
