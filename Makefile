@@ -3,7 +3,8 @@ PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-# roslibjs and ws for the interop tests (tests/rosbridge/test_roslibjs.py): node >= 20, npm.
+# The interop tests' Node clients (roslibjs and ws: tests/rosbridge/test_roslibjs.py;
+# @foxglove/ws-protocol and protobufjs: tests/backend/foxglove_live/test_interop.py): node >= 20, npm.
 NODE_DIR   := tests/node
 NODE_STAMP := $(NODE_DIR)/node_modules/.installed
 # The page's chart (Leaflet) and plots (uPlot), served by the console at /vendor/: no CDN at sea.

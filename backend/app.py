@@ -2,8 +2,9 @@
 
 Nothing starts at import time. The lifespan starts the :class:`backend.console.Console` (the
 mission log, in training mode the simulated vehicle and its rosbridge, the vehicle link, the
-viser view) and stops it on shutdown. One uvicorn worker only: viser and the simulator live
-in the process.
+viser view) and, when ``foxglove_port`` is set, the live Foxglove view
+(:mod:`backend.foxglove_live`), and stops them on shutdown. One uvicorn worker only: viser
+and the simulator live in the process.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.manager import RateLimited
 from backend.commands.service import SendRefused, refusal_detail
 from backend.console import Console
+from backend.foxglove_live import live_view
 from backend.security import HostGuard, allowed_hosts, install_redaction
 from backend.settings import Settings
 from backend.strict_input import strict_json_body
@@ -68,7 +70,8 @@ def create_app(
         app.state.console = console
         await console.start(viewer=viewer)
         try:
-            yield
+            async with live_view(console):  # the Foxglove view, when foxglove_port is set
+                yield
         finally:
             await console.stop()
 

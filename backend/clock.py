@@ -10,6 +10,11 @@ is proved by moving the clock past every timer rather than by waiting in real ti
 Timers, not ``sleep``: both waits of a delivery are "until this time, unless woken sooner" (the
 next copy, or a Surface pressed again) and "call this if nothing settled it first" (the
 acknowledgement timeout), which a cancellable timer says directly.
+
+The console's UTC (:data:`CONSOLE_UTC`) is the other clock: the wall clock read once, then moved
+by the monotonic one. Every time the console writes into the mission log is on it (a command
+created, sent, acknowledged; an event; the arrival of a track point), so the dive's stamps never
+go back and their differences are true seconds even if the system clock is stepped meanwhile.
 """
 
 from __future__ import annotations
@@ -17,6 +22,7 @@ from __future__ import annotations
 import asyncio
 import time
 from collections.abc import Callable
+from datetime import UTC, datetime
 from typing import Protocol
 
 
@@ -51,3 +57,31 @@ class SystemClock:
 
 #: The clock of a running console.
 SYSTEM_CLOCK: Clock = SystemClock()
+
+
+class AnchoredUtc:
+    """UTC on the monotonic clock: ``wall_s`` (POSIX seconds) read once at construction, the
+    anchor, then moved by ``monotonic_s``. Within a run its times never go back and differ by
+    the elapsed seconds; NTP's gradual corrections reach both clocks, a step of the system
+    clock reaches neither (it shows at the next start, when the anchor is read again)."""
+
+    def __init__(
+        self,
+        wall_s: Callable[[], float] = time.time,
+        monotonic_s: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self._monotonic_s = monotonic_s
+        self._anchor_wall_s = wall_s()
+        self._anchor_mono_s = monotonic_s()
+
+    def now_s(self) -> float:
+        """Now, as POSIX seconds (UTC)."""
+        return self._anchor_wall_s + (self._monotonic_s() - self._anchor_mono_s)
+
+    def now(self) -> datetime:
+        """Now, as an aware UTC datetime."""
+        return datetime.fromtimestamp(self.now_s(), UTC)
+
+
+#: The console's UTC: every stamp the mission log holds (``backend.mission_log.store.now_iso``).
+CONSOLE_UTC = AnchoredUtc()

@@ -49,6 +49,7 @@ from station.link import Link, RosbridgeLink
 from vehicle_contract.messages import pose_from_message
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
+    from backend.foxglove_live.server import FoxgloveLive
     from backend.scripts.operations import ScriptRunner
     from backend.viewer.viewer import Viewer
     from rosbridge.server import BridgeServer
@@ -99,6 +100,8 @@ class Console:
         #: The one checked path to the vehicle (every frame leaves through it).
         self.service: CommandService | None = None
         self.viewer: Viewer | None = None  # the 3D view (None: started without one)
+        #: The live Foxglove view (None: off; the app's lifespan sets it: backend.foxglove_live).
+        self.foxglove: FoxgloveLive | None = None
         self.runner: ScriptRunner | None = None  # the latest mission script run (None: none yet)
         self._runner_task: asyncio.Task[None] | None = None
         self.script_commands: dict[int, int] = {}  # script step -> command id
@@ -212,6 +215,8 @@ class Console:
         if self.dives is not None:
             self.dives.heard()
         self.hub.set_status(msg)
+        if self.dives is not None:
+            self.dives.status(self._status_of_track(msg))
         self._check_echo()
 
     def _on_mission(self, ack: dict[str, Any]) -> None:
@@ -260,10 +265,15 @@ class Console:
         if self.viewer is not None:
             self.viewer.update_pose(t_s, x, y, z, roll or 0.0, heading)
         if self.dives is not None:
-            status = self.hub.status or {}
-            if "active" not in status and self.commands is not None:  # the echo instead
-                status = {**status, "active": self.commands.vehicle_active}
-            self.dives.track((t_s, x, y, z, heading), status)
+            self.dives.track((t_s, x, y, z, heading), self._status_of_track(self.hub.status))
+
+    def _status_of_track(self, status: Mapping[str, Any] | None) -> Mapping[str, Any]:
+        """The status a track point keeps: ``status``, with the command the console believes
+        the vehicle runs (its echo) when the vehicle does not say ``active``."""
+        status = status or {}
+        if "active" not in status and self.commands is not None:  # the echo instead
+            status = {**status, "active": self.commands.vehicle_active}
+        return status
 
     def _show_active(self, active: Plan | None) -> None:
         """The path the vehicle flies (as the station mirrors it): in the 3D view, and for

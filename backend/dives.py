@@ -22,6 +22,7 @@ from typing import Any
 from backend.commands.manager import CommandManager
 from backend.mission_log.store import LogWriteError, MissionLog
 from backend.telemetry import TelemetryHub
+from vehicle_contract.messages import number
 
 logger = logging.getLogger("backend.console")
 
@@ -40,6 +41,9 @@ class Dives:
         #: The current dive's number (None: none started since this console started).
         self.current: int | None = None
         self._last_track_s: float | None = None
+        #: The dive's start on the vehicle's clock: its first track point's ``t_s`` (None:
+        #: none yet), the zero of the dive's clock.
+        self.start_t_s: float | None = None
         self._echo_flagged = False  # an echo mismatch is logged once each time it begins
 
     def ensure(self) -> int:
@@ -50,7 +54,7 @@ class Dives:
         """
         if self.current is None:
             self.current = self.log.new_dive(self.target)
-            self._last_track_s = None
+            self._last_track_s = self.start_t_s = None
             logger.info("dive %d started", self.current)
             self._started()
         return self.current
@@ -62,7 +66,7 @@ class Dives:
             LogWriteError: the new dive cannot be written (the current one stays).
         """
         self.current = self.log.new_dive(self.target)
-        self._last_track_s = None
+        self._last_track_s = self.start_t_s = None
         logger.info("dive %d started (vehicle reset)", self.current)
         self._started()
         return self.current
@@ -91,11 +95,29 @@ class Dives:
         dive = self.heard()
         if dive is None:
             return
-        t_s, last = position[0], self._last_track_s
-        if last is not None and last <= t_s < last + TRACK_INTERVAL_S:
+        if self._due(position[0]):
+            self.log.add_track(dive, *position, status=status)
+
+    def status(self, status: Mapping[str, Any]) -> None:
+        """A status heard: a track point without a position when it says the navigation is
+        not valid (no pose comes then), at most every :data:`TRACK_INTERVAL_S` as the poses'."""
+        t_s = number(status.get("t_s"))
+        if status.get("nav_valid") is not False or t_s is None:
             return
+        dive = self.heard()
+        if dive is not None and self._due(t_s):
+            self.log.add_status_point(dive, t_s, status)
+
+    def _due(self, t_s: float) -> bool:
+        """Whether a point at ``t_s`` is kept (one :data:`TRACK_INTERVAL_S` after the last;
+        a clock that went back, a vehicle restarted, starts the count again)."""
+        last = self._last_track_s
+        if last is not None and last <= t_s < last + TRACK_INTERVAL_S:
+            return False
         self._last_track_s = t_s
-        self.log.add_track(dive, *position, status=status)
+        if self.start_t_s is None:
+            self.start_t_s = t_s
+        return True
 
     def event(
         self, kind: str, detail: str, data: Mapping[str, Any] | None = None

@@ -91,6 +91,9 @@ class Settings(BaseSettings):
     viewer_host: str = "127.0.0.1"
     #: viser's own port (0: any free port; viser moves to the next free one if taken).
     viewer_port: Annotated[int, Field(ge=0, le=65535)] = 8080
+    #: The live Foxglove view's port (docs/foxglove.md, "Live"): a read-only Foxglove
+    #: WebSocket server on ``host`` (0: any free port). Unset: off.
+    foxglove_port: Annotated[int, Field(ge=0, le=65535)] | None = None
     #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port.
     target: str = SIM_TARGET
     #: With an ME modem target: the vehicle's rosbridge (ws://host:port) that telemetry and

@@ -65,6 +65,9 @@ class TelemetryHub:
         self.unknown_values = 0
         self._unknown_at: deque[tuple[float, int]] = deque(maxlen=1000)
         self._version = 0
+        #: The telemetry message of :attr:`_version`, serialised once for every page, and the
+        #: monotonic time it was (its ``age_s`` is as of then).
+        self._telemetry_json: tuple[int, float, str] | None = None
         self._clients: set[_Client] = set()
         #: Called with every event published, before the pages get it (the belief listens).
         self.observers: list[Callable[[News], None]] = []
@@ -123,6 +126,16 @@ class TelemetryHub:
             {"pose": self.pose, "status": self.status, "age_s": self.age_s(), "dive": self.dive}
         )
 
+    def telemetry_json(self) -> str:
+        """:meth:`telemetry` as the pages get it, serialised once per change of the pose or
+        status however many pages there are. Its ``age_s`` is as of that serialisation, so it
+        is reused only within one period (a page that joins later gets a fresh age)."""
+        now = time.monotonic()
+        cached = self._telemetry_json
+        if cached is None or cached[0] != self._version or now - cached[1] > self.period_s:
+            cached = self._telemetry_json = (self._version, now, message_json(self.telemetry()))
+        return cached[2]
+
     def publish(self, event: News) -> None:
         """Queue an event for every client (in order), serialised once; a client too far
         behind is dropped."""
@@ -150,6 +163,6 @@ class TelemetryHub:
                         await sender.send_text(client.events.get_nowait())
                 if client.sent_version != self._version:
                     client.sent_version = self._version
-                    await sender.send_text(message_json(self.telemetry()))
+                    await sender.send_text(self.telemetry_json())
         finally:
             self._clients.discard(client)

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, TextIO
 
 from cli import contract as contract_cli
+from cli import export as export_cli
 from cli import send as send_cli
 from cli import sim as sim_cli
 from cli.common import (
@@ -178,6 +179,7 @@ BENCHMARKS = (
     "channel_estimate",
     "durations",
     "dead_reckoning",
+    "export",
 )
 
 
@@ -248,6 +250,7 @@ COMMANDS: dict[str, Handler] = {
     "analyze": cmd_analyze,
     "contract": contract_cli.cmd_contract,
     "vehicle-check": contract_cli.cmd_vehicle_check,
+    "export": export_cli.cmd_export,
 }
 
 
@@ -292,6 +295,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim_cli.add_parsers(sub)
     _serve().add_parser(sub)
     contract_cli.add_parsers(sub)
+    export_cli.add_parser(sub)
 
     p = sub.add_parser("bench", help="run a benchmark and print its table")
     p.add_argument("target", choices=BENCHMARKS, help="what to benchmark")

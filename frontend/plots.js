@@ -1,5 +1,6 @@
 // Telemetry over the dive (uPlot, served by the console from npm's copy): depth against the
-// commanded depth, battery and speed, against seconds since the dive began. At page load the
+// commanded depth (with a red bar along the surface where the vehicle's navigation was not
+// valid), battery and speed, against seconds since the dive began. At page load the
 // dive so far comes from the mission log (GET /api/series: a sample a second, on the dive's
 // own clock), then live telemetry is appended, so a reload loses nothing and the axis starts
 // at the dive's start. The samples are a bounded buffer that keeps the whole dive: when it is
@@ -19,8 +20,13 @@ const TICKS = 4; // about this many labelled ticks on each value axis
 let uPlot = null;
 const plots = [];
 // t: the vehicle's clock (s); shown as t - t0, t0 the dive's start (its first sample)
-const buf = { t: [], depth: [], commanded: [], battery: [], speed: [] };
+const buf = { t: [], depth: [], commanded: [], navLost: [], battery: [], speed: [] };
 const state = { t0: null, lastT: null, minDtS: 0.5, dirty: false, dive: undefined, samples: 0, loads: 0, logged: 0 };
+
+/** The nav-lost bar's value: 0 (the surface line) where navigation was not valid, else null. */
+export function navLost(navValid) {
+  return navValid === false ? 0 : null;
+}
 
 /** The active command's commanded depth (m): its `depth`, or a helix's `end_depth`. */
 export function commandedDepth(active) {
@@ -68,6 +74,7 @@ function add(msg) {
   buf.t.push(t);
   buf.depth.push(finite(status && status.depth_m) ?? finite(pose && pose.z_m));
   buf.commanded.push(commandedDepth(active));
+  buf.navLost.push(navLost(status && status.nav_valid));
   buf.battery.push(finite(status && status.battery_pct));
   buf.speed.push(finite(status && status.speed_mps));
   state.samples += 1;
@@ -92,7 +99,8 @@ async function loadSeries() {
   const last = logged.length ? logged[logged.length - 1] : -Infinity;
   // live samples of this dive the log does not hold yet (newer than its last sample)
   const live = buf.t.map((t, i) => i).filter((i) => buf.t[i] > last && buf.t[i] >= start);
-  const cols = { depth: s.depth_m, commanded: s.commanded_depth_m, battery: s.battery_pct, speed: s.speed_mps };
+  const navValid = Array.isArray(s.nav_valid) ? s.nav_valid : s.t_s.map(() => null);
+  const cols = { depth: s.depth_m, commanded: s.commanded_depth_m, navLost: navValid.map(navLost), battery: s.battery_pct, speed: s.speed_mps };
   buf.t = [...logged, ...live.map((i) => buf.t[i])];
   for (const [key, values] of Object.entries(cols)) buf[key] = [...values, ...live.map((i) => buf[key][i])];
   state.t0 = start;
@@ -109,7 +117,7 @@ function redraw() {
   state.dirty = false;
   const t0 = state.t0 ?? 0;
   const x = buf.t.map((t) => t - t0);
-  plots[0].setData([x, buf.depth, buf.commanded]);
+  plots[0].setData([x, buf.depth, buf.commanded, buf.navLost]);
   plots[1].setData([x, buf.battery]);
   plots[2].setData([x, buf.speed]);
   const box = $("plots");
@@ -217,7 +225,7 @@ export async function initPlots() {
   loadSeries(); // at once: the session may come later
   const host = $("plots");
   // for the tests: the buffered samples as drawn (s since the dive's start)
-  host.samplesShown = () => ({ t0: state.t0, t: buf.t.map((t) => t - (state.t0 ?? 0)), depth: [...buf.depth], battery: [...buf.battery] });
+  host.samplesShown = () => ({ t0: state.t0, t: buf.t.map((t) => t - (state.t0 ?? 0)), depth: [...buf.depth], battery: [...buf.battery], navLost: [...buf.navLost] });
   try {
     uPlot = (await import(UPLOT_JS)).default;
   } catch (err) {
@@ -240,6 +248,7 @@ export async function initPlots() {
       [
         { label: "depth (m)", stroke: "#3fa7ff", width: 2 },
         { label: "commanded (m)", stroke: "#ffb13b", width: 1.5, dash: [6, 4] },
+        { label: "nav lost", stroke: "#e5484d", width: 6, value: (u, v) => (v === null ? "" : "yes") },
       ],
       "m (down)",
       valueScale(2, 0, Infinity, { dir: -1 }), // depth grows downwards, as in the water

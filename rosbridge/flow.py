@@ -4,8 +4,9 @@
 ``Protocol.incoming`` does (a text that does not parse is kept and joined with the next one;
 several objects in one text are taken one by one). :class:`MessageHandler` paces one
 subscription as the real server's ``subscription_modifiers`` do (``throttle_rate``,
-``queue_length``), and :class:`Subscription` holds one topic's; :class:`Defragmenter`
-reassembles incoming ``fragment`` ops as its ``defragmentation`` capability does.
+``queue_length``), and :class:`Subscription` holds one topic's (and its ``compression``);
+:class:`Defragmenter` reassembles incoming ``fragment`` ops as its ``defragmentation``
+capability does.
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, Final
 
+from rosbridge.compression import strongest
 from rosbridge.errors import BridgeError, FragmentError
 from rosbridge.messages import Fragment
 
@@ -24,11 +26,13 @@ class MessageHandler:
     """Pacing of one subscription, as the real ``subscription_modifiers``: with no queue a
     message goes out if ``throttle_rate`` ms have passed since the last one sent, otherwise
     it is dropped; with ``queue_length`` > 0 messages wait in a queue keeping the newest
-    ``queue_length``, and the oldest goes out whenever ``throttle_rate`` ms have passed."""
+    ``queue_length``, and the oldest goes out whenever ``throttle_rate`` ms have passed.
+    It paces messages, not texts: a message is encoded when it goes out, as the real server
+    applies the compression then."""
 
     def __init__(self) -> None:
         self.throttle_s = 0.0
-        self.queue: deque[str] | None = None
+        self.queue: deque[Any] | None = None
         self.last = -math.inf
 
     def configure(self, throttle_ms: int, queue_length: int) -> None:
@@ -37,17 +41,17 @@ class MessageHandler:
         self.throttle_s = throttle_ms / 1000.0
         self.queue = deque(self.queue or (), maxlen=queue_length) if queue_length else None
 
-    def handle(self, text: str, now: float) -> list[str]:
+    def handle(self, message: Any, now: float) -> list[Any]:
         if self.queue is None:
             if now >= self.last + self.throttle_s:
                 self.last = now
-                return [text]
+                return [message]
             return []
-        self.queue.append(text)
+        self.queue.append(message)
         return self.poll(now)
 
-    def poll(self, now: float) -> list[str]:
-        out: list[str] = []
+    def poll(self, now: float) -> list[Any]:
+        out: list[Any] = []
         while self.queue and now >= self.last + self.throttle_s:
             self.last = now
             out.append(self.queue.popleft())
@@ -59,16 +63,20 @@ class MessageHandler:
 @dataclass(slots=True)
 class Subscription:
     """One client's subscriptions to one topic: every id's (``throttle_rate`` ms,
-    ``queue_length``), paced together by the smallest of each (as the real server)."""
+    ``queue_length``, ``compression``), paced together by the smallest of each and
+    compressed the strongest way any asked (as the real server)."""
 
     expanded: str
     type: str
-    options: dict[Any, tuple[int, int]] = field(default_factory=dict)  # id -> (throttle, queue)
+    #: id -> (throttle_rate, queue_length, compression)
+    options: dict[Any, tuple[int, int, str]] = field(default_factory=dict)
     handler: MessageHandler = field(default_factory=MessageHandler)
+    compression: str = "none"
 
     def update(self) -> None:
         values = list(self.options.values())
         self.handler.configure(min(v[0] for v in values), min(v[1] for v in values))
+        self.compression = strongest(v[2] for v in values)
 
 
 @dataclass(slots=True)

@@ -27,6 +27,7 @@ from rosbridge.errors import (
     TopicNotEstablished,
     TypeMismatch,
 )
+from rosbridge.typedefs import full_text
 from rosbridge.types import resolve_type
 from vehicle_contract import contract
 from vehicle_contract.contract import VEHICLE_NODE
@@ -295,7 +296,7 @@ class Graph:
         ``args`` (an object, a list of positional values, or anything else for none).
 
         Raises :class:`ServiceError` with the real server's text: no such service, bad
-        arguments, or a service the simulator does not model (parameters, type details).
+        arguments, or a service the simulator does not model (parameters, ``*_details``).
         """
         if service not in self._services:
             raise ServiceError(f"Service {service} does not exist")
@@ -322,6 +323,17 @@ class Graph:
 def _topics(graph: Graph, _: JsonObject) -> JsonObject:
     topics = graph.topics()
     return {"topics": list(topics), "types": list(topics.values())}
+
+
+def _topics_and_raw_types(graph: Graph, _: JsonObject) -> JsonObject:
+    """rosapi's answer Foxglove's rosbridge player asks for: each type's full definition."""
+    topics = graph.topics()
+    kinds = list(topics.values())
+    return {
+        "topics": list(topics),
+        "types": kinds,
+        "typedefs_full_text": list(map(full_text, kinds)),
+    }
 
 
 def _topics_for_type(graph: Graph, request: JsonObject) -> JsonObject:
@@ -360,6 +372,7 @@ _ROSAPI: Final[
     {
         "/rosapi/topics": ((), _topics),
         "/rosapi/topics_for_type": ((("type", _STRING),), _topics_for_type),
+        "/rosapi/topics_and_raw_types": ((), _topics_and_raw_types),
         "/rosapi/services": ((), _services),
         "/rosapi/services_for_type": ((("type", _STRING),), _services_for_type),
         "/rosapi/nodes": ((), lambda g, _: {"nodes": g.nodes()}),

@@ -148,11 +148,12 @@ class Publication:
 @dataclass(frozen=True, slots=True)
 class Outcome:
     """What one message led to. ``error`` is set when it failed (only logged, as ``logs``);
-    ``close`` when the real server would drop the connection."""
+    ``close`` when the real server would drop the connection. ``texts`` are sent as they
+    are (``bytes``: a binary frame, a CBOR message)."""
 
     request: Request | None = None
     replies: tuple[JsonObject, ...] = ()
-    texts: tuple[str, ...] = ()
+    texts: tuple[str | bytes, ...] = ()
     publication: Publication | None = None
     error: BridgeError | None = None
     logs: tuple[LogLine, ...] = ()

@@ -52,12 +52,12 @@ class ClientOutbox:
         self.connected_at = 0.0
         self._send_timeout_s = send_timeout_s
         self._max_queue = max_queue
-        self._queue: deque[str] = deque()
-        self._latest: dict[str, tuple[str, ...]] = {}
+        self._queue: deque[str | bytes] = deque()
+        self._latest: dict[str, tuple[str | bytes, ...]] = {}
         self._wake = asyncio.Event()
         self._dropped = False
 
-    def enqueue(self, *texts: str) -> None:
+    def enqueue(self, *texts: str | bytes) -> None:
         """Queue messages that must not be skipped; drop the client if it cannot keep up."""
         if self._dropped or not texts:
             return
@@ -67,7 +67,7 @@ class ClientOutbox:
         self._queue.extend(texts)
         self._wake.set()
 
-    def offer_latest(self, topic: str, *texts: str) -> None:
+    def offer_latest(self, topic: str, *texts: str | bytes) -> None:
         """Offer the newest message of a streamed topic; replaces one not yet sent."""
         if self._dropped or not texts:
             return
@@ -83,14 +83,15 @@ class ClientOutbox:
         self.ws.transport.abort()
 
     async def run_writer(self) -> None:
-        """Send the outbox in order, then the latest streamed messages, until closed."""
+        """Send the outbox in order, then the latest streamed messages, until closed
+        (``str`` as a text frame, ``bytes`` as a binary frame)."""
         try:
             while True:
                 await self._wake.wait()
                 self._wake.clear()
                 while self._queue or self._latest:
                     if self._queue:
-                        texts: tuple[str, ...] = (self._queue.popleft(),)
+                        texts: tuple[str | bytes, ...] = (self._queue.popleft(),)
                     else:
                         texts = self._latest.pop(next(iter(self._latest)))
                     for text in texts:

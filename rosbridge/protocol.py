@@ -12,6 +12,8 @@ package layer does the rest, split along its seams:
 * :mod:`rosbridge.graph`: the ROS graph (nodes, topics, services) and rosapi;
 * :mod:`rosbridge.types` and :mod:`rosbridge.convert`: message types
   and the JSON conversion (``uint8[]`` as base64, NaN as ``null``);
+* :mod:`rosbridge.typedefs`: full message definitions (rosapi's ``topics_and_raw_types``)
+  and the ROS 2 type store; :mod:`rosbridge.compression`: ``cbor`` and ``cbor-raw``;
 * :mod:`rosbridge.wire`: builders, serialization and outgoing fragments (the pose message,
   the time stamps and the JSON payloads are the vehicle contract's,
   :mod:`vehicle_contract.messages`);

@@ -10,7 +10,9 @@ server, a client never gets an error message back: errors are only logged.
 Outgoing, :meth:`ClientSession.deliver` passes a topic's message through that client's
 subscription (``throttle_rate``, ``queue_length``) and :meth:`ClientSession.poll` releases
 queued ones when due; every outgoing text is split into ``fragment`` ops when longer than
-the client's ``fragment_size`` (set by any message that carries one).
+the client's ``fragment_size`` (set by any message that carries one). A subscription with
+``compression`` ``cbor`` or ``cbor-raw`` gets binary CBOR frames instead
+(:mod:`rosbridge.compression`).
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from collections.abc import Mapping
 from typing import Any, Final
 
 from rosbridge.auth import AuthGate
+from rosbridge.compression import EncodeError, cbor_publish, cbor_raw_publish
 from rosbridge.convert import extract, populate
 from rosbridge.errors import (
     BinaryMessage,
@@ -57,6 +60,7 @@ from rosbridge.wire import (
     LOG_ERROR,
     LOG_INFO,
     LOG_WARN,
+    binary_frame,
     fragments,
     publish_message,
     service_response,
@@ -259,7 +263,11 @@ class ClientSession:
         elif request.type is not None:
             self.graph.add_subscriber(self.client_id, request.topic, request.type)
         before = dict(sub.options)
-        sub.options[id_key(request.id)] = (request.throttle_rate, request.queue_length)
+        sub.options[id_key(request.id)] = (
+            request.throttle_rate,
+            request.queue_length,
+            request.compression,
+        )
         try:
             sub.update()
         except ValueError as exc:
@@ -269,16 +277,15 @@ class ClientSession:
             raise BridgeError(str(exc), request.id) from None
         self._subs[request.topic] = sub
         logs = [LogLine(LOG_INFO, f"Subscribed to {request.topic}")]
-        if request.compression in ("png", "cbor", "cbor-raw"):
+        if request.compression == "png":
             logs.append(
                 LogLine(
                     LOG_WARN,
-                    f"compression {request.compression!r} is not implemented by the NemeSys "
-                    "simulator: JSON is sent",
+                    "compression 'png' is not implemented by the NemeSys simulator: JSON is sent",
                     request.id,
                 )
             )
-        texts: list[str] = []
+        texts: list[str | bytes] = []
         latched = self.graph.latched.get(sub.expanded)
         if latched is not None:
             texts = self._through(request.topic, sub, latched)
@@ -333,33 +340,43 @@ class ClientSession:
         Raises :class:`FragmentError` where the real server's send fails."""
         return fragments(wire_json(message), self.fragment_size, message.get("id"))
 
-    def deliver(self, topic: str, msg: JsonObject) -> list[str]:
-        """The texts to send now for a message on ``topic`` (absolute name), through every
-        subscription of this client that delivers it."""
-        out: list[str] = []
+    def deliver(self, topic: str, msg: JsonObject) -> list[str | bytes]:
+        """What to send now for a message on ``topic`` (absolute name), through every
+        subscription of this client that delivers it: texts, or binary frames (CBOR)."""
+        out: list[str | bytes] = []
         for raw, sub in self._subs.items():
             if sub.expanded == topic:
                 out.extend(self._through(raw, sub, msg))
         return out
 
-    def _through(self, raw: str, sub: Subscription, msg: JsonObject) -> list[str]:
-        text = wire_json(publish_message(raw, msg))
-        return self._split(sub.handler.handle(text, self.graph.clock()))
+    def _through(self, raw: str, sub: Subscription, msg: JsonObject) -> list[str | bytes]:
+        return self._send(raw, sub, sub.handler.handle(msg, self.graph.clock()))
 
-    def poll(self) -> list[str]:
+    def poll(self) -> list[str | bytes]:
         """Queued messages (``queue_length``) that are due now."""
         now = self.graph.clock()
-        out: list[str] = []
-        for sub in self._subs.values():
-            out.extend(self._split(sub.handler.poll(now)))
+        out: list[str | bytes] = []
+        for raw, sub in self._subs.items():
+            out.extend(self._send(raw, sub, sub.handler.poll(now)))
         return out
 
-    def _split(self, texts: list[str]) -> list[str]:
-        out: list[str] = []
-        for text in texts:
+    def _send(self, raw: str, sub: Subscription, msgs: list[JsonObject]) -> list[str | bytes]:
+        """Messages a subscription released, encoded as its ``compression`` asks: JSON text
+        (fragmented past ``fragment_size``) or one CBOR binary frame each. One that cannot be
+        sent is logged as the real server logs a failed subscribe callback."""
+        out: list[str | bytes] = []
+        for msg in msgs:
             try:
-                out.extend(fragments(text, self.fragment_size))
-            except FragmentError as error:
+                if sub.compression == "cbor-raw":
+                    data = cbor_raw_publish(raw, sub.type, msg, self.graph.ros_time())
+                    out.append(binary_frame(data, self.fragment_size))
+                elif sub.compression == "cbor":
+                    data = cbor_publish(raw, sub.type, msg)
+                    out.append(binary_frame(data, self.fragment_size))
+                else:
+                    text = wire_json(publish_message(raw, msg))
+                    out.extend(fragments(text, self.fragment_size))
+            except (FragmentError, EncodeError) as error:
                 self._logs.append(
                     LogLine(LOG_ERROR, f"Exception calling subscribe callback: {error.reason}")
                 )

@@ -7,7 +7,8 @@ Builders make the ``msg`` of the NemeSys topics that rosbridge carries (:func:`j
 :func:`service_response`); :func:`wire_json` serializes them as the real server does (NaN as
 ``null``; :func:`vehicle_contract.messages.to_json` is the compact form), and
 :func:`fragments` splits a serialized message into ``fragment`` ops exactly as the real
-server's ``Protocol.send`` does.
+server's ``Protocol.send`` does; :func:`binary_frame` checks a CBOR message against the
+fragment size as the real server's send does (it cannot fragment one).
 """
 
 from __future__ import annotations
@@ -95,6 +96,22 @@ def wire_json(message: Any) -> str:
     ``json.dumps`` (``", "`` and ``": "`` separators, non-ASCII escaped), NaN as ``null``.
     Fragment boundaries and sizes therefore match the real server's."""
     return strict_json(message, (", ", ": "))
+
+
+def binary_frame(data: bytes, fragment_size: object) -> bytes:
+    """A CBOR message (``cbor``, ``cbor-raw``) as the real server sends it: whole, when it fits
+    ``fragment_size`` (or the size is ``None``). The real server cannot fragment one: its send
+    fails (``'bytes' object has no attribute 'get'``, rosbridge_suite issue #844), as it does
+    for a size that is not a number: both raise :class:`FragmentError` with its words."""
+    if fragment_size is None:
+        return data
+    if not isinstance(fragment_size, int | float):
+        raise FragmentError(
+            f"'>' not supported between instances of 'int' and '{type(fragment_size).__name__}'"
+        )
+    if len(data) > fragment_size:
+        raise FragmentError("'bytes' object has no attribute 'get'")
+    return data
 
 
 def fragments(text: str, fragment_size: object, op_id: MessageId = None) -> tuple[str, ...]:

@@ -11,6 +11,7 @@ import asyncio
 import errno
 import logging
 import socket
+import time
 from dataclasses import asdict, dataclass
 from types import TracebackType
 from typing import Any, ClassVar, Literal, Self
@@ -166,6 +167,13 @@ class ModemTransmitter(Transmitter):
     say is what the OS took. The connection is kept between frames; :meth:`check` opens it
     when it is not open and tells whether a frame could leave now, without sending one."""
 
+    #: Seconds kept between the end of one frame and the next (set by each modem).
+    gap_s: float
+    #: Frames the transport took since this transmitter was made.
+    frames_sent: int
+    #: The monotonic time (s) before which the next frame waits.
+    _next_t: float
+
     @property
     @abc.abstractmethod
     def connected(self) -> bool:
@@ -184,6 +192,17 @@ class ModemTransmitter(Transmitter):
 
     def _passed(self, detail: str) -> LinkCheck:
         return LinkCheck("modem", self.target, True, None, detail)
+
+    def _copy_sent(self, frame: Frame, detail: str) -> SendResult:
+        """A copy the transport took (``detail``: how far it went), counted and logged: the
+        one place a modem's copy becomes sent. Called with the transmitter's lock held."""
+        sent_t = time.time()
+        self._next_t = time.monotonic() + self.gap_s
+        self.frames_sent += 1
+        logger.info("wrote frame %s to %s", frame.hex, self.target)
+        return SendResult(
+            ok=True, transport=self.transport, target=self.target, sent_t=sent_t, detail=detail
+        )
 
     def _check_failed(self, reason: str, detail: str) -> LinkCheck:
         logger.info("%s %s: check failed: %s (%s)", self.transport, self.target, reason, detail)

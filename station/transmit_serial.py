@@ -113,17 +113,9 @@ class SerialTransmitter(ModemTransmitter):
                 return self._failed(
                     "short write", f"wrote {written} of {len(data)} bytes to {self.url}"
                 )
-            sent_t = time.time()
-            self._next_t = time.monotonic() + self.gap_s
-            self.frames_sent += 1
-        logger.info("wrote frame %s to %s", frame.hex, self.target)
-        return SendResult(
-            ok=True,
-            transport=self.transport,
-            target=self.target,
-            sent_t=sent_t,
-            detail=f"wrote {FRAME_BYTES} bytes; the modem gives no acknowledgement",
-        )
+            return self._copy_sent(
+                frame, f"wrote {FRAME_BYTES} bytes; the modem gives no acknowledgement"
+            )
 
     def check(self) -> LinkCheck:
         """Open the port if it is not open and ask it how many bytes wait to go out (a device

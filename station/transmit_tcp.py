@@ -289,17 +289,9 @@ class TcpTransmitter(ModemTransmitter):
             if problem is not None:
                 self._close_sock(reset=True)
                 return self._failed(problem.reason, problem.detail)
-            sent_t = time.time()
-            self._next_t = time.monotonic() + self.gap_s
-            self.frames_sent += 1
-        logger.info("wrote frame %s to %s", frame.hex, self.target)
-        return SendResult(
-            ok=True,
-            transport=self.transport,
-            target=self.target,
-            sent_t=sent_t,
-            detail=f"the gateway took {FRAME_BYTES} bytes; the modem gives no acknowledgement",
-        )
+            return self._copy_sent(
+                frame, f"the gateway took {FRAME_BYTES} bytes; the modem gives no acknowledgement"
+            )
 
     def check(self) -> LinkCheck:
         """Connect if not connected; pass when the gateway is there, nothing of an earlier

@@ -1,21 +1,28 @@
-"""A dive read back from the mission log: ``GET /api/series`` (the plots after a reload) and
-``GET /api/dives/{dive}/timeline`` (the replay's time slider)."""
+"""A dive read back from the mission log: ``GET /api/series`` (the plots after a reload),
+``GET /api/dives/{dive}/timeline`` (the replay's time slider) and
+``GET /api/dives/{dive}/export.mcap`` (the dive for the robotics tools)."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from collections.abc import Iterator
+from typing import Annotated, Any, Final
 
 from fastapi import APIRouter, HTTPException, Query
+from fastapi.responses import StreamingResponse
 
 from backend.api.deps import SQLITE_INT_MAX, ConsoleDep, IdPath
 from backend.api.schemas import errors
 from backend.api.schemas.dives import DiveSeries, DiveTimeline
+from backend.bag.export import stream_mcap
 from backend.chart.reach import track_lat_lon
 from backend.console import Console
 from backend.mission_log.series import DEFAULT_MAX_POINTS, dive_series
 from backend.mission_log.timeline import dive_timeline
 
 router = APIRouter(prefix="/api", tags=["commands"])
+
+#: MCAP has no registered media type: served as bytes (the file name says what it is).
+MCAP_MEDIA_TYPE: Final = "application/octet-stream"
 
 #: A dive's number as a query parameter: 1 and up (absent: the current dive).
 DiveQ = Annotated[
@@ -30,9 +37,10 @@ LimitQ = Annotated[int, Query(ge=2, le=86_400, description="most samples returne
 def series(
     console: ConsoleDep, dive: DiveQ = None, limit: LimitQ = DEFAULT_MAX_POINTS
 ) -> DiveSeries:
-    """The dive's telemetry (depth, commanded depth, battery, speed) a sample a second of the
-    vehicle's clock, from its start: the plots load it, then append the live telemetry.
-    Without ``dive``, the current dive (``dive: null`` and no samples before one starts)."""
+    """The dive's status series (depth, commanded depth, battery, speed, heading, mode,
+    navigation validity) a sample a second of the vehicle's clock, from its start: the plots
+    load it, then append the live telemetry. Without ``dive``, the current dive (``dive: null``
+    and no samples before one starts)."""
     log = console.log
     assert log is not None
     chosen = console.dive if dive is None else dive
@@ -43,7 +51,7 @@ def series(
     row = log.dive(chosen)
     if row is None:
         raise HTTPException(404, f"no dive {chosen}")
-    doc = dive_series(log.track_rows(chosen), limit)
+    doc = dive_series(log.track_rows(chosen, positioned=False), limit)
     return DiveSeries.model_validate({"dive": chosen, "started_at": row["started_at"], **doc})
 
 
@@ -70,3 +78,38 @@ def timeline(dive: IdPath, console: ConsoleDep) -> DiveTimeline:
     (position, mode, the command it was running), its commands and the link's events (copies
     sent, acknowledgements, rejections, timeouts, logged events), in time order."""
     return DiveTimeline.model_validate(timeline_of(console, dive))
+
+
+@router.get(
+    "/dives/{dive}/export.mcap",
+    response_class=StreamingResponse,
+    responses={
+        **errors((404, 422)),
+        200: {
+            "description": "the dive as an MCAP file (ROS 2 profile, CDR, chunked and indexed), "
+            "streamed as it is written (Content-Disposition: attachment)",
+            "content": {MCAP_MEDIA_TYPE: {"schema": {"type": "string"}}},
+        },
+    },
+)
+def export_mcap(dive: IdPath, console: ConsoleDep) -> StreamingResponse:
+    """The dive as MCAP for Foxglove, ``ros2 bag`` and PlotJuggler (docs/foxglove.md): the
+    vehicle's odometry (ENU) and fix, its status, the frames sent, the command records, the
+    acknowledgements (typed, and as the contract's JSON) and the log's events, on the console's
+    clock. Streamed in constant memory from one snapshot of the log; a failure midway cuts the
+    response short (an incomplete download, never a file that looks whole)."""
+    log = console.log
+    assert log is not None
+    if not log.dive_exists(dive):
+        raise HTTPException(404, f"no dive {dive}")
+    datum = console.datum
+
+    def body() -> Iterator[bytes]:
+        with log.exporting() as db:
+            yield from stream_mcap(db, dive, datum)
+
+    return StreamingResponse(
+        body(),
+        media_type=MCAP_MEDIA_TYPE,
+        headers={"Content-Disposition": f'attachment; filename="nemesys-dive-{dive}.mcap"'},
+    )

@@ -67,4 +67,9 @@ def predict_track(
             status_code=503,
             headers={"Retry-After": str(math.ceil(err.retry_after_s))},
         )
-    return DocResponse(Prediction.model_validate(doc))
+    prediction = Prediction.model_validate(doc)
+    if console.foxglove is not None:  # the live Foxglove view shows the latest asked for
+        console.foxglove.prediction(
+            prediction.x_m, prediction.y_m, prediction.z_m, f"prediction: {body.pattern}"
+        )
+    return DocResponse(prediction)

@@ -104,6 +104,10 @@ def preview(
         console.drawer.later(
             view, path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
         )
+    if show and view is not None and console.foxglove is not None:  # the latest a page drew
+        console.foxglove.preview(
+            path.xs, path.ys, path.zs, path.body_start, f"preview: {cmd.pattern.name}"
+        )
     return enc, doc
 
 

@@ -19,6 +19,9 @@ Every difference between the two is here and nowhere else:
 * the column types (REAL vs DOUBLE PRECISION, INTEGER PRIMARY KEY vs IDENTITY) are the
   migrations' (:mod:`backend.mission_log.migrating`, SQLAlchemy types).
 
+A long read's own read-only connection (an export's: one snapshot, rows streamed) differs too:
+:mod:`backend.mission_log.read_only`.
+
 What is the same on both needs nothing here: ISO 8601 text times, JSON as text, ``||``,
 ``COALESCE``, ``LIMIT ?``, and upserts (``INSERT ... ON CONFLICT (key) DO UPDATE SET col =
 excluded.col`` is the same statement on SQLite >= 3.24 and PostgreSQL).

@@ -11,10 +11,10 @@ is SQLite's ``REAL`` and PostgreSQL's ``DOUBLE PRECISION`` (PostgreSQL's ``REAL`
 bytes), :func:`id_column` is SQLite's ``INTEGER PRIMARY KEY`` and an identity on PostgreSQL.
 
 Logs made before the migrations (``create_or_migrate`` added the columns an older log lacked,
-and wrote no version) have any prefix of the first five revisions' tables and columns: those
-revisions create a table only if it is missing and add only the columns missing
-(:func:`add_missing`), so such a log is brought up and stamped like a new one. Revisions
-after them are plain steps.
+and wrote no version) have any prefix of the first six revisions' tables and columns: those
+revisions create a table only if it is missing, add only the columns missing
+(:func:`add_missing`) and make nullable only what is not yet, so such a log is brought up and
+stamped like a new one. Revisions after them are plain steps.
 
 Adding a migration: a new file ``vNNNN_what.py`` beside the others with ``revision =
 "NNNN"``, ``down_revision`` the newest one's, and ``upgrade()`` using ``alembic.op`` (e.g.
@@ -86,8 +86,9 @@ def current(db: LogDatabase) -> str | None:
         return MigrationContext.configure(conn).get_current_revision()
 
 
-def migrate(db: LogDatabase) -> None:
+def migrate(db: LogDatabase, to: str = "head") -> None:
     """Bring the log to :func:`head` (nothing to do: one read). One write transaction.
+    ``to``: another revision to stop at (the tests make an older log with it).
 
     Raises:
         LogSchemaNewer: a newer console migrated the log past what this one knows.
@@ -95,14 +96,14 @@ def migrate(db: LogDatabase) -> None:
         log is as it was.
     """
     at = current(db)
-    if at == head():
+    if at == (head() if to == "head" else to):
         return
     script = scripts()
     if at is not None and at not in {rev.revision for rev in script.walk_revisions()}:
         raise LogSchemaNewer(at, head())
 
     def upgrade(rev: Any, _context: Any) -> Any:
-        return script._upgrade_revs("head", rev)
+        return script._upgrade_revs(to, rev)
 
     # SQLAlchemy's transaction is a marker (autocommit: it sends nothing), so Alembic sees one
     # under way and leaves it alone; the real one is ours, on the driver connection
@@ -110,7 +111,7 @@ def migrate(db: LogDatabase) -> None:
         db.execute(db.begin_sql)
         try:
             db.lock_for_migration()
-            with EnvironmentContext(Config(), script, fn=upgrade, destination_rev="head") as env:
+            with EnvironmentContext(Config(), script, fn=upgrade, destination_rev=to) as env:
                 env.configure(connection=conn, transactional_ddl=False)
                 env.run_migrations()
             db.execute("COMMIT")

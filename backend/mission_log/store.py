@@ -19,11 +19,11 @@ from __future__ import annotations
 import contextlib
 import json
 import threading
-from collections.abc import Iterator, Mapping
-from datetime import UTC, datetime
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
+from backend.clock import CONSOLE_UTC
 from backend.commands.lifecycle import ON_ITS_WAY, Event, State, advance
 from backend.mission_log.command_rows import (
     FINAL_STATES,
@@ -37,6 +37,7 @@ from backend.mission_log.command_rows import (
 from backend.mission_log.database import LogDatabase, open_database
 from backend.mission_log.errors import LogWriteError
 from backend.mission_log.migrating import migrate
+from backend.mission_log.read_only import ReadOnlyDatabase, read_only_of
 from backend.mission_log.track import (
     TRACK_BATCH,
     TRACK_BUFFER_MAX,
@@ -46,6 +47,7 @@ from backend.mission_log.track import (
     TrackPoint,
     track_point,
 )
+from vehicle_contract.messages import number
 
 __all__ = [
     "BUSY_TIMEOUT_S",
@@ -62,30 +64,44 @@ __all__ = [
 
 #: How long a write waits for a lock another connection holds before it fails (s).
 BUSY_TIMEOUT_S = 1.0
+#: The page cache of an export's own connection (KiB; SQLite's default is 2000): it reads
+#: once, in order (``backend.mission_log.dive_reader``).
+EXPORT_CACHE_KIB = 256
 
 
 def now_iso() -> str:
-    """Current UTC time, ISO 8601 with milliseconds."""
-    return datetime.now(UTC).isoformat(timespec="milliseconds")
+    """Current UTC time on the console's monotonic-anchored clock (:data:`CONSOLE_UTC`: the
+    log's stamps never go back within a run), ISO 8601 with milliseconds."""
+    return CONSOLE_UTC.now().isoformat(timespec="milliseconds")
 
 
 class MissionLog:
     """The mission log, in a SQLite file or on PostgreSQL. Thread-safe.
 
     ``where``: the SQLite file (or ``":memory:"``), or a ``postgresql://`` URL. Opening
-    brings the tables to the newest migration.
+    brings the tables to the newest migration. ``now``: the stamps the log writes (ISO UTC);
+    a benchmark that fills a long dive in seconds passes its own clock, the console keeps
+    :func:`now_iso`.
 
     Raises:
         sqlite3.Error, psycopg.Error: the database cannot be opened or migrated (what is
             wrong, in words: :func:`backend.mission_log.opening.open_checked`).
     """
 
-    def __init__(self, where: Path | str, *, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
+    def __init__(
+        self,
+        where: Path | str,
+        *,
+        busy_timeout_s: float = BUSY_TIMEOUT_S,
+        now: Callable[[], str] = now_iso,
+    ) -> None:
         self._db: LogDatabase = open_database(where, busy_timeout_s)
         #: The SQLite file (None on PostgreSQL).
         self.path = Path(where) if self._db.kind == "sqlite" else None
         #: The log as messages name it: the file, or the URL with its password masked.
         self.where = self._db.where
+        self._now = now
+        self._busy_timeout_s = busy_timeout_s
         self._lock = threading.RLock()  # re-entered by the writes of a transaction()
         self._track = TrackBuffer(self._lock, self._write_track)
         self._closed = False
@@ -104,6 +120,7 @@ class MissionLog:
         """How long a write waits for another connection's lock before it fails."""
         with self._lock:
             self._db.set_busy_timeout(busy_timeout_s)
+            self._busy_timeout_s = busy_timeout_s
 
     def check(self) -> list[str]:
         """The database's integrity check (SQLite's ``quick_check``): the problems it finds
@@ -131,7 +148,7 @@ class MissionLog:
                     "' (the log was last written at ' || ? || "
                     "'); whether the vehicle received it is not known' "
                     f"WHERE state IN ({marks})",
-                    (target, now_iso(), last or "an unknown time", *on_its_way),
+                    (target, self._now(), last or "an unknown time", *on_its_way),
                 )
         return cur.rowcount
 
@@ -163,13 +180,35 @@ class MissionLog:
             self._track.close()
             self._db.close()
 
+    @contextlib.contextmanager
+    def exporting(self) -> Iterator[ReadOnlyDatabase]:
+        """A connection for a long read (an export) that does not hold the log's lock: a
+        read-only one of its own (SQLite's file, or the same PostgreSQL database), the track
+        buffer written first. An in-memory log (tests) has no second connection: its own,
+        under the lock throughout.
+
+        Raises:
+            sqlite3.Error, psycopg.Error: the second connection cannot be opened.
+        """
+        self.flush_track()
+        db = read_only_of(self._db, cache_kib=EXPORT_CACHE_KIB, busy_timeout_s=self._busy_timeout_s)
+        try:
+            with self._lock if db.shared else contextlib.nullcontext():
+                yield db
+        finally:
+            db.close()
+
+    def flush_track(self) -> None:
+        """Write the buffered track points now (a failure is logged, as the buffer's)."""
+        self._track.flush()
+
     # --- dives ---------------------------------------------------------------------------
 
     def new_dive(self, target: str) -> int:
         """Open a new dive (``backend.dives`` decides when); returns its number."""
         with self._lock, self._db.writing():
             return self._db.insert(
-                "INSERT INTO dives (started_at, target) VALUES (?, ?)", (now_iso(), target)
+                "INSERT INTO dives (started_at, target) VALUES (?, ?)", (self._now(), target)
             )
 
     def dives(self) -> list[dict[str, Any]]:
@@ -196,7 +235,7 @@ class MissionLog:
 
     def insert_command(self, dive: int, record: Mapping[str, Any]) -> dict[str, Any]:
         """Write a new command (state ``queued``) and return it with its id. Committed."""
-        stamp = now_iso()
+        stamp = self._now()
         row = {
             "dive": dive,
             "created_at": stamp,
@@ -219,7 +258,7 @@ class MissionLog:
     def update_command(self, command_id: int, **fields: Any) -> dict[str, Any]:
         """Set some fields of a command (one atomic statement); returns the new record."""
         fields = checked_update(fields)
-        fields["updated_at"] = now_iso()
+        fields["updated_at"] = self._now()
         sets = ", ".join(f"{k} = ?" for k in fields)
         values = [column_value(k, v) for k, v in fields.items()]
         with self._lock, self._db.writing():
@@ -288,7 +327,7 @@ class MissionLog:
         self, dive: int, kind: str, detail: str, data: Mapping[str, Any] | None = None
     ) -> dict[str, Any]:
         """Write one event (committed); returns it with its id."""
-        row = (dive, now_iso(), kind, detail, None if data is None else json.dumps(data))
+        row = (dive, self._now(), kind, detail, None if data is None else json.dumps(data))
         with self._lock, self._db.writing():
             new_id = self._db.insert(
                 "INSERT INTO events (dive, at, kind, detail, data) VALUES (?, ?, ?, ?, ?)", row
@@ -323,7 +362,14 @@ class MissionLog:
         :data:`TRACK_BATCH` points, on a read and on close. A write that fails is logged and
         tried again by the timer (never raised)."""
         position = (t_s, x_m, y_m, z_m, heading_deg)
-        self._track.add(track_point(dive, position, status or {}, now_iso()))
+        self._track.add(track_point(dive, position, status or {}, self._now()))
+
+    def add_status_point(self, dive: int, t_s: float, status: Mapping[str, Any]) -> None:
+        """Buffer one track point without a position: what ``status`` says at ``t_s`` when the
+        vehicle sends no pose (its navigation not valid; the heading is the status's, null in
+        the contract's nav fault). Written as :meth:`add_track`'s points are."""
+        position = (t_s, None, None, None, number(status.get("heading_deg")))
+        self._track.add(track_point(dive, position, status, self._now()))
 
     def _write_track(self, points: list[TrackPoint]) -> None:
         """Commit ``points`` together (the track buffer's write)."""
@@ -333,20 +379,25 @@ class MissionLog:
             self._db.executemany(f"INSERT INTO track ({cols}) VALUES ({marks})", points)
 
     def track(self, dive: int) -> list[dict[str, float]]:
-        """The dive's positions in time order: ``t_s, x_m, y_m, z_m, heading_deg``."""
+        """The dive's positions in time order: ``t_s, x_m, y_m, z_m, heading_deg`` (its points
+        without a position left out)."""
         keys = ("t_s", "x_m", "y_m", "z_m", "heading_deg")
         return [{k: row[k] for k in keys} for row in self.track_rows(dive)]
 
-    def track_rows(self, dive: int) -> list[dict[str, Any]]:
-        """The dive's track points in time order with every column (``active`` parsed; an
-        older log's points have null status columns)."""
+    def track_rows(self, dive: int, *, positioned: bool = True) -> list[dict[str, Any]]:
+        """The dive's track points in time order with every column (``active`` parsed,
+        ``nav_valid`` a boolean; an older log's points have null status columns). Only the
+        points with a position unless ``positioned`` is false (the status series)."""
+        where = " AND x_m IS NOT NULL" if positioned else ""
         with self._lock:
             self._track.flush()
             rows = self._db.execute(
-                f"SELECT {', '.join(TRACK_COLUMNS[1:])} FROM track WHERE dive = ? ORDER BY t_s",
+                f"SELECT {', '.join(TRACK_COLUMNS[1:])} FROM track WHERE dive = ?{where} "
+                "ORDER BY t_s",
                 (dive,),
             ).fetchall()
         out = [dict(r) for r in rows]
         for row in out:
             row["active"] = None if row["active"] is None else json.loads(row["active"])
+            row["nav_valid"] = None if row["nav_valid"] is None else bool(row["nav_valid"])
         return out

@@ -3,11 +3,12 @@ running and the link's events, at any second of the dive.
 
 The dive's clock counts seconds from its start: the vehicle's clock less its first track
 point's (:mod:`backend.dives`). The log writes the link's events on the station's clock (a
-copy sent, an acknowledgement received, a timeout); each track point also keeps the station's
-clock when it arrived (``at``), which maps one clock onto the other (linear between points,
-the track's mean rate beyond them). A dive without track points (a one-way modem, no
-telemetry) counts station seconds from the dive's start. An acknowledgement that carries the
-vehicle's own ``t_s`` is placed by it.
+copy sent, an acknowledgement received, a timeout: the console's monotonic-anchored UTC,
+:data:`backend.clock.CONSOLE_UTC`, one clock for every stamp of the log); each track point
+also keeps the station's clock when it arrived (``at``), which maps one clock onto the other
+(linear between points, the track's mean rate beyond them). A dive without track points (a
+one-way modem, no telemetry) counts station seconds from the dive's start. An acknowledgement
+that carries the vehicle's own ``t_s`` is placed by it.
 """
 
 from __future__ import annotations

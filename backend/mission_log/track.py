@@ -17,6 +17,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from backend.mission_log.errors import LogWriteError
+from backend.mission_log.series import commanded_depth_m
 from vehicle_contract.messages import number
 
 #: The mission log's messages, under the store's name.
@@ -29,22 +30,27 @@ TRACK_BATCH = 10
 #: Points kept while the log cannot be written (the oldest are dropped beyond).
 TRACK_BUFFER_MAX = 3600
 
-#: A row of the log's ``track`` table: dive, t_s, x_m, y_m, z_m, heading_deg, then what the
-#: status said (depth_m, speed_mps, battery_pct, mode; None: not said), the active command
-#: the vehicle reported (JSON text, None: none or not said) and the station's clock (ISO).
+#: A row of the log's ``track`` table: dive, t_s, x_m, y_m, z_m, heading_deg (None: a point
+#: made from a status without navigation), then what the status said (depth_m, speed_mps,
+#: battery_pct, mode; None: not said), the active command the vehicle reported (JSON text,
+#: None: none or not said), the station's clock (ISO, :data:`backend.clock.CONSOLE_UTC`), the
+#: depth that command asks for, whether the navigation was valid (1/0) and its age (s).
 TrackPoint = tuple[
     int,
     float,
-    float,
-    float,
-    float,
-    float,
+    float | None,
+    float | None,
+    float | None,
+    float | None,
     float | None,
     float | None,
     float | None,
     str | None,
     str | None,
     str,
+    float | None,
+    int | None,
+    float | None,
 ]
 #: The track table's columns, in :data:`TrackPoint`'s order.
 TRACK_COLUMNS = (
@@ -60,21 +66,25 @@ TRACK_COLUMNS = (
     "mode",
     "active",
     "at",
+    "commanded_depth_m",
+    "nav_valid",
+    "nav_age_s",
 )
+#: A point's position: t_s, then x_m, y_m, z_m, heading_deg (None: no navigation).
+Position = tuple[float, float | None, float | None, float | None, float | None]
 
 
-def track_point(
-    dive: int,
-    position: tuple[float, float, float, float, float],
-    status: Mapping[str, Any],
-    at: str,
-) -> TrackPoint:
+def track_point(dive: int, position: Position, status: Mapping[str, Any], at: str) -> TrackPoint:
     """The row of one point: ``position`` (t_s, x_m, y_m, z_m, heading_deg), what ``status``
     says (a number it does not hold, or a mode that is not text: null; an ``active`` that is
-    not a command object: null) and the station's clock ``at``."""
+    not a command object: null; a ``nav_valid`` that is not a boolean: null, a 1.x vehicle's
+    "taken as true"; a boolean is kept as 0/1, on PostgreSQL too: one schema for both), the
+    commanded depth of its ``active`` command
+    (:func:`~backend.mission_log.series.commanded_depth_m`) and the station's clock ``at``."""
     t_s, x_m, y_m, z_m, heading_deg = position
     mode = status.get("mode")
     active = status.get("active")
+    nav_valid = status.get("nav_valid")
     return (
         dive,
         t_s,
@@ -88,6 +98,9 @@ def track_point(
         mode if isinstance(mode, str) else None,
         json.dumps(active) if isinstance(active, dict) else None,
         at,
+        commanded_depth_m(active if isinstance(active, dict) else None),
+        int(nav_valid) if isinstance(nav_valid, bool) else None,
+        number(status.get("nav_age_s")),
     )
 
 

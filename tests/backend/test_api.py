@@ -65,6 +65,7 @@ API_PATHS = {
     "/api/dives/{dive}",
     "/api/dives/{dive}/replay",
     "/api/dives/{dive}/timeline",
+    "/api/dives/{dive}/export.mcap",
     "/api/series",
     "/api/vehicle",
     "/api/link",

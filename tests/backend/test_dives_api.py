@@ -3,11 +3,16 @@
 
 from __future__ import annotations
 
+from collections import Counter
+from io import BytesIO
 from typing import Any
 
 import pytest
 from fastapi.testclient import TestClient
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
 
+from backend.chart.geo import Datum
 from planner import VehicleState
 from station.link import Capability
 from tests.agent_link import HOLDING, AgentLink
@@ -26,6 +31,10 @@ def test_before_any_dive_the_series_is_empty(make_light_client: MakeLightClient)
         "commanded_depth_m": [],
         "battery_pct": [],
         "speed_mps": [],
+        "heading_deg": [],
+        "mode": [],
+        "nav_valid": [],
+        "nav_age_s": [],
     }
 
 
@@ -51,6 +60,24 @@ def test_the_series_is_the_dives_track_from_its_start(client: TestClient) -> Non
     # the same dive named, thinned evenly to three samples (first and last kept)
     thin = client.get("/api/series", params={"dive": 1, "limit": 3}).json()
     assert thin["t_s"] == [0.0, 4.0, 9.0] and thin["interval_s"] == 4.5
+
+
+def test_the_series_shows_a_navigation_fault_as_points_without_position(
+    client: TestClient,
+) -> None:
+    console = console_of(client)
+    assert console.log is not None and console.dive == 1
+    ok = {"nav_valid": True, "nav_age_s": 0.1, "heading_deg": 10.0, "mode": "running"}
+    console.log.add_track(1, HOLDING.t_s + 1, 1.0, 0.0, 2.0, 10.0, ok)
+    fault = {"nav_valid": False, "nav_age_s": 7.0, "heading_deg": None, "mode": "nav_fault"}
+    console.log.add_status_point(1, HOLDING.t_s + 2, fault)
+    s = client.get("/api/series").json()
+    assert s["t_s"][-2:] == [1.0, 2.0]
+    assert s["nav_valid"][-2:] == [True, False] and s["nav_age_s"][-2:] == [0.1, 7.0]
+    assert s["mode"][-2:] == ["running", "nav_fault"] and s["heading_deg"][-2:] == [10.0, None]
+    # the replay's timeline keeps the positions only
+    timeline = client.get("/api/dives/1/timeline").json()
+    assert [p["t_s"] for p in timeline["samples"]][-1] == 1.0
 
 
 @pytest.mark.parametrize(
@@ -143,3 +170,35 @@ def test_the_slider_gives_the_vehicle_at_a_time_and_refuses_one_outside_the_dive
     assert client.put("/api/replay/at", json={"dive": 4, "t_s": 0}).status_code == 404
     for bad in ({"dive": 1, "t_s": "1"}, {"dive": 1}, {"dive": True, "t_s": 0}):
         assert client.put("/api/replay/at", json=bad).status_code == 422, bad
+
+
+def test_a_dive_downloads_as_mcap_with_the_logs_rows(client: TestClient) -> None:
+    console = console_of(client)
+    assert console.log is not None and console.dive == 1
+    for k in range(1, 6):
+        console.log.add_track(1, HOLDING.t_s + k, float(k), 0.0, 2.0, 0.0, {"nav_valid": True})
+    console.log.add_status_point(1, HOLDING.t_s + 6, {"nav_valid": False})
+    send(client, "circle", None)
+    rows = console.log.track_rows(1, positioned=False)
+    commands = console.log.commands(dive=1, limit=100)
+    r = client.get("/api/dives/1/export.mcap")
+    assert r.status_code == 200, r.text
+    assert r.headers["content-disposition"] == 'attachment; filename="nemesys-dive-1.mcap"'
+    reader = make_reader(BytesIO(r.content), decoder_factories=[DecoderFactory()])
+    got = Counter(ch.topic for _, ch, _, _ in reader.iter_decoded_messages())
+    assert got["/nemesys/typed/status"] == len(rows)
+    assert got["/nemesys/odom"] == len(rows) - 1 and "/nemesys/fix" not in got  # no datum
+    assert got["/nemesys/console/commands"] == len(commands) >= 1
+    # the console's datum places the fixes when the log has none
+    console.datum = Datum(43.0, 5.0)
+    r = client.get("/api/dives/1/export.mcap")
+    reader = make_reader(BytesIO(r.content), decoder_factories=[DecoderFactory()])
+    got = Counter(ch.topic for _, ch, _, _ in reader.iter_decoded_messages())
+    assert got["/nemesys/fix"] == len(rows) - 1
+
+
+def test_exporting_a_dive_that_does_not_exist_is_404_naming_it(client: TestClient) -> None:
+    r = client.get("/api/dives/99/export.mcap")
+    assert r.status_code == 404 and r.json() == {"detail": "no dive 99"}
+    r = client.get("/api/dives/0/export.mcap")
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["path", "dive"]

@@ -328,6 +328,7 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     c.call("GET", "/api/dives/1")
     c.call("GET", "/api/series")
     c.call("GET", "/api/dives/1/timeline")
+    c.call("GET", "/api/dives/1/export.mcap")
     view = {"X-Nemesys-View": "tour-view-0001"}  # a page's own 3D view (none in this app)
     c.call("POST", "/api/dives/1/replay", headers={**AUTH, **view})
     c.call("PUT", "/api/replay/at", json={"dive": 1, "t_s": 0.0}, headers=view)

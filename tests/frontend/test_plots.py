@@ -22,7 +22,7 @@ LOGGED = 30
 
 def shown(page: Page) -> dict[str, Any]:
     """What the plots hold: ``t0`` (the vehicle's clock at the dive's start) and the samples
-    (``t``: s since the dive's start, ``depth``, ``battery``)."""
+    (``t``: s since the dive's start, ``depth``, ``battery``, ``navLost``)."""
     got: dict[str, Any] = page.evaluate("() => document.getElementById('plots').samplesShown()")
     return got
 
@@ -48,11 +48,15 @@ def assert_from_the_dive_start(page: Page, series: dict[str, Any]) -> None:
     got = shown(page)
     assert got["t0"] == series["start_t_s"]
     assert got["t"][0] == 0.0
-    by_t = dict(zip(got["t"], zip(got["depth"], got["battery"], strict=True), strict=True))
-    for t, depth, battery in zip(
-        series["t_s"], series["depth_m"], series["battery_pct"], strict=True
+    by_t = dict(
+        zip(got["t"], zip(got["depth"], got["battery"], got["navLost"], strict=True), strict=True)
+    )
+    for t, depth, battery, nav_valid in zip(
+        series["t_s"], series["depth_m"], series["battery_pct"], series["nav_valid"], strict=True
     ):
-        assert by_t.get(t) == (depth, battery), f"the log's sample at {t} s"
+        # the nav-lost bar: at the surface line (0) where the navigation was not valid
+        lost = 0 if nav_valid is False else None
+        assert by_t.get(t) == (depth, battery, lost), f"the log's sample at {t} s"
     # the time axis starts at the dive's start; every value axis labels more than one tick
     assert ticks(page, "plot-depth", "x")[0] == 0
     for plot in ("plot-depth", "plot-battery", "plot-speed"):

@@ -75,6 +75,36 @@ await sleep(3000);
 results.posesIn3s = poses;
 pose.unsubscribe();
 
+// Foxglove's (Lichtblick's) rosbridge player: full definitions, then cbor-raw (roslibjs
+// decodes the binary CBOR frame; msg.bytes is the CDR), and cbor for comparison. One client
+// has one stream per topic, so each comes after the last one's unsubscribe.
+const raw = await withTimeout(
+  new Promise((resolve, reject) => ros.getTopicsAndRawTypes(resolve, reject)),
+  3000,
+  "getTopicsAndRawTypes",
+);
+results.rawTypes = raw;
+const firstOf = (compression) =>
+  withTimeout(
+    new Promise((resolve) => {
+      const topic = new Topic({ ros, name: "/nemesys/pose", compression });
+      topic.subscribe((message) => {
+        topic.unsubscribe();
+        resolve(message);
+      });
+    }),
+    3000,
+    `${compression} pose`,
+  );
+const rawPose = await firstOf("cbor-raw");
+results.cborRaw = {
+  bytesIsUint8Array: rawPose.bytes instanceof Uint8Array,
+  hex: Buffer.from(rawPose.bytes).toString("hex"),
+  secs: rawPose.secs,
+  nsecs: rawPose.nsecs,
+};
+results.cborPose = await firstOf("cbor");
+
 // Fragments: a service response split with fragment_size 40 is reassembled by roslibjs
 // (its id is the call's); a topic message fragmented by the server has id 0, which roslibjs
 // ignores. fragment_size stays set for this connection, so this part comes last.

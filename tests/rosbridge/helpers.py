@@ -1,11 +1,12 @@
 """Helpers shared by the bridge tests: the worked example frame, an event loop on its own
-thread (servers that blocking clients talk to), a roslibpy client and its inbox, and a free
-loopback port."""
+thread (servers that blocking clients talk to), a roslibpy client and its inbox, a full
+message definition split into its types, and a free loopback port."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import re
 import socket
 import threading
 from collections.abc import Coroutine, Iterator
@@ -70,6 +71,18 @@ class Inbox:
     def items(self) -> list[dict[str, Any]]:
         with self._cond:
             return list(self._items)
+
+
+#: What rosapi puts between two message definitions in ``typedefs_full_text``.
+_BETWEEN = re.compile(r"\n={80}\nMSG: (\S+)\n")
+
+
+def definition_sections(text: str) -> list[tuple[str | None, str]]:
+    """``(type or None for the root, its text)`` of a full message definition, split on its
+    separators by rosapi's own layout (a blank line, 80 ``=``, ``MSG: pkg/Type``)."""
+    parts = _BETWEEN.split(text)
+    names: list[str | None] = [None, *parts[1::2]]
+    return list(zip(names, parts[0::2], strict=True))
 
 
 def free_port() -> int:

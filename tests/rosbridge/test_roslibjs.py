@@ -2,7 +2,9 @@
 
 ``tests/node/interop.mjs`` connects, lists the topics and a topic's type through rosapi,
 subscribes to the pose throttled to 1 s, publishes a frame, reads the echo and the vehicle's
-acknowledgement, and checks fragments; it prints its results as JSON. `make test` installs
+acknowledgement, makes Foxglove's rosbridge player's calls (``getTopicsAndRawTypes``, a
+``cbor-raw`` and a ``cbor`` subscription, decoded by roslibjs), and checks fragments; it
+prints its results as JSON. `make test` installs
 the npm packages (``npm ci --prefix tests/node``); without them this test fails and says so.
 """
 
@@ -16,10 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from mcap_ros2._dynamic import generate_dynamic
 
 from codec import encode_frame
 from tests.sim.sim_process import nemesys_sim
-from vehicle_contract.contract import TOPICS
+from vehicle_contract.contract import POSE_FRAME_ID, TOPICS
 
 #: roslibjs through node: the interop tier (make test), not make test-fast.
 pytestmark = pytest.mark.interop
@@ -78,6 +81,25 @@ def test_frame_echo_is_base64_and_the_frame_is_acknowledged(results: dict[str, A
     assert base64.b64decode(results["echoData"], validate=True) == FRAME.to_bytes()
     assert results["ackOutcome"] == "accepted"
     assert results["ackFrameHex"] == FRAME.hex
+
+
+def test_foxglove_players_calls_through_roslibjs(results: dict[str, Any]) -> None:
+    """roslibjs (what Lichtblick's player is built on) reads the definitions and the binary
+    CBOR frames; the CDR decodes with the definition the simulator gave (mcap_ros2)."""
+    raw = results["rawTypes"]
+    assert raw["topics"] == results["topics"] and raw["types"] == results["types"]
+    assert "rcl_interfaces/msg/Log" in raw["types"]
+    definition = raw["typedefs_full_text"][raw["topics"].index("/nemesys/pose")]
+    kind = "geometry_msgs/msg/PoseStamped"
+    cbor_raw = results["cborRaw"]
+    assert cbor_raw["bytesIsUint8Array"] is True
+    assert isinstance(cbor_raw["secs"], int) and isinstance(cbor_raw["nsecs"], int)
+    pose = generate_dynamic(kind, definition)[kind](bytes.fromhex(cbor_raw["hex"]))
+    assert pose.header.frame_id == POSE_FRAME_ID
+    assert abs(pose.header.stamp.sec - cbor_raw["secs"]) <= 1  # both the vehicle's clock
+    cbor_pose = results["cborPose"]
+    assert cbor_pose["header"]["frame_id"] == POSE_FRAME_ID
+    assert set(cbor_pose["pose"]["position"]) == {"x", "y", "z"}
 
 
 def test_fragments(results: dict[str, Any]) -> None:

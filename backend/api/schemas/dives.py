@@ -25,10 +25,20 @@ class DiveSeries(BaseModel):
     t_s: list[float] = Field(description="seconds since the dive's start")
     depth_m: list[float | None] = Field(description="depth (m, down): the sensor, else the pose")
     commanded_depth_m: list[float | None] = Field(
-        description="the depth of the command the vehicle reported running (m)"
+        description="the depth of the command the vehicle reported running (m): its depth, or "
+        "a helix's end depth"
     )
     battery_pct: list[float | None]
     speed_mps: list[float | None] = Field(description="speed through the water (m/s)")
+    heading_deg: list[float | None] = Field(description="degrees clockwise from north")
+    mode: list[str | None] = Field(description="what guidance was doing, as the vehicle said")
+    nav_valid: list[bool | None] = Field(
+        description="the vehicle's navigation was valid; false: no position then (nav fault); "
+        "null: not said (a 1.x vehicle, taken as true)"
+    )
+    nav_age_s: list[float | None] = Field(
+        description="age of the vehicle's latest navigation solution (s)"
+    )
 
 
 class TimelineSample(BaseModel):

@@ -7,13 +7,14 @@ y east,
 z down (depth), with an FRD body, and the heading measured from north, clockwise.
 
 Each direction is ONE function: :func:`enu_to_ned` and :func:`ned_to_enu` (position and
-heading together, the axes only). The odometry's ENU frame has its origin wherever the
-navigation started, and maybe a magnetic north: :func:`odometry_to_map` is the one edge from
-it to the contract's ``map_ned`` about the datum (the axes, then the declination, then the
-origin's offset, :class:`MapOrigin`), :func:`map_to_odometry` its inverse (setpoints in the
-odometry's frame). The quaternion helpers read the yaw out of an orientation and build the
-yaw-only quaternion the contract publishes; :func:`quaternion_enu_to_ned` converts a full
-attitude (used to cross-check the yaw path in the tests). Angles in degrees.
+heading together, the axes only), kept in :mod:`vehicle_contract.frames` (the console's dive
+exports convert with the same function) and re-exported here. The odometry's ENU frame has its
+origin wherever the navigation started, and maybe a magnetic north: :func:`odometry_to_map` is
+the one edge from it to the contract's ``map_ned`` about the datum (the axes, then the
+declination, then the origin's offset, :class:`MapOrigin`), :func:`map_to_odometry` its inverse
+(setpoints in the odometry's frame). The quaternion helpers read the yaw out of an orientation
+and build the yaw-only quaternion the contract publishes; :func:`quaternion_enu_to_ned` converts
+a full attitude (used to cross-check the yaw path in the tests). Angles in degrees.
 """
 
 from __future__ import annotations
@@ -21,7 +22,23 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+from vehicle_contract.frames import EnuPose, NedPose, enu_to_ned, ned_to_enu
 from vehicle_contract.messages import quaternion_from_roll_yaw
+
+__all__ = [
+    "EnuPose",
+    "MapOrigin",
+    "NedPose",
+    "Quaternion",
+    "enu_to_ned",
+    "map_to_odometry",
+    "ned_to_enu",
+    "odometry_to_map",
+    "quaternion_enu_to_ned",
+    "quaternion_product",
+    "yaw_deg_of",
+    "yaw_quaternion",
+]
 
 #: A quaternion ``(x, y, z, w)``.
 Quaternion = tuple[float, float, float, float]
@@ -31,49 +48,6 @@ _HALF_SQRT2 = math.sqrt(0.5)
 _Q_ENU_TO_NED: Quaternion = (_HALF_SQRT2, _HALF_SQRT2, 0.0, 0.0)
 #: FRD -> FLU body axes: 180 degrees about x (negates y and z).
 _Q_FRD_TO_FLU: Quaternion = (1.0, 0.0, 0.0, 0.0)
-
-
-class EnuPose(NamedTuple):
-    """A position and yaw in a ROS world frame (REP-103)."""
-
-    x_east_m: float
-    y_north_m: float
-    z_up_m: float
-    #: From east, counter-clockwise (about +z up), in [-180, 180).
-    yaw_deg: float
-
-
-class NedPose(NamedTuple):
-    """A position and heading in the contract's ``map_ned`` frame."""
-
-    x_north_m: float
-    y_east_m: float
-    #: Depth when the ENU origin is at the water surface.
-    z_down_m: float
-    #: From north, clockwise, in [0, 360).
-    heading_deg: float
-
-
-def enu_to_ned(pose: EnuPose) -> NedPose:
-    """ENU (x east, y north, z up, yaw from east CCW) -> NED (x north, y east, z down, heading
-    from north CW): ``heading_deg = (90 - yaw_deg) mod 360``."""
-    return NedPose(
-        pose.y_north_m + 0.0,
-        pose.x_east_m + 0.0,
-        -pose.z_up_m + 0.0,  # + 0.0: no -0.0 in the JSON
-        (90.0 - pose.yaw_deg) % 360.0,
-    )
-
-
-def ned_to_enu(pose: NedPose) -> EnuPose:
-    """The inverse of :func:`enu_to_ned`: ``yaw_deg = 90 - heading_deg``, wrapped to
-    [-180, 180)."""
-    return EnuPose(
-        pose.y_east_m + 0.0,
-        pose.x_north_m + 0.0,
-        -pose.z_down_m + 0.0,
-        (90.0 - pose.heading_deg + 180.0) % 360.0 - 180.0,
-    )
 
 
 class MapOrigin(NamedTuple):

@@ -1,8 +1,9 @@
 """The mission log's one migration history (Alembic, backend/mission_log/migrations/): older
-SQLite logs (the first release's format, and the previous version's, migrated by columns added
+SQLite logs (the first release's format, and the previous versions', migrated by columns added
 at open and with no migration version) are brought to the newest migration at open with their
-rows; on both back-ends (``log_backend``) a migration failing half-way leaves no table behind,
-and a log a newer console migrated is refused unchanged."""
+rows; on both back-ends (``log_backend``) a new log's track has the columns the previous
+version declared, a migration failing half-way leaves no table behind, and a log a newer
+console migrated is refused unchanged."""
 
 from __future__ import annotations
 
@@ -57,8 +58,8 @@ CREATE TABLE track (
 CREATE INDEX track_dive ON track(dive, t_s);
 """
 NEW_COLUMNS = ("copies", "copies_sent", "p_delivered", "ber", "two_way", "superseded_by")
-#: The previous version's tables, written out (``git show 1a02d10:backend/mission_log/schema.py``,
-#: its ``SCHEMA``): every column, made and completed by ``create_or_migrate`` at open, and no
+#: Issue 20's tables, written out (``git show 1a02d10:backend/mission_log/schema.py``, its
+#: ``SCHEMA``): every column, made and completed by ``create_or_migrate`` at open, and no
 #: migration version.
 PREVIOUS_SCHEMA = """
 CREATE TABLE IF NOT EXISTS dives (
@@ -123,6 +124,41 @@ CREATE TABLE IF NOT EXISTS events (
 );
 CREATE INDEX IF NOT EXISTS events_dive ON events(dive);
 """
+#: Issue 22's track (``git show fefcc4b:backend/mission_log/schema.py``, its ``TRACK_TABLE``):
+#: the position nullable (a status point while the navigation is not valid), three columns more.
+ISSUE_22_TRACK = """
+CREATE TABLE IF NOT EXISTS track (
+    dive INTEGER NOT NULL REFERENCES dives(id),
+    t_s REAL NOT NULL,
+    x_m REAL,
+    y_m REAL,
+    z_m REAL,
+    heading_deg REAL,
+    depth_m REAL,
+    speed_mps REAL,
+    battery_pct REAL,
+    mode TEXT,
+    active TEXT,
+    at TEXT,
+    commanded_depth_m REAL,
+    nav_valid INTEGER,
+    nav_age_s REAL
+);
+"""
+_ISSUE_20_TRACK = PREVIOUS_SCHEMA[
+    PREVIOUS_SCHEMA.index("CREATE TABLE IF NOT EXISTS track") : PREVIOUS_SCHEMA.index(
+        "CREATE INDEX IF NOT EXISTS track_dive"
+    )
+]
+#: Issue 20's dives and track alone (an older log, for the exports' tests).
+ISSUE_20_TRACK = (
+    PREVIOUS_SCHEMA[: PREVIOUS_SCHEMA.index("CREATE TABLE IF NOT EXISTS commands")]
+    + _ISSUE_20_TRACK
+    + "CREATE INDEX IF NOT EXISTS track_dive ON track(dive, t_s);\n"
+)
+#: The version before the migrations (issue 22's ``create_or_migrate``): issue 20's tables with
+#: issue 22's track.
+ISSUE_22_SCHEMA = PREVIOUS_SCHEMA.replace(_ISSUE_20_TRACK, ISSUE_22_TRACK.lstrip())
 
 
 def test_an_old_format_log_is_migrated_and_readable(tmp_path: Path) -> None:
@@ -204,11 +240,17 @@ def table_sql(db: Path) -> dict[str, str]:
     return dict(rows)
 
 
-def test_a_log_of_the_previous_version_is_stamped_and_keeps_its_rows(tmp_path: Path) -> None:
+@pytest.mark.parametrize("version", ["issue 20", "issue 22"])
+def test_a_log_of_a_previous_version_is_stamped_and_keeps_its_rows(
+    tmp_path: Path, version: str
+) -> None:
+    """Logs ``create_or_migrate`` made (no migration version): issue 22's is only stamped, not
+    a table changed; issue 20's track is made again by 0006 (its position nullable, three
+    columns more) with its rows, every other table unchanged."""
     db = tmp_path / "previous.sqlite3"
     fields = command_fields()
     with sqlite3.connect(db) as raw:
-        raw.executescript(PREVIOUS_SCHEMA)
+        raw.executescript(PREVIOUS_SCHEMA if version == "issue 20" else ISSUE_22_SCHEMA)
         raw.execute("INSERT INTO dives VALUES (1, '2026-01-01T10:00:00.000+00:00', 'sim')")
         raw.execute(
             "INSERT INTO commands (dive, created_at, updated_at, operator, target, kind, pattern, "
@@ -218,31 +260,85 @@ def test_a_log_of_the_previous_version_is_stamped_and_keeps_its_rows(tmp_path: P
             (fields["pattern"], fields["pattern_id"], fields["bits"], fields["hex"]),
         )
         raw.execute("INSERT INTO events (dive, at, kind, detail) VALUES (1, 't2', 'datum', 'x')")
-        raw.execute(
-            "INSERT INTO track (dive, t_s, x_m, y_m, z_m, heading_deg, depth_m, mode, at) "
-            "VALUES (1, 1.5, 1, 2, 3, 90, 2.5, 'auto', 't1')"
-        )
+        for t_s in (1.5, 0.5):
+            raw.execute(
+                "INSERT INTO track (dive, t_s, x_m, y_m, z_m, heading_deg, depth_m, mode, at) "
+                "VALUES (1, ?, 1, 2, 3, 90, 2.5, 'auto', 't1')",
+                (t_s,),
+            )
     raw.close()
     before = table_sql(db)
 
     MissionLog(db).close()
 
     after = table_sql(db)
-    assert {name: after[name] for name in before} == before  # not a column added or changed
+    rebuilt = {"track", "track_dive"} if version == "issue 20" else set()
+    kept = {name: sql for name, sql in before.items() if name not in rebuilt}
+    assert {name: after[name] for name in kept} == kept  # not a column added or changed
     assert set(after) - set(before) == {"alembic_version"}
+    assert track_columns(db) == declared(ISSUE_22_TRACK)
     log = MissionLog(db)
     try:
         (rec,) = log.commands()
         assert rec["state"] == "acknowledged" and rec["copies"] == 3 and rec["origin"] == "api"
         assert rec["hex"] == fields["hex"]
         assert [e["kind"] for e in log.events()] == ["datum"]
-        (point,) = log.track_rows(1)
+        point = log.track_rows(1)[1]
         assert point["depth_m"] == 2.5 and point["mode"] == "auto" and point["t_s"] == 1.5
+        assert point["nav_valid"] is None and point["commanded_depth_m"] is None
     finally:
         log.close()
     with sqlite3.connect(db) as raw:
         assert raw.execute("SELECT version_num FROM alembic_version").fetchall() == [(head(),)]
+        assert raw.execute("SELECT t_s FROM track ORDER BY rowid").fetchall() == [(1.5,), (0.5,)]
     raw.close()
+
+
+#: A declared column type as each back-end names it.
+TYPE_NAMES = {
+    "sqlite": {"REAL": "REAL", "INTEGER": "INTEGER", "TEXT": "TEXT"},
+    "postgresql": {"REAL": "double precision", "INTEGER": "integer", "TEXT": "text"},
+}
+
+
+def declared(create_table: str, kind: str = "sqlite") -> dict[str, tuple[str, bool]]:
+    """``name: (type, nullable)`` of each column ``create_table`` declares."""
+    out = {}
+    for line in create_table.strip().splitlines()[1:-1]:
+        name, decl, *rest = line.strip().rstrip(",").split()
+        out[name] = (TYPE_NAMES[kind][decl], "NOT NULL" not in " ".join(rest))
+    return out
+
+
+def track_columns(db: Path) -> dict[str, tuple[str, bool]]:
+    with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as raw:
+        rows = raw.execute("PRAGMA table_info(track)").fetchall()
+    raw.close()
+    return {str(r[1]): (str(r[2]), not r[3]) for r in rows}
+
+
+def test_a_new_logs_track_has_the_columns_the_previous_version_declared(
+    log_backend: LogBackend,
+) -> None:
+    """0001..0006 make the track issue 22's ``TRACK_TABLE`` declared (the same columns,
+    types and nullability, in its order), with its index."""
+    log_backend.open().close()
+    if log_backend.postgres:
+        rows = log_backend.query(
+            "SELECT column_name, data_type, is_nullable FROM information_schema.columns "
+            "WHERE table_schema = current_schema() AND table_name = 'track' "
+            "ORDER BY ordinal_position"
+        )
+        columns = {str(name): (str(kind), nullable == "YES") for name, kind, nullable in rows}
+        index = log_backend.query("SELECT indexdef FROM pg_indexes WHERE indexname = 'track_dive'")
+        assert [r[0] for r in index] == [
+            "CREATE INDEX track_dive ON public.track USING btree (dive, t_s)"
+        ]
+    else:
+        columns = track_columns(log_backend.path)
+        assert log_backend.query("PRAGMA index_info(track_dive)") == [(0, 0, "dive"), (1, 1, "t_s")]
+    expected = declared(ISSUE_22_TRACK, log_backend.kind)
+    assert list(columns.items()) == list(expected.items())
 
 
 def test_a_migration_that_fails_leaves_the_log_as_it_was(
