@@ -79,15 +79,21 @@ def settings_for(db_path: Path, **overrides: Any) -> Settings:
     return Settings(**values)
 
 
+#: This process's PostgreSQL server, once started: one for every conftest that takes
+#: ``pg_server`` from here (tests/cli's too), stopped by the first of them at the session's end.
+_PG_SERVER: list[PgServer] = []
+
+
 @pytest.fixture(scope="session")
 def pg_server() -> Iterator[PgServer]:
     """This worker's PostgreSQL server (a temporary directory, a free loopback port)."""
-    try:
-        server = PgServer()
-    except PostgresMissing as err:
-        pytest.fail(str(err), pytrace=False)
-    yield server
-    server.stop()
+    if not _PG_SERVER:
+        try:
+            _PG_SERVER.append(PgServer())
+        except PostgresMissing as err:
+            pytest.fail(str(err), pytrace=False)
+    yield _PG_SERVER[0]
+    _PG_SERVER[0].stop()  # again by another conftest's: does nothing
 
 
 @pytest.fixture(params=KINDS)
