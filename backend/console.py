@@ -122,8 +122,9 @@ class Console:
         if gps is not None:
             self.gps = GpsReader(gps, on_fix=self._on_fix)
             await self.gps.start()
-        # checked (quick_check, not locked, writable): a LogError names the file and the fix
-        self.log = open_checked(s.db_path)
+        # checked (quick_check, not locked, writable, reachable): a LogError names the file or
+        # the server and the fix
+        self.log = open_checked(s.mission_log)
         # ``nemesys console`` already did this before printing its URL; an app built otherwise
         # (tests, an embedding program) gets it here, before any command is taken
         recovered = self.log.recover_interrupted()

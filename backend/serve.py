@@ -84,13 +84,13 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
         return _usage(f"setting {where}: {error_message(first)}")
-    from backend.mission_log.opening import ELSEWHERE, LogError, open_checked
+    from backend.mission_log.opening import LogError, elsewhere, open_checked
     from backend.mission_log.store import LogWriteError
 
     # before the URL: the log is usable, what an earlier run left on its way is interrupted,
     # not stuck, and the token kept beside the log is read (or made, or replaced)
     try:
-        log = open_checked(settings.db_path)
+        log = open_checked(settings.mission_log)
     except LogError as err:
         return _usage(str(err))
     try:
@@ -98,8 +98,8 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         settings, kept = _with_token(settings, rotate=args.new_token)
     except LogWriteError as err:
         return _usage(
-            f"mission log {settings.db_path} cannot be written ({err.reason}): free some space "
-            f"or make it writable, {ELSEWHERE}"
+            f"mission log {settings.mission_log_name} cannot be written ({err.reason}): free "
+            f"some space or make it writable, {elsewhere(settings.mission_log)}"
         )
     except TokenFileError as err:
         return _usage(str(err))
@@ -116,7 +116,7 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
 
     def announce() -> None:
         out.write(
-            f"NemeSys console, {mode}; mission log {settings.db_path}\n"
+            f"NemeSys console, {mode}; mission log {settings.mission_log_name}\n"
             f"Open this URL (it holds the operator token; without it the page is read-only):\n"
             f"    {url}\n{kept}"
         )

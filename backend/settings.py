@@ -15,6 +15,7 @@ import os
 import secrets
 from pathlib import Path
 from typing import Annotated, Any
+from urllib.parse import urlsplit
 
 from pydantic import BeforeValidator, Field, WithJsonSchema, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -106,6 +107,10 @@ class Settings(BaseSettings):
     sim_seed: int = 0
     sim_time_scale: Annotated[float, Field(ge=0, le=50)] = 1.0
     db_path: Path = Path(".nemesys/missions.sqlite3")
+    #: The mission log on a PostgreSQL server instead of the SQLite file ``db_path``:
+    #: postgresql://user:password@host:5432/database (several consoles may share one).
+    #: "": the SQLite file. (The token file stays beside ``db_path`` either way.)
+    database_url: str = ""
     #: The operator token. Not set: the one kept beside the mission log, made on first use
     #: (backend/token_file.py: ``create_app`` and ``nemesys console`` put it here).
     token: Annotated[str, Field(min_length=16)] = Field(
@@ -205,6 +210,19 @@ class Settings(BaseSettings):
             )
         return self
 
+    @field_validator("database_url")
+    @classmethod
+    def _database_url(cls, value: str) -> str:
+        value = value.strip()
+        scheme = urlsplit(value).scheme
+        if value and scheme not in ("postgresql", "postgres"):
+            # the scheme only: the rest may hold a password
+            raise ValueError(
+                "database_url must be postgresql://user:password@host:port/database, or empty "
+                f"for the SQLite file db_path; got a URL of scheme {scheme or 'none'!r}"
+            )
+        return value
+
     @field_validator("vehicle_namespace")
     @classmethod
     def _vehicle_namespace(cls, value: str) -> str:
@@ -219,6 +237,18 @@ class Settings(BaseSettings):
 
         parse_gps(value)  # raises ValueError naming the allowed forms; nothing is opened
         return value
+
+    @property
+    def mission_log(self) -> Path | str:
+        """Where the mission log is: the PostgreSQL URL if set, else the SQLite file."""
+        return self.database_url or self.db_path
+
+    @property
+    def mission_log_name(self) -> str:
+        """The mission log as messages name it (a URL's password masked)."""
+        from backend.mission_log.database import masked
+
+        return masked(self.database_url) if self.database_url else str(self.db_path)
 
     @property
     def training(self) -> bool:

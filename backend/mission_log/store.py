@@ -1,11 +1,16 @@
 """The mission log: every command, written before it is transmitted, and the dives' tracks.
 
-SQLite in WAL mode with ``synchronous=FULL``: a committed row survives a killed process or a
-power cut. One connection guarded by a lock (the console is one process; writes are small).
-Rows are only ever inserted or updated field by field, so no record is half written. A write
-that fails (disk full, the file made read-only) raises :class:`LogWriteError`. Track points are
-written within :data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that;
-the buffer is :mod:`backend.mission_log.track`).
+A SQLite file (the embedded default: WAL mode, ``synchronous=FULL``) or a PostgreSQL database
+(``postgresql://...``, several consoles sharing it; ``synchronous_commit=on``): either way a
+committed row survives a killed process or a power cut. The two differ only in
+:mod:`backend.mission_log.database`; the tables are the migrations'
+(:mod:`backend.mission_log.migrating`), brought up to date when the log is opened. One
+connection guarded by a lock (the console is one process; writes are small). Rows are only
+ever inserted or updated field by field, each statement or :meth:`MissionLog.transaction`
+committed whole, so no record is half written. A write that fails (disk full, the file made
+read-only, the server gone) raises :class:`LogWriteError`. Track points are written within
+:data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that; the buffer is
+:mod:`backend.mission_log.track`).
 Opening a log with its checks: :func:`backend.mission_log.opening.open_checked`.
 """
 
@@ -13,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import sqlite3
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
@@ -30,8 +34,10 @@ from backend.mission_log.command_rows import (
     command_row,
     commands_query,
 )
+from backend.mission_log.database import LogDatabase, open_database
 from backend.mission_log.errors import LogWriteError
-from backend.mission_log.schema import create_or_migrate
+from backend.mission_log.migrating import migrate
+from backend.mission_log.read_only import ReadOnlyDatabase, read_only_of
 from backend.mission_log.track import (
     TRACK_BATCH,
     TRACK_BUFFER_MAX,
@@ -63,17 +69,6 @@ BUSY_TIMEOUT_S = 1.0
 EXPORT_CACHE_KIB = 256
 
 
-@contextlib.contextmanager
-def _writing() -> Iterator[None]:
-    """SQLite's errors of a write as :class:`LogWriteError` (our own misuse stays as it is)."""
-    try:
-        yield
-    except (sqlite3.IntegrityError, sqlite3.ProgrammingError):
-        raise
-    except sqlite3.DatabaseError as err:
-        raise LogWriteError(str(err)) from err
-
-
 def now_iso() -> str:
     """Current UTC time on the console's monotonic-anchored clock (:data:`CONSOLE_UTC`: the
     log's stamps never go back within a run), ISO 8601 with milliseconds."""
@@ -81,60 +76,58 @@ def now_iso() -> str:
 
 
 class MissionLog:
-    """The SQLite mission log. Thread-safe."""
+    """The mission log, in a SQLite file or on PostgreSQL. Thread-safe.
+
+    ``where``: the SQLite file (or ``":memory:"``), or a ``postgresql://`` URL. Opening
+    brings the tables to the newest migration. ``now``: the stamps the log writes (ISO UTC);
+    a benchmark that fills a long dive in seconds passes its own clock, the console keeps
+    :func:`now_iso`.
+
+    Raises:
+        sqlite3.Error, psycopg.Error: the database cannot be opened or migrated (what is
+            wrong, in words: :func:`backend.mission_log.opening.open_checked`).
+    """
 
     def __init__(
         self,
-        path: Path | str,
+        where: Path | str,
         *,
         busy_timeout_s: float = BUSY_TIMEOUT_S,
         now: Callable[[], str] = now_iso,
     ) -> None:
-        """``now``: the stamps the log writes (ISO UTC); a benchmark that fills a long dive in
-        seconds passes its own clock, the console keeps :func:`now_iso`."""
-        self.path = Path(path)
+        self._db: LogDatabase = open_database(where, busy_timeout_s)
+        #: The SQLite file (None on PostgreSQL).
+        self.path = Path(where) if self._db.kind == "sqlite" else None
+        #: The log as messages name it: the file, or the URL with its password masked.
+        self.where = self._db.where
         self._now = now
         self._busy_timeout_s = busy_timeout_s
-        if str(path) != ":memory:":
-            self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.RLock()  # re-entered by the writes of a transaction()
         self._track = TrackBuffer(self._lock, self._write_track)
         self._closed = False
-        self._db = sqlite3.connect(
-            str(path), timeout=busy_timeout_s, check_same_thread=False, isolation_level=None
-        )
-        self._db.row_factory = sqlite3.Row
         try:
-            self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute("PRAGMA synchronous=FULL")
-            self._db.execute("PRAGMA foreign_keys=ON")
-            create_or_migrate(self._db)
+            migrate(self._db)
         except BaseException:
             self._db.close()
             raise
 
+    @property
+    def kind(self) -> str:
+        """``"sqlite"`` or ``"postgresql"``."""
+        return self._db.kind
+
     def set_busy_timeout(self, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
         """How long a write waits for another connection's lock before it fails."""
         with self._lock:
-            self._db.execute(f"PRAGMA busy_timeout = {round(busy_timeout_s * 1000)}")
+            self._db.set_busy_timeout(busy_timeout_s)
+            self._busy_timeout_s = busy_timeout_s
 
     def check(self) -> list[str]:
-        """SQLite's ``quick_check``: the problems it finds (none: the file is intact). Then a
-        write that changes nothing, rolled back: raises ``sqlite3.OperationalError`` if the log
-        is locked by another process or read-only."""
+        """The database's integrity check (SQLite's ``quick_check``): the problems it finds
+        (none: intact). Then a write that changes nothing, rolled back: raises the driver's
+        error if the log is locked by another process or read-only."""
         with self._lock:
-            rows = self._db.execute("PRAGMA quick_check").fetchall()
-            self._db.execute("BEGIN IMMEDIATE")  # busy: locked
-            try:
-                self._db.execute("DELETE FROM dives WHERE 0")  # read-only, as opened
-            finally:
-                self._db.execute("ROLLBACK")
-        return [
-            line
-            for row in rows
-            for line in str(row[0]).splitlines()
-            if line != "ok" and not line.startswith("***")
-        ]
+            return self._db.check()
 
     def recover_interrupted(self) -> int:
         """Every command an earlier run left on its way (``queued`` or ``transmitted``) becomes
@@ -145,10 +138,10 @@ class MissionLog:
         target = advance(State.QUEUED, Event.INTERRUPTED)
         with self._lock:
             last = self._db.execute(
-                "SELECT MAX(t) FROM (SELECT MAX(updated_at) AS t FROM commands "
-                "UNION ALL SELECT MAX(started_at) FROM dives)"
-            ).fetchone()[0]
-            with self.transaction(), _writing():
+                "SELECT MAX(t) AS last FROM (SELECT MAX(updated_at) AS t FROM commands "
+                "UNION ALL SELECT MAX(started_at) FROM dives) AS times"
+            ).fetchone()["last"]
+            with self.transaction(), self._db.writing():
                 cur = self._db.execute(
                     "UPDATE commands SET state = ?, updated_at = ?, "
                     "reason = 'the console stopped while this command was ' || state || "
@@ -167,15 +160,15 @@ class MissionLog:
             if self._db.in_transaction:  # nested: part of the outer one
                 yield
                 return
-            with _writing():
-                self._db.execute("BEGIN IMMEDIATE")
+            with self._db.writing():
+                self._db.execute(self._db.begin_sql)
             try:
                 yield
-                with _writing():
+                with self._db.writing():
                     self._db.execute("COMMIT")
             except BaseException:
                 if self._db.in_transaction:  # SQLite may have rolled back already
-                    with contextlib.suppress(sqlite3.Error):
+                    with contextlib.suppress(*self._db.write_errors):
                         self._db.execute("ROLLBACK")
                 raise
 
@@ -188,20 +181,20 @@ class MissionLog:
             self._db.close()
 
     @contextlib.contextmanager
-    def exporting(self) -> Iterator[sqlite3.Connection]:
+    def exporting(self) -> Iterator[ReadOnlyDatabase]:
         """A connection for a long read (an export) that does not hold the log's lock: a
-        read-only one of its own, the track buffer written first. An in-memory log (tests)
-        has no second connection: its own, under the lock throughout."""
+        read-only one of its own (SQLite's file, or the same PostgreSQL database), the track
+        buffer written first. An in-memory log (tests) has no second connection: its own,
+        under the lock throughout.
+
+        Raises:
+            sqlite3.Error, psycopg.Error: the second connection cannot be opened.
+        """
         self.flush_track()
-        if str(self.path) == ":memory:":
-            with self._lock:
-                yield self._db
-            return
-        uri = f"{self.path.resolve().as_uri()}?mode=ro"
-        db = sqlite3.connect(uri, uri=True, timeout=self._busy_timeout_s, check_same_thread=False)
-        db.execute(f"PRAGMA cache_size = -{EXPORT_CACHE_KIB}")  # one pass in order
+        db = read_only_of(self._db, cache_kib=EXPORT_CACHE_KIB, busy_timeout_s=self._busy_timeout_s)
         try:
-            yield db
+            with self._lock if db.shared else contextlib.nullcontext():
+                yield db
         finally:
             db.close()
 
@@ -213,11 +206,10 @@ class MissionLog:
 
     def new_dive(self, target: str) -> int:
         """Open a new dive (``backend.dives`` decides when); returns its number."""
-        with self._lock, _writing():
-            cur = self._db.execute(
+        with self._lock, self._db.writing():
+            return self._db.insert(
                 "INSERT INTO dives (started_at, target) VALUES (?, ?)", (self._now(), target)
             )
-            return int(cur.lastrowid or 0)
 
     def dives(self) -> list[dict[str, Any]]:
         with self._lock:
@@ -254,12 +246,12 @@ class MissionLog:
         }
         cols = list(row)
         values = [column_value(c, row[c]) for c in cols]
-        with self._lock, _writing():
-            cur = self._db.execute(
+        with self._lock, self._db.writing():
+            new_id = self._db.insert(
                 f"INSERT INTO commands ({', '.join(cols)}) VALUES ({', '.join('?' * len(cols))})",
                 values,
             )
-            got = self._command(int(cur.lastrowid or 0))
+            got = self._command(new_id)
         assert got is not None
         return got
 
@@ -269,7 +261,7 @@ class MissionLog:
         fields["updated_at"] = self._now()
         sets = ", ".join(f"{k} = ?" for k in fields)
         values = [column_value(k, v) for k, v in fields.items()]
-        with self._lock, _writing():
+        with self._lock, self._db.writing():
             self._db.execute(f"UPDATE commands SET {sets} WHERE id = ?", [*values, command_id])
             got = self._command(command_id)
         if got is None:
@@ -336,12 +328,12 @@ class MissionLog:
     ) -> dict[str, Any]:
         """Write one event (committed); returns it with its id."""
         row = (dive, self._now(), kind, detail, None if data is None else json.dumps(data))
-        with self._lock, _writing():
-            cur = self._db.execute(
+        with self._lock, self._db.writing():
+            new_id = self._db.insert(
                 "INSERT INTO events (dive, at, kind, detail, data) VALUES (?, ?, ?, ?, ?)", row
             )
         keys = ("dive", "at", "kind", "detail")
-        return {"id": int(cur.lastrowid or 0), **dict(zip(keys, row, strict=False)), "data": data}
+        return {"id": new_id, **dict(zip(keys, row, strict=False)), "data": data}
 
     def events(self, dive: int | None = None) -> list[dict[str, Any]]:
         """Events, oldest first (of one dive)."""
@@ -383,7 +375,7 @@ class MissionLog:
         """Commit ``points`` together (the track buffer's write)."""
         cols = ", ".join(TRACK_COLUMNS)
         marks = ", ".join("?" * len(TRACK_COLUMNS))
-        with self.transaction(), _writing():
+        with self.transaction(), self._db.writing():
             self._db.executemany(f"INSERT INTO track ({cols}) VALUES ({marks})", points)
 
     def track(self, dive: int) -> list[dict[str, float]]:

@@ -34,7 +34,7 @@ TRACK_BUFFER_MAX = 3600
 #: made from a status without navigation), then what the status said (depth_m, speed_mps,
 #: battery_pct, mode; None: not said), the active command the vehicle reported (JSON text,
 #: None: none or not said), the station's clock (ISO, :data:`backend.clock.CONSOLE_UTC`), the
-#: depth that command asks for, whether the navigation was valid and its age (s).
+#: depth that command asks for, whether the navigation was valid (1/0) and its age (s).
 TrackPoint = tuple[
     int,
     float,
@@ -49,7 +49,7 @@ TrackPoint = tuple[
     str | None,
     str,
     float | None,
-    bool | None,
+    int | None,
     float | None,
 ]
 #: The track table's columns, in :data:`TrackPoint`'s order.
@@ -78,7 +78,8 @@ def track_point(dive: int, position: Position, status: Mapping[str, Any], at: st
     """The row of one point: ``position`` (t_s, x_m, y_m, z_m, heading_deg), what ``status``
     says (a number it does not hold, or a mode that is not text: null; an ``active`` that is
     not a command object: null; a ``nav_valid`` that is not a boolean: null, a 1.x vehicle's
-    "taken as true"), the commanded depth of its ``active`` command
+    "taken as true"; a boolean is kept as 0/1, on PostgreSQL too: one schema for both), the
+    commanded depth of its ``active`` command
     (:func:`~backend.mission_log.series.commanded_depth_m`) and the station's clock ``at``."""
     t_s, x_m, y_m, z_m, heading_deg = position
     mode = status.get("mode")
@@ -98,7 +99,7 @@ def track_point(dive: int, position: Position, status: Mapping[str, Any], at: st
         json.dumps(active) if isinstance(active, dict) else None,
         at,
         commanded_depth_m(active if isinstance(active, dict) else None),
-        nav_valid if isinstance(nav_valid, bool) else None,
+        int(nav_valid) if isinstance(nav_valid, bool) else None,
         number(status.get("nav_age_s")),
     )
 
