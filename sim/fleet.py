@@ -133,8 +133,8 @@ class FleetSimulation:
             if distance_m > range_m:
                 raise ValueError(
                     f"vehicle {v.name} would start {distance_m:.0f} m from the transmitter, "
-                    f"beyond the link's range of {range_m:g} m: use a smaller spacing_m "
-                    f"(now {self.spacing_m:g} m) or fewer vehicles"
+                    f"beyond the link's range of {range_m:g} m: start them closer (spacing "
+                    f"{self.spacing_m:g} m now) or use fewer vehicles"
                 )
             sims[v.namespace] = Simulation(own)
         self._sims = sims
