@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any, Final
@@ -32,11 +32,16 @@ from rosbridge.types import resolve_type
 from vehicle_contract import contract
 from vehicle_contract.contract import VEHICLE_NODE
 from vehicle_contract.messages import stamp
+from vehicle_contract.names import check_namespace, topic_name
 
 #: Node names (a real vehicle: rosbridge_websocket_launch.xml plus the vehicle's node).
 BRIDGE_NODE: Final = "/rosbridge_websocket"
 ROSAPI_NODE: Final = "/rosapi"
 ROSAPI_PARAMS_NODE: Final = "/rosapi_params"
+#: A fleet's graph (:class:`Graph` with namespaces): the surface station's ME transmitter, the
+#: subscriber of the contract's frame topic, through which a frame goes once onto the link
+#: that every vehicle hears.
+TRANSMITTER_NODE: Final = "/nemesys_me_transmitter"
 #: The ROS 2 distribution the simulated graph is modelled on (rosapi/get_ros_version).
 ROS_DISTRO: Final = "jazzy"
 #: Seconds a publisher the bridge made for its clients outlives their last unadvertise.
@@ -102,6 +107,12 @@ ROSAPI_SERVICES: Final = tuple(
 _TOKEN: Final = re.compile(r"[A-Za-z0-9_]*")
 
 
+def vehicle_node_of(namespace: str) -> str:
+    """The vehicle's node under ``namespace``: ``/auv1/nemesys_vehicle`` (the reference node's
+    name, :data:`vehicle_contract.contract.VEHICLE_NODE`, launched in that namespace)."""
+    return check_namespace(namespace) + VEHICLE_NODE
+
+
 def expand_name(name: str, kind: str = "topic", node: str = BRIDGE_NODE) -> str:
     """A topic or service name made absolute as ``rclpy`` does it for the bridge's node (in
     the root namespace): ``x`` -> ``/x``, ``~/x`` -> ``/rosbridge_websocket/x``.
@@ -153,11 +164,32 @@ class Graph:
         clock: Callable[[], float] = time.monotonic,
         ros_time: Callable[[], float] = lambda: 0.0,
         vehicle_node: str = VEHICLE_NODE,
+        namespaces: Sequence[str] = (),
     ) -> None:
         self.clock = clock
         self.ros_time = ros_time
         self.vehicle_node = vehicle_node
-        self._nodes = (BRIDGE_NODE, ROSAPI_NODE, ROSAPI_PARAMS_NODE, vehicle_node)
+        # One vehicle (no namespaces): its node and the contract's names, as ever. A fleet:
+        # each vehicle's node and topics under its namespace, and the station's transmitter
+        # on the contract's frame topic (every frame topic is the one shared link).
+        vehicles = (
+            [(vehicle_node, "")]
+            if not namespaces
+            else [(vehicle_node_of(ns), ns) for ns in namespaces]
+        )
+        fleet_nodes = (TRANSMITTER_NODE,) if namespaces else ()
+        self._nodes = (
+            BRIDGE_NODE,
+            ROSAPI_NODE,
+            ROSAPI_PARAMS_NODE,
+            *(node for node, _ in vehicles),
+            *fleet_nodes,
+        )
+        #: The topics whose messages are frames for the vehicle (or the fleet's shared link).
+        self.frame_topics = frozenset(
+            {topic_name(contract.FRAME_TOPIC, ns) for _, ns in vehicles}
+            | ({contract.FRAME_TOPIC} if namespaces else set())
+        )
         # Static endpoints: topic -> {node: type}.
         self._static_pubs: dict[str, dict[str, str]] = {}
         self._static_subs: dict[str, dict[str, str]] = {}
@@ -168,13 +200,18 @@ class Graph:
             ]
         for topic in (CLIENT_COUNT_TOPIC, CONNECTED_CLIENTS_TOPIC):
             self._static_pubs[topic] = {BRIDGE_NODE: SERVER_TOPIC_TYPES[topic]}
-        for t in contract.TOPICS:
-            if not t.required:  # the simulator publishes no optional topic (no datum)
-                continue
-            side = self._static_subs if t.direction is contract.Direction.TO_VEHICLE else None
-            (side if side is not None else self._static_pubs).setdefault(t.name, {})[
-                vehicle_node
-            ] = t.type
+        for node, ns in vehicles:
+            for t in contract.TOPICS:
+                if not t.required:  # the simulator publishes no optional topic (no datum)
+                    continue
+                side = self._static_subs if t.direction is contract.Direction.TO_VEHICLE else None
+                (side if side is not None else self._static_pubs).setdefault(
+                    topic_name(t.name, ns), {}
+                )[node] = t.type
+        if namespaces:
+            self._static_subs.setdefault(contract.FRAME_TOPIC, {})[TRANSMITTER_NODE] = (
+                contract.TOPIC_TYPES[contract.FRAME_TOPIC]
+            )
         self._bridge_pubs: dict[str, _BridgeTopic] = {}
         self._bridge_subs: dict[str, _BridgeTopic] = {}
         #: Latched (transient local, depth 1) messages: topic -> the last message's JSON.

@@ -66,7 +66,6 @@ from rosbridge.wire import (
     service_response,
     wire_json,
 )
-from vehicle_contract import contract
 
 #: Default limit on one incoming message, UTF-8 bytes (tornado's, as the real server has it).
 DEFAULT_MAX_MESSAGE_BYTES: Final = 10 * 1024 * 1024
@@ -252,7 +251,7 @@ class ClientSession:
         msg = extract(kind, message)
         if request.latch or expanded in self._latched:
             self.graph.latched[expanded] = msg
-        frame = bytes(message["data"]) if expanded == contract.FRAME_TOPIC else None
+        frame = bytes(message["data"]) if expanded in self.graph.frame_topics else None
         return Outcome(request, publication=Publication(expanded, kind, msg, frame))
 
     def _subscribe(self, request: Subscribe) -> Outcome:
