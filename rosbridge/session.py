@@ -56,6 +56,7 @@ from rosbridge.messages import (
     op_of,
     parse_object,
 )
+from rosbridge.rosapi import call_service
 from rosbridge.wire import (
     LOG_ERROR,
     LOG_INFO,
@@ -312,7 +313,7 @@ class ClientSession:
             cid = service[service.find("#") + 1 :]
         name = service.split("#", 1)[0]
         try:
-            values = self.graph.call_service(expand_name(name, "service"), request.args)
+            values = call_service(self.graph, expand_name(name, "service"), request.args)
         except (ServiceError, InvalidName) as exc:
             kind = {
                 InvalidName: "InvalidServiceNameException",
