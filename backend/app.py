@@ -20,7 +20,17 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException
 from starlette.types import Scope
 
-from backend.api import authoring, chart, commands, errors_db, live, predict, scripts, training
+from backend.api import (
+    authoring,
+    chart,
+    commands,
+    errors_db,
+    live,
+    predict,
+    scripts,
+    survey,
+    training,
+)
 from backend.api import dives as dives_api
 from backend.api import view as view_api
 from backend.api.openapi import security_schemes
@@ -99,6 +109,7 @@ def create_app(
         chart.router,
         predict.router,
         dives_api.router,
+        survey.router,
     ):
         app.include_router(router)
     app.include_router(view_api.router)  # a page's own 3D view
