@@ -26,7 +26,7 @@ VEHICLES: list[dict[str, Any]] = [
     {"vehicle": "auv2", "x_m": -30.0, "y_m": 60.0, "heading_deg": 90.0},
     {"vehicle": "auv3", "x_m": 250.0, "y_m": 150.0, "heading_deg": 200.0, "z_m": 2.0},
 ]
-SURVEY = {"area": AREA, "vehicles": VEHICLES}
+SURVEY: dict[str, Any] = {"area": AREA, "vehicles": VEHICLES}
 
 
 def test_a_survey_preview(client: TestClient) -> None:
