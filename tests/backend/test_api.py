@@ -77,6 +77,7 @@ API_PATHS = {
     "/api/training/reset",
     "/api/training/scenario/{name}",
     "/api/scripts/preview",
+    "/api/survey/preview",
     "/api/scripts/export",
     "/api/scripts/run",
     "/api/scripts/run/next",
