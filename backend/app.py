@@ -20,7 +20,17 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException
 from starlette.types import Scope
 
-from backend.api import authoring, chart, commands, errors_db, live, predict, scripts, training
+from backend.api import (
+    authoring,
+    chart,
+    commands,
+    control,
+    errors_db,
+    live,
+    predict,
+    scripts,
+    training,
+)
 from backend.api import dives as dives_api
 from backend.api import view as view_api
 from backend.api.openapi import security_schemes
@@ -93,6 +103,7 @@ def create_app(
     for router in (
         authoring.router,
         commands.router,
+        control.router,
         training.router,
         scripts.router,
         live.router,
