@@ -226,5 +226,5 @@ def link_health_of(
         delivery_target=cm.delivery_target,
         copies=cm.copies_now(),
         surface_copies=cm.surface_copies_now(),
-        mission_log=reach,
+        mission_log=MissionLogReach.model_validate(reach.model_dump()),  # every field said
     )

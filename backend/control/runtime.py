@@ -37,7 +37,8 @@ class ControlRuntime:
         self.desk = desk
         self.sync = sync
         self.gate = ControlGate(desk, sync)
-        self._beat: asyncio.Task[None] | None = None
+        #: The heartbeat's task (shared log; cancelled, the console's control times out).
+        self.heartbeat: asyncio.Task[None] | None = None
 
     @property
     def console(self) -> str:
@@ -49,10 +50,10 @@ class ControlRuntime:
         return self.sync.mission_log() if self.sync is not None else MissionLogReach()
 
     async def stop(self) -> None:
-        if self._beat is not None:
-            self._beat.cancel()
+        if self.heartbeat is not None:
+            self.heartbeat.cancel()
             with contextlib.suppress(asyncio.CancelledError):
-                await self._beat
+                await self.heartbeat
         if self.sync is not None:
             await self.sync.stop()
             if self.sync.mission_log().reachable:
@@ -96,6 +97,6 @@ def start_control(rt: Console) -> ControlRuntime:
         except LogWriteError as err:
             logger.error("could not take control at start: %s", err)
     sync.start()
-    runtime._beat = asyncio.create_task(desk.run(), name="control heartbeat")
+    runtime.heartbeat = asyncio.create_task(desk.run(), name="control heartbeat")
     logger.info("console %r on a shared mission log (control timeout %g s)", name, desk.timeout_s)
     return runtime

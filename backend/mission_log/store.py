@@ -118,6 +118,12 @@ class MissionLog:
         """``"sqlite"`` or ``"postgresql"``."""
         return self._db.kind
 
+    @property
+    def read_errors(self) -> tuple[type[Exception], ...]:
+        """The driver's errors a read raises when the database is out of reach (a PostgreSQL
+        server gone): a reader that can go on with what it read last catches them."""
+        return self._db.write_errors
+
     def set_busy_timeout(self, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
         """How long a write waits for another connection's lock before it fails."""
         with self._lock:
