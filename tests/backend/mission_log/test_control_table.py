@@ -85,7 +85,9 @@ def test_request_grant_refuse_release_takeover(log: MissionLog) -> None:
     assert "'bob'" in log.events()[5]["detail"] and "granted" in log.events()[5]["detail"]
 
 
-def test_the_heartbeat_keeps_control_and_the_timeout_releases_it(log: MissionLog) -> None:
+def test_the_heartbeat_keeps_control_and_the_timeout_releases_it(
+    log: MissionLog, log_backend: LogBackend
+) -> None:
     act(log, "request", SHIP)
     assert control.heartbeat(log, "ship", TIMEOUT_S) == [V]
     assert control.heartbeat(log, "shore", TIMEOUT_S) == []
@@ -93,21 +95,27 @@ def test_the_heartbeat_keeps_control_and_the_timeout_releases_it(log: MissionLog
     assert found[V].owner(now, TIMEOUT_S) == "ship"
     assert found[V].owner(now + TIMEOUT_S + 1, TIMEOUT_S) is None  # on the database's clock
     assert control.expired(log, TIMEOUT_S) == []
-    # a heartbeat already older than the timeout: not refreshed, released by whoever looks
-    assert control.heartbeat(log, "ship", 0.0) == []
+    # the last beat older than the timeout: not refreshed, released by whoever looks
+    aged = "UPDATE control SET heartbeat_s = heartbeat_s - ? RETURNING vehicle"
+    assert log_backend.query(aged, (TIMEOUT_S + 1,)) == [(V,)]
+    assert control.heartbeat(log, "ship", TIMEOUT_S) == []
     dive = log.dives()[0]["id"]
-    assert control.expired(log, 0.0) == [V]
-    change = control.release_expired(log, dive, V, 0.0)
+    assert control.expired(log, TIMEOUT_S) == [V]
+    change = control.release_expired(log, dive, V, TIMEOUT_S)
     assert change is not None and change.outcome == "timed_out"
     assert change.after.console is None and change.after.epoch == 2
-    assert control.release_expired(log, dive, V, 0.0) is None  # done once
-    assert "over the 0 s timeout" in log.events()[-1]["detail"]
+    assert control.release_expired(log, dive, V, TIMEOUT_S) is None  # done once
+    assert "over the 15 s timeout" in log.events()[-1]["detail"]
 
 
-def test_an_action_on_an_expired_control_times_it_out_first(log: MissionLog) -> None:
+def test_an_action_on_an_expired_control_times_it_out_first(
+    log: MissionLog, log_backend: LogBackend
+) -> None:
     act(log, "request", SHIP)
+    aged = "UPDATE control SET heartbeat_s = heartbeat_s - ? RETURNING vehicle"
+    assert log_backend.query(aged, (TIMEOUT_S + 1,)) == [(V,)]
     dive = log.dives()[0]["id"]
-    changes = control.act(log, dive, V, "request", SHORE, 0.0)
+    changes = control.act(log, dive, V, "request", SHORE, TIMEOUT_S)
     assert [c.outcome for c in changes] == ["timed_out", "granted"]
     assert changes[-1].after.console == "shore" and changes[-1].after.epoch == 3
 
