@@ -113,6 +113,17 @@ function renderMissionLog(reach) {
   else resolved("mission-log");
 }
 
+/** Who is in control of a vehicle changed (consoles sharing one mission log: a websocket
+ *  "control" message), said in the message row, with a request waiting for the owner. */
+export function renderControl(c) {
+  if (!c || typeof c !== "object" || c.implicit) return;
+  const who = c.console ? `console ${c.console} (operator ${c.operator})` : "nobody";
+  let text = `control of ${c.vehicle}: ${who}`;
+  const r = c.request;
+  if (r) text += `; console ${r.console} (operator ${r.operator}) asks for it: grant or refuse (POST /api/control)`;
+  notify(text, r ? "warn" : "info", "control");
+}
+
 /** From GET /api/vehicle or a websocket "link" message. */
 export function renderLink(link) {
   if (!link || typeof link !== "object") return;

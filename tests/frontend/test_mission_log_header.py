@@ -1,7 +1,8 @@
 """The header's line while the console's PostgreSQL mission log is out of reach (issue 24,
 frontend/link.js): "mission log unreachable — sends refused (...)" in the message row as soon
-as the server stops, gone when it is back; in Chromium, on a console whose log is this test's
-own PostgreSQL server (stopped and started again on its port)."""
+as the server stops, gone when it is back; a change of who is in control is said there too.
+In Chromium, on a console whose log is this test's own PostgreSQL server (stopped and started
+again on its port)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from collections.abc import Iterator
 import pytest
 from playwright.sync_api import expect
 
-from tests.frontend.conftest import Console, Watched
+from tests.frontend.conftest import TOKEN, Console, Watched
 from tests.frontend.pagekit import open_sized
 from tests.pg_server import PgServer
 
@@ -34,6 +35,11 @@ def test_the_header_says_when_the_mission_log_is_unreachable(
     line = page.get_by_test_id("messages").get_by_text("mission log unreachable — sends refused")
     expect(page.get_by_test_id("link-indicator")).not_to_have_class("level-unknown")
     expect(line).to_have_count(0)
+    auth = {"Authorization": f"Bearer {TOKEN}"}
+    released = console.http.post("/api/control", json={"action": "release"}, headers=auth)
+    assert released.status_code == 200, released.text
+    messages = page.get_by_test_id("messages")
+    expect(messages).to_contain_text("control of nemesys: nobody")
     own_server.halt()
     expect(line).to_have_count(1)
     expect(page.get_by_test_id("link-indicator")).to_have_class("link-indicator level-red")
