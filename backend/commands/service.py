@@ -217,7 +217,9 @@ class CommandService:
             codec.EncodeError / planner.PlanError: a value the frame cannot carry, named.
             LimitRefused / OverrideNeeded: the policy (:func:`decide`).
             RateLimited: too many transmissions in the last minute (never Surface).
-            LogWriteError: the mission log cannot be written; nothing was transmitted.
+            LogWriteError: the mission log cannot be written (or, the gate: its database is
+                out of reach); nothing was transmitted.
+            SendRefused: the gate's (another console in control: 409).
         """
         if request.pattern == "surface":
             return await self._surface(request)
