@@ -24,6 +24,7 @@ from backend.api import (
     authoring,
     chart,
     commands,
+    control,
     errors_db,
     live,
     predict,
@@ -103,6 +104,7 @@ def create_app(
     for router in (
         authoring.router,
         commands.router,
+        control.router,
         training.router,
         scripts.router,
         live.router,

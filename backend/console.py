@@ -33,6 +33,7 @@ from backend.commands.link_ber import BerChoice, CopiesFrom
 from backend.commands.link_settings import ber_now, change_link
 from backend.commands.manager import CommandManager
 from backend.commands.service import Assessment, CommandService
+from backend.control.runtime import ControlRuntime, start_control
 from backend.dives import Dives
 from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMessage, VehicleView
 from backend.mission_log.opening import open_checked
@@ -99,6 +100,8 @@ class Console:
         self.beliefs: Beliefs | None = None  # what each vehicle is believed to do
         #: The one checked path to the vehicle (every frame leaves through it).
         self.service: CommandService | None = None
+        #: Who is in control of each vehicle; live sync with other consoles (backend.control).
+        self.control: ControlRuntime | None = None
         self.viewer: Viewer | None = None  # the 3D view (None: started without one)
         #: The live Foxglove view (None: off; the app's lifespan sets it: backend.foxglove_live).
         self.foxglove: FoxgloveLive | None = None
@@ -158,7 +161,11 @@ class Console:
             target=s.target,
             clock=self.clock,
         )
-        self.service = CommandService(self.commands, self.assess, s.operator)
+        # who is in control, and (a shared PostgreSQL log) what the other consoles write
+        self.control = start_control(self)
+        self.service = CommandService(
+            self.commands, self.assess, s.operator, gate=self.control.gate
+        )
         self.service.watch(self.script_guard)
         self.beliefs = Beliefs(self)
         self.beliefs.start()
@@ -182,6 +189,8 @@ class Console:
                     await task
         if self.beliefs is not None:
             await self.beliefs.stop()
+        if self.control is not None:
+            await self.control.stop()
         if self.commands is not None:
             await self.commands.close()
         if self.link is not None:
@@ -335,6 +344,7 @@ class Console:
             ber_now(self),
             self.ber_choice.copies_from,
             datum_problem=self.datum_watch.problem(self.datum),
+            mission_log=self.control.mission_log() if self.control else None,
         )
 
     def set_link(

@@ -117,6 +117,18 @@ class Settings(BaseSettings):
         default_factory=lambda: secrets.token_urlsafe(24)
     )
     operator: Annotated[str, Field(min_length=1, max_length=40)] = "operator"
+    #: This console's name among the consoles sharing a mission log (control, the records'
+    #: ``console``, live sync: backend/control/). "": the one kept beside ``db_path``
+    #: (``<db_path>.console``), made on first use from the host name.
+    console_name: Annotated[
+        str, Field(max_length=64, pattern=r"^([A-Za-z0-9][A-Za-z0-9._-]*)?$")
+    ] = ""
+    #: Control of a vehicle is released when the console holding it has not refreshed its
+    #: heartbeat for this long, on the database's clock (s; PostgreSQL: several consoles).
+    control_timeout_s: Annotated[float, Field(ge=1, le=3600)] = 15.0
+    #: At start, take control of each vehicle no console controls (PostgreSQL; a SQLite log
+    #: has one console, always in control).
+    control_at_start: bool = True
     bitrate_bps: Annotated[float, Field(gt=0, le=1e7)] = 36000.0
     #: Time allowed for an acknowledgement on top of airtime and the channel's delay (s).
     ack_timeout_s: Annotated[float, Field(gt=0, le=600)] = 5.0

@@ -191,6 +191,7 @@ BENCHMARKS = (
     "durations",
     "dead_reckoning",
     "export",
+    "control_sync",
 )
 
 

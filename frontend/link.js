@@ -6,7 +6,7 @@
 
 import { api } from "./api.js";
 import { berText, age } from "./delivery.js";
-import { $, canWrite, el, num, READ_ONLY_TIP, withUnit } from "./ui.js";
+import { $, canWrite, el, notify, num, READ_ONLY_TIP, resolved, withUnit } from "./ui.js";
 
 const CAPABILITY = {
   acks_and_telemetry: "acks + telemetry",
@@ -100,9 +100,34 @@ export function setSessionLink(link) {
   changed();
 }
 
+let logRefusal = null; // the header's line while the mission log is unreachable
+
+/** The mission log's database out of reach (link.mission_log): a line in the header's
+ *  message row until it is back ("mission log unreachable — sends refused"). */
+function renderMissionLog(reach) {
+  const down = reach && reach.reachable === false;
+  const text = down ? `mission log unreachable — sends refused (${reach.problem || "no answer"})` : null;
+  if (text === logRefusal) return; // unchanged: told once, not every second
+  logRefusal = text;
+  if (text) notify(text, "error", "mission-log");
+  else resolved("mission-log");
+}
+
+/** Who is in control of a vehicle changed (consoles sharing one mission log: a websocket
+ *  "control" message), said in the message row, with a request waiting for the owner. */
+export function renderControl(c) {
+  if (!c || typeof c !== "object" || c.implicit) return;
+  const who = c.console ? `console ${c.console} (operator ${c.operator})` : "nobody";
+  let text = `control of ${c.vehicle}: ${who}`;
+  const r = c.request;
+  if (r) text += `; console ${r.console} (operator ${r.operator}) asks for it: grant or refuse (POST /api/control)`;
+  notify(text, r ? "warn" : "info", "control");
+}
+
 /** From GET /api/vehicle or a websocket "link" message. */
 export function renderLink(link) {
   if (!link || typeof link !== "object") return;
+  renderMissionLog(link.mission_log);
   vehicleLink = link;
   linkAt = performance.now();
   renderIndicator(link);

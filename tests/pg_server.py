@@ -131,14 +131,7 @@ class PgServer:
             *("--auth-local", "trust", "--auth-host", "scram-sha-256", "--no-sync"),
         )
         pwfile.unlink()
-        options = " ".join(
-            (
-                "-c listen_addresses=127.0.0.1",
-                f"-c unix_socket_directories={self.root}",
-                "-c fsync=off -c full_page_writes=off -c synchronous_commit=off",
-                "-c shared_buffers=16MB -c max_connections=60",
-            )
-        )
+        options = self._options()
         for attempt in range(PORT_TRIES):
             self.port = free_port()
             try:
@@ -152,6 +145,16 @@ class PgServer:
             except RuntimeError:
                 if attempt == PORT_TRIES - 1:
                     raise
+
+    def _options(self) -> str:
+        return " ".join(
+            (
+                "-c listen_addresses=127.0.0.1",
+                f"-c unix_socket_directories={self.root}",
+                "-c fsync=off -c full_page_writes=off -c synchronous_commit=off",
+                "-c shared_buffers=16MB -c max_connections=60",
+            )
+        )
 
     def url(self, database: str = "postgres", *, password: str | None = PASSWORD) -> str:
         """A ``postgresql://`` URL of ``database`` on this server."""
@@ -174,6 +177,24 @@ class PgServer:
         """Drop ``name``, ending whatever connections a test left to it (a killed console's
         server side may still be closing)."""
         self.admin().execute(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)')
+
+    def halt(self) -> None:
+        """Stop the server and keep its data (its clients see "terminating connection due to
+        administrator command", then refused connections): :meth:`resume` starts it again on
+        the same port."""
+        if self._admin is not None:
+            self._admin.close()
+        self._run(str(self.bin / "pg_ctl"), "-D", str(self.data), "-m", "fast", "-w", "stop")
+
+    def resume(self) -> None:
+        """Start the halted server again, on the same port and with the same data."""
+        options = self._options()
+        self._run(
+            str(self.bin / "pg_ctl"),
+            *("-D", str(self.data), "-l", str(self.log), "-w"),
+            *("-t", str(START_TIMEOUT_S), "-o", f"-p {self.port} {options}", "start"),
+            timeout_s=START_TIMEOUT_S + 10,
+        )
 
     def stop(self) -> None:
         if self._admin is not None:

@@ -45,9 +45,13 @@ router = APIRouter(prefix="/api", tags=["commands"])
     response_model_exclude_unset=True,
     responses=errors(
         (*OPERATOR, 409, 413, 422, 429, 503),
-        models={409: LimitViolationError, 422: ValidationErrorResponse | LimitViolationError},
+        models={
+            409: LimitViolationError | ErrorDetail,
+            422: ValidationErrorResponse | LimitViolationError,
+        },
         why={
-            409: "limits an operator may override, without override: true",
+            409: "limits an operator may override, without override: true; or another "
+            "console (named) is in control of the vehicle",
             422: "invalid input, or limits no operator can override (the depth rating)",
         },
     ),
@@ -55,7 +59,9 @@ router = APIRouter(prefix="/api", tags=["commands"])
 async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRecord:
     """Queue a command for transmission (logged first), through the command service's checks.
     422: limits that cannot be overridden or bad values; 409: overridable limits without
-    ``override`` (an override is recorded in the log with who gave it); 429: rate limit."""
+    ``override`` (an override is recorded in the log with who gave it), or this console is
+    not in control of the vehicle (consoles sharing a log: ``/api/control``); 429: rate
+    limit; 503: the mission log cannot be written or its database is out of reach."""
     request = SendRequest(
         body.pattern, body.params, "api", override=body.override, copies=body.copies
     )

@@ -121,6 +121,8 @@ class BeliefTracker:
         self._lock = threading.Lock()
         self._seq = 0
         self._cached: tuple[float, Belief] | None = None
+        #: The records read last (the belief goes on with them while the log is unreadable).
+        self._records: list[dict[str, Any]] = []
         self._pushed: Belief | None = None
         self._pushed_at = -math.inf
         self._drawn = False  # the 3D view shows a believed position
@@ -170,8 +172,11 @@ class BeliefTracker:
             # vehicle runs on across dives and console restarts
             dive = rt.dive if rt.sim is not None else None
             if rt.sim is None or dive is not None:
-                newest = rt.log.commands(target=cm.target, dive=dive, limit=RECORDS_WINDOW)
-                records = newest[::-1]
+                try:
+                    newest = rt.log.commands(target=cm.target, dive=dive, limit=RECORDS_WINDOW)
+                    records = self._records = newest[::-1]
+                except rt.log.read_errors:  # a database out of reach: what was read last
+                    records = self._records
         sim = rt.sim
         if sim is not None:
             c = sim.config

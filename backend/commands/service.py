@@ -20,6 +20,12 @@ shortcut, the API or ``/ws``, a retry, a mission script's step, a training scena
 
 Surface is never refused by the checks: it is the way out.
 
+**The gate** (:class:`SendGate`, given to the service): consulted once for every command
+after the checks, before anything is written: on a mission log several consoles share, only
+the console in control of the vehicle sends (:class:`backend.control.gate.ControlGate`:
+others get 409 naming who is; Surface passes from any console), and none while the log's
+database is out of reach (503).
+
 **Watchers** (:class:`SendWatcher`, :meth:`CommandService.watch`) are told of every command
 the service hands to the manager, whatever the path: ``admit`` just before the record is
 written (it may refuse), ``sent`` once it is written and its delivery begun, before its first
@@ -177,13 +183,27 @@ class SendWatcher(Protocol):
         begun; no copy of it has left yet."""
 
 
+class SendGate(Protocol):
+    """Who may send now (see the module's docstring)."""
+
+    def check(self, request: SendRequest) -> None:
+        """Raise a :class:`SendRefused` (or ``LogWriteError``) to refuse ``request``."""
+
+
 class CommandService:
     """The one checked path to the vehicle (see the module's docstring)."""
 
-    def __init__(self, manager: CommandManager, assess: Assessor, operator: str) -> None:
+    def __init__(
+        self,
+        manager: CommandManager,
+        assess: Assessor,
+        operator: str,
+        gate: SendGate | None = None,
+    ) -> None:
         self.manager = manager
         self.assess = assess
         self.operator = operator
+        self.gate = gate
         self._watchers: list[SendWatcher] = []
 
     def watch(self, watcher: SendWatcher) -> None:
@@ -197,7 +217,9 @@ class CommandService:
             codec.EncodeError / planner.PlanError: a value the frame cannot carry, named.
             LimitRefused / OverrideNeeded: the policy (:func:`decide`).
             RateLimited: too many transmissions in the last minute (never Surface).
-            LogWriteError: the mission log cannot be written; nothing was transmitted.
+            LogWriteError: the mission log cannot be written (or, the gate: its database is
+                out of reach); nothing was transmitted.
+            SendRefused: the gate's (another console in control: 409).
         """
         if request.pattern == "surface":
             return await self._surface(request)
@@ -224,6 +246,8 @@ class CommandService:
         """The watchers' ``admit``, the manager's record and delivery, the watchers' ``sent``:
         no ``await`` that yields between them (the manager's ``submit`` does not), so the
         watchers hear of the command before its first copy can leave."""
+        if self.gate is not None:
+            self.gate.check(request)
         for watcher in self._watchers:
             watcher.admit(request)
         record = await self.manager.submit(
@@ -293,6 +317,7 @@ __all__ = [
     "NotRetryableCommand",
     "Origin",
     "OverrideNeeded",
+    "SendGate",
     "SendOutcome",
     "SendRefused",
     "SendRequest",

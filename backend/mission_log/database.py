@@ -13,6 +13,12 @@ Every difference between the two is here and nowhere else:
   ``synchronous_commit=on`` (a committed row is on the server's disk);
 * how long a write waits for another's lock: SQLite's ``busy_timeout``, PostgreSQL's
   ``lock_timeout``;
+* the database's clock (:attr:`LogDatabase.now_s_sql`: seconds since 1970, what control's
+  heartbeats are judged by, the same for every console) and a row locked for the rest of a
+  transaction (``FOR UPDATE`` on PostgreSQL; SQLite's ``BEGIN IMMEDIATE`` already holds the
+  whole file);
+* the writing console's name, which PostgreSQL's notifications carry (a session setting,
+  ``nemesys.console``, set again on a new connection; SQLite has one console);
 * which driver errors are a write that failed (:class:`LogWriteError`: disk full, read-only,
   locked, connection lost) and which are the program's own misuse (integrity and programming
   errors, raised as they are);
@@ -127,6 +133,10 @@ class LogDatabase:
     sqlalchemy_url: str
     #: ``BEGIN`` of a write transaction.
     begin_sql: str
+    #: An expression of the database's clock: seconds since 1970 (UTC), a float.
+    now_s_sql: str
+    #: What follows a ``SELECT`` to lock its rows until the transaction ends.
+    for_update: str = ""
 
     @property
     def raw(self) -> Any:
@@ -160,6 +170,9 @@ class LogDatabase:
         """Inside the migration's transaction: hold off other consoles migrating the same
         database until it ends."""
 
+    def name_console(self, console: str) -> None:
+        """The console's name, for what the database tells other consoles of its writes."""
+
     def close(self) -> None:
         raise NotImplementedError
 
@@ -188,6 +201,7 @@ class SqliteDatabase(LogDatabase):
     misuse_errors = (sqlite3.IntegrityError, sqlite3.ProgrammingError)
     sqlalchemy_url = "sqlite://"
     begin_sql = "BEGIN IMMEDIATE"
+    now_s_sql = "((julianday('now') - 2440587.5) * 86400.0)"
 
     def __init__(self, path: Path | str, busy_timeout_s: float) -> None:
         self.where = str(path)
@@ -256,6 +270,10 @@ class PostgresDatabase(LogDatabase):
     kind = "postgresql"
     sqlalchemy_url = "postgresql+psycopg://"
     begin_sql = "BEGIN"
+    now_s_sql = "CAST(EXTRACT(EPOCH FROM clock_timestamp()) AS DOUBLE PRECISION)"
+    for_update = " FOR UPDATE"
+    #: The console's name (``nemesys.console``, set on every new connection); "": not named.
+    console = ""
 
     def __init__(self, url: str, busy_timeout_s: float) -> None:
         import psycopg
@@ -280,6 +298,8 @@ class PostgresDatabase(LogDatabase):
         try:
             db.execute("SET synchronous_commit = on")
             db.execute(f"SET lock_timeout = '{round(self._busy_timeout_s * 1000)}ms'")
+            if self.console:
+                db.execute("SELECT set_config('nemesys.console', %s, false)", (self.console,))
         except BaseException:
             db.close()
             raise
@@ -338,6 +358,10 @@ class PostgresDatabase(LogDatabase):
 
     def lock_for_migration(self) -> None:
         self.execute("SELECT pg_advisory_xact_lock(?)", (MIGRATION_LOCK_KEY,))
+
+    def name_console(self, console: str) -> None:
+        self.console = console
+        self.execute("SELECT set_config('nemesys.console', ?, false)", (console,))
 
     def close(self) -> None:
         self._closed = True

@@ -133,6 +133,11 @@ class CommandRecord(BaseModel):
     first_sent_at: str | None = Field(
         None, description="when its first copy left (ISO 8601, UTC): the log's wire order"
     )
+    console: str | None = Field(
+        None,
+        description="the console that wrote it (consoles sharing a log; null: a record from "
+        "before consoles were named)",
+    )
 
 
 def command_record(row: Mapping[str, Any]) -> CommandRecord:

@@ -105,6 +105,8 @@ class MissionLog:
         self._lock = threading.RLock()  # re-entered by the writes of a transaction()
         self._track = TrackBuffer(self._lock, self._write_track)
         self._closed = False
+        #: The console writing (:meth:`name_console`; None: not named).
+        self.console: str | None = None
         try:
             migrate(self._db)
         except BaseException:
@@ -116,11 +118,32 @@ class MissionLog:
         """``"sqlite"`` or ``"postgresql"``."""
         return self._db.kind
 
+    @property
+    def read_errors(self) -> tuple[type[Exception], ...]:
+        """The driver's errors a read raises when the database is out of reach (a PostgreSQL
+        server gone): a reader that can go on with what it read last catches them."""
+        return self._db.write_errors
+
     def set_busy_timeout(self, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
         """How long a write waits for another connection's lock before it fails."""
         with self._lock:
             self._db.set_busy_timeout(busy_timeout_s)
             self._busy_timeout_s = busy_timeout_s
+
+    def name_console(self, console: str) -> None:
+        """This console's name among those sharing the log: written into every command it
+        records, and carried by PostgreSQL's notifications of its writes (so it can tell
+        its own: :mod:`backend.mission_log.listen`)."""
+        with self._lock:
+            self._db.name_console(console)
+            self.console = console
+
+    @contextlib.contextmanager
+    def connection(self) -> Iterator[LogDatabase]:
+        """The log's connection under its lock, for the SQL kept beside the store (the
+        control table: :mod:`backend.mission_log.control`)."""
+        with self._lock:
+            yield self._db
 
     def check(self) -> list[str]:
         """The database's integrity check (SQLite's ``quick_check``): the problems it finds
@@ -242,6 +265,7 @@ class MissionLog:
             "updated_at": stamp,
             "state": "queued",
             "attempts": 0,
+            "console": self.console,
             **record,
         }
         cols = list(row)
@@ -335,11 +359,13 @@ class MissionLog:
         keys = ("dive", "at", "kind", "detail")
         return {"id": new_id, **dict(zip(keys, row, strict=False)), "data": data}
 
-    def events(self, dive: int | None = None) -> list[dict[str, Any]]:
-        """Events, oldest first (of one dive)."""
-        sql = "SELECT * FROM events" + (" WHERE dive = ?" if dive is not None else "")
+    def events(self, dive: int | None = None, *, after: int = 0) -> list[dict[str, Any]]:
+        """Events, oldest first (of one dive; with an id above ``after``)."""
+        sql = "SELECT * FROM events WHERE id > ?" + (" AND dive = ?" if dive is not None else "")
         with self._lock:
-            rows = self._db.execute(sql + " ORDER BY id", () if dive is None else (dive,))
+            rows = self._db.execute(
+                sql + " ORDER BY id", (after,) + (() if dive is None else (dive,))
+            )
             out = [dict(r) for r in rows.fetchall()]
         for event in out:
             event["data"] = None if event["data"] is None else json.loads(event["data"])

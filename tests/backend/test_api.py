@@ -58,6 +58,7 @@ API_PATHS = {
     "/api/commands",
     "/api/commands/{command_id}",
     "/api/commands/{command_id}/retry",
+    "/api/control",
     "/api/surface",
     "/api/log.csv",
     "/api/log.json",

@@ -58,6 +58,7 @@ OPERATOR_OPS = {
     ("POST", "/api/commands"),
     ("POST", "/api/commands/{}/retry"),
     ("POST", "/api/surface"),
+    ("POST", "/api/control"),
     ("POST", "/api/dives/{}/replay"),
     ("PUT", "/api/link"),
     ("POST", "/api/link/test"),
@@ -355,6 +356,8 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     wait_until(lambda: c.call("GET", "/api/scripts/run").json()["next"], what="step 2 proposed")
     c.call("POST", "/api/scripts/run/stop", headers=AUTH)
     c.call("GET", "/api/scripts/run")
+    c.call("POST", "/api/control", json={"action": "request"}, headers=AUTH)
+    c.call("GET", "/api/control")
     ok = {(m, p) for m, p, status in c.seen if status < 300}
     assert ok == {(m, normal(p)) for m, p, _ in c.operations()}
 

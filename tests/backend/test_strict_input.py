@@ -69,6 +69,7 @@ BASES: dict[str, dict[str, Any]] = {
     "DatumIn": {"lat_deg": 1.0, "lon_deg": 2.0},
     "ReplayAtIn": {"dive": 1, "t_s": 0.0},
     "SurveyIn": {"area": SURVEY_AREA, "vehicles": [SURVEY_VEHICLE]},
+    "ControlIn": {"action": "request", "vehicle": "nemesys", "takeover_allowed": False},
 }
 #: A value for every path parameter of the API.
 PATH_VALUES = {"command_id": "1", "dive": "1", "z": "0", "x": "0", "y": "0", "name": "wreck"}
@@ -201,7 +202,8 @@ def refused(http: httpx.Client, ep: Endpoint, body: str, path: Loc) -> dict[str,
 def test_the_openapi_has_the_json_endpoints_expected() -> None:
     """The walk finds every JSON endpoint and its fields (a smaller set would test less)."""
     urls = {str(ep) for ep in ENDPOINTS}
-    assert len(urls) == 16 and {"PUT /api/datum", "POST /api/survey/preview"} <= urls
+    assert len(urls) == 17 and {"PUT /api/datum", "POST /api/survey/preview"} <= urls
+    assert "POST /api/control" in urls
     assert sum(len(ep.slots) for ep in ENDPOINTS) > 60
     by_url = {str(ep): ep.slots for ep in ENDPOINTS}
     assert Slot(("steps", 0, "params", "radius"), True, True) in by_url["POST /api/scripts/preview"]

@@ -20,6 +20,7 @@ from backend.messages import (
     ActivePathMessage,
     BeliefMessage,
     CommandMessage,
+    ControlMessage,
     EventMessage,
     LinkMessage,
     Message,
@@ -107,6 +108,7 @@ _Server = (
     | LinkMessage
     | EventMessage
     | BeliefMessage
+    | ControlMessage
     | AuthOk
     | AuthRefused
     | Queued
