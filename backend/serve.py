@@ -20,6 +20,7 @@ from codec import int_from_text, number_from_text
 if TYPE_CHECKING:
     import uvicorn
 
+    from backend.mission_log.store import MissionLog
     from backend.settings import Settings
 
 #: The exit status of bad input (``cli.common.EXIT_USAGE``): a setting, the mission log,
@@ -55,6 +56,23 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
         help="write a new operator token (kept owner-only beside the mission log, reused at "
         "every start); pages holding the old one become read-only",
     )
+
+
+def _recover(log: MissionLog, settings: Settings, out: TextIO) -> str | None:
+    """What an earlier run left on its way made ``interrupted`` (on a log consoles share, only
+    this console's own) and said; or why this console's name cannot be used.
+
+    Raises:
+        LogWriteError: the log cannot be written.
+    """
+    from backend.control.identity import ConsoleNameError, recovered_by
+
+    try:
+        recovered = log.recover_interrupted(recovered_by(settings))
+    except ConsoleNameError as err:
+        return str(err)
+    _report_recovered(recovered, out)
+    return None
 
 
 def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
@@ -94,7 +112,8 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     except LogError as err:
         return _usage(str(err))
     try:
-        recovered = log.recover_interrupted()
+        if (refused := _recover(log, settings, out)) is not None:
+            return _usage(refused)
         settings, kept = _with_token(settings, rotate=args.new_token)
     except LogWriteError as err:
         return _usage(
@@ -105,7 +124,6 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         return _usage(str(err))
     finally:
         log.close()
-    _report_recovered(recovered, out)
     try:
         sockets = listen_sockets(settings.host, settings.port)
     except OSError as err:
