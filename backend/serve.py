@@ -101,7 +101,8 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
 
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
-        return _usage(f"setting {where}: {error_message(first)}")
+        # a rule between settings (a model validator) has no field to name
+        return _usage(f"setting{' ' if where else 's'}{where}: {error_message(first)}")
     from backend.mission_log.opening import LogError, elsewhere, open_checked
     from backend.mission_log.store import LogWriteError
 
@@ -130,7 +131,13 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         return _usage(port_problem(settings.host, settings.port, err))
     port = sockets[0].getsockname()[1]  # the one chosen, if asked for port 0
     url = f"http://{settings.host}:{port}/?token={settings.token}"
-    mode = "training (simulated vehicle)" if settings.training else f"vehicle at {settings.target}"
+    mode = (
+        "training (simulated vehicle)"
+        if settings.training
+        else "relay (no transmitter here: the console holding it sends)"
+        if settings.relay
+        else f"vehicle at {settings.target}"
+    )
 
     def announce() -> None:
         out.write(
