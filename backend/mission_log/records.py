@@ -162,7 +162,10 @@ class LogEvent(BaseModel):
     id: int
     dive: int
     at: str = Field(description="ISO 8601, UTC")
-    kind: str = Field(description="echo_mismatch, datum, copies_from, script_stopped")
+    kind: str = Field(
+        description="echo_mismatch, datum, copies_from, script_stopped, control (who is in "
+        "control), relay (a relayed command refused by the console holding the transmitter)"
+    )
     detail: str = Field(description="what happened, in words")
     data: dict[str, JsonValue] | None = Field(description="the kind's figures (null: none)")
 
