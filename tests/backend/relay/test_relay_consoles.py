@@ -20,6 +20,8 @@ import psycopg
 import pytest
 from fastapi.testclient import TestClient
 
+from backend.mission_log import outbox
+from backend.mission_log.store import MissionLog
 from tests.backend.conftest import (
     AUTH,
     CIRCLE,
@@ -193,3 +195,41 @@ def test_without_a_console_holding_the_transmitter_the_shore_says_so_and_sends_n
     assert "nothing was sent" in r.json()["detail"]
     (row,) = outbox_rows(shared_url)
     assert row["state"] == "withdrawn" and row["decided_by"] == "shore"
+
+
+def test_the_ships_gate_judges_the_console_the_command_came_from(
+    shared_url: str, tmp_path: Path, make_client: MakeClient
+) -> None:
+    """A row from a console that is not in control (its control lost between its own check
+    and the ship's claim) is refused by the ship with 409 naming who is; nothing sent."""
+    ship = make_client(
+        db_path=tmp_path / "ship.sqlite3", console_name="ship", database_url=shared_url
+    )
+    assert owner(ship) == ("ship", "operator")
+    before = frames_at_the_vehicle(ship)
+    log = MissionLog(shared_url)
+    try:
+        log.name_console("shore")
+        row = outbox.put(
+            log,
+            console="shore",
+            operator="bob",
+            vehicle="nemesys",
+            origin="api",
+            kind="command",
+            pattern="circle",
+            params=CIRCLE,
+            override=False,
+            copies=None,
+            retry_of=None,
+        )
+        decided = wait_until(
+            lambda: (got := outbox.get(log, row.id)) is not None and got.state != "waiting" and got
+        )
+    finally:
+        log.close()
+    assert decided.state == "refused" and decided.status == 409 and decided.decided_by == "ship"
+    assert decided.reason is not None
+    assert "console 'ship' (operator 'operator') is in control" in decided.reason
+    assert "the console it came from ('shore') is not" in decided.reason
+    assert frames_at_the_vehicle(ship) == before
