@@ -173,7 +173,6 @@ class Console:
             self.commands, self.assess, s.operator, gate=self.control.gate, relay=self.relay.sender
         )
         self.service.watch(self.script_guard)
-        self.relay.start(self.service)
         self.beliefs = Beliefs(self)
         self.beliefs.start()
         link.on_mission = self._on_mission
@@ -181,6 +180,7 @@ class Console:
         await link.start()
         if isinstance(link, RosbridgeLink) and s.training:
             await link.wait_connected(5.0)
+        self.relay.start(self.service)  # the outbox taken once the link is up (training)
         self._health_task = asyncio.create_task(self._push_health(), name="link health")
         if viewer:
             from backend.viewer.viewer import Viewer
