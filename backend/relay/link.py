@@ -61,7 +61,8 @@ class RelayLink(Link):
             try:
                 self._view = view_of(*outbox.transmitters(self._log))
                 self._problem = None
-            except LogWriteError as err:  # the last view stands; the header says the log is lost
+            except LogWriteError as err:  # the last view, no longer known to be fresh
+                self._view = self._view.model_copy(update={"fresh": False})
                 self._problem = f"the transmitting consoles cannot be read: {err.reason}"
         return self._view
 

@@ -5,18 +5,24 @@ ship's send request."""
 
 from __future__ import annotations
 
+import asyncio
+import contextlib
 import io
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from pydantic import ValidationError
 
+from backend.mission_log import outbox
 from backend.mission_log.outbox import OutboxRow, Transmitter
-from backend.relay.link import FRESH_S, view_of
+from backend.mission_log.store import LogWriteError, MissionLog
+from backend.relay.link import FRESH_S, NO_TRANSMITTER, RelayLink, view_of
 from backend.relay.ship import request_of
 from backend.relay.shore import refusal_of
 from backend.settings import Settings
 from cli.main import main
+from codec import encode_frame
 from station.link import Capability
 from tests.backend.conftest import CIRCLE, clear_nemesys_env
 
@@ -118,3 +124,36 @@ def test_an_outbox_row_is_the_ships_request_with_who_asked() -> None:
     assert (request.relayed.operator, request.relayed.outbox_id) == ("bob", 7)
     odd = request_of(OutboxRow(**{**row.__dict__, "origin": "elsewhere", "kind": "x"}))
     assert odd.origin == "api" and odd.kind == "command"
+
+
+class _Gone:
+    """A log whose database is out of reach."""
+
+    @contextlib.contextmanager
+    def connection(self) -> Iterator[None]:
+        raise LogWriteError("server closed the connection unexpectedly")
+        yield
+
+
+def test_the_relay_link_follows_the_transmitters_table(tmp_path: Path) -> None:
+    log = MissionLog(tmp_path / "missions.sqlite3")
+    try:
+        link = RelayLink()
+        assert link.target == "relay" and not link.connected  # no log yet: nothing known
+        link.attach(log)
+        assert not link.connected and link.capability is Capability.UNKNOWN
+        assert link.connection_problem == "no console holding the transmitter is on the mission log"
+        health = {"connected": True, "capability": "acks_and_telemetry", "level": "green"}
+        outbox.beat_transmitter(log, "ship", "sim", health)
+        (check,) = asyncio.run(link.test())  # read now
+        assert check.ok and "relay via console 'ship'" in check.detail
+        assert link.connected and link.connection_problem is None
+        assert link.capability is Capability.ACKS_AND_TELEMETRY and link.acknowledges
+        assert asyncio.run(link.transmit(encode_frame("surface", {}).frame)) == NO_TRANSMITTER
+        link.attach(_Gone())
+        (check,) = asyncio.run(link.test())
+        assert not check.ok and not link.connected
+        assert check.reason is not None and "cannot be read" in check.reason
+        assert link.view().via == "ship"  # the last one read, no longer fresh
+    finally:
+        log.close()
