@@ -33,12 +33,14 @@ from backend.commands.link_ber import BerChoice, CopiesFrom
 from backend.commands.link_settings import ber_now, change_link
 from backend.commands.manager import CommandManager
 from backend.commands.service import Assessment, CommandService
+from backend.control.identity import recovered_by
 from backend.control.runtime import ControlRuntime, start_control
 from backend.dives import Dives
 from backend.messages import ActivePath, ActivePathMessage, EventMessage, LinkMessage, VehicleView
 from backend.mission_log.opening import open_checked
 from backend.mission_log.records import log_event
 from backend.mission_log.store import MissionLog
+from backend.relay.runtime import RelayRuntime
 from backend.scripts.guard import RunGuard
 from backend.settings import Settings
 from backend.telemetry import TelemetryHub
@@ -102,6 +104,9 @@ class Console:
         self.service: CommandService | None = None
         #: Who is in control of each vehicle; live sync with other consoles (backend.control).
         self.control: ControlRuntime | None = None
+        #: Commands from a console without the transmitter, through the shared log
+        #: (backend.relay): this console's sender (target relay) or outbox worker.
+        self.relay: RelayRuntime | None = None
         self.viewer: Viewer | None = None  # the 3D view (None: started without one)
         #: The live Foxglove view (None: off; the app's lifespan sets it: backend.foxglove_live).
         self.foxglove: FoxgloveLive | None = None
@@ -130,7 +135,7 @@ class Console:
         self.log = open_checked(s.mission_log)
         # ``nemesys console`` already did this before printing its URL; an app built otherwise
         # (tests, an embedding program) gets it here, before any command is taken
-        recovered = self.log.recover_interrupted()
+        recovered = self.log.recover_interrupted(recovered_by(s))
         if recovered:
             logger.warning(
                 "%d commands an earlier run left on their way are interrupted", recovered
@@ -163,8 +168,9 @@ class Console:
         )
         # who is in control, and (a shared PostgreSQL log) what the other consoles write
         self.control = start_control(self)
+        self.relay = RelayRuntime(self)
         self.service = CommandService(
-            self.commands, self.assess, s.operator, gate=self.control.gate
+            self.commands, self.assess, s.operator, gate=self.control.gate, relay=self.relay.sender
         )
         self.service.watch(self.script_guard)
         self.beliefs = Beliefs(self)
@@ -174,6 +180,7 @@ class Console:
         await link.start()
         if isinstance(link, RosbridgeLink) and s.training:
             await link.wait_connected(5.0)
+        self.relay.start(self.service)  # the outbox taken once the link is up (training)
         self._health_task = asyncio.create_task(self._push_health(), name="link health")
         if viewer:
             from backend.viewer.viewer import Viewer
@@ -189,6 +196,8 @@ class Console:
                     await task
         if self.beliefs is not None:
             await self.beliefs.stop()
+        if self.relay is not None:
+            await self.relay.stop()
         if self.control is not None:
             await self.control.stop()
         if self.commands is not None:
@@ -345,6 +354,7 @@ class Console:
             self.ber_choice.copies_from,
             datum_problem=self.datum_watch.problem(self.datum),
             mission_log=self.control.mission_log() if self.control else None,
+            relay=self.relay.view() if self.relay else None,
         )
 
     def set_link(

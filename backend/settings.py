@@ -4,7 +4,9 @@ Defaults are the embedded training set-up: a simulated NemeSys behind its own ro
 loopback, a local SQLite mission log, everything bound to 127.0.0.1. Point ``target`` at a
 real vehicle's rosbridge (``ws://host:9090``) or an ME transmitter (``serial:///dev/ttyUSB0``,
 ``tcp://host:port``) instead, the latter with ``telemetry`` (``ws://host:9090``) when the
-vehicle reports over a rosbridge (the hybrid link). A settings file
+vehicle reports over a rosbridge (the hybrid link); ``relay`` is a console without a
+transmitter of its own (the shore), its commands sent by the console that holds it through a
+shared PostgreSQL log. A settings file
 (``NEMESYS_SETTINGS=path``, ``KEY=value`` lines with the same ``NEMESYS_`` names) is read when
 given.
 """
@@ -24,6 +26,9 @@ from codec import ASCII_DIGITS, number_from_text
 
 #: The target meaning "the embedded simulator" (training mode).
 SIM_TARGET = "sim"
+#: The target meaning "no transmitter here": commands go through the console that holds it
+#: (the shared log's outbox, backend/relay/), which needs a PostgreSQL ``database_url``.
+RELAY_TARGET = "relay"
 
 
 def _number(value: object, *, text: bool) -> float | None:
@@ -94,7 +99,8 @@ class Settings(BaseSettings):
     #: The live Foxglove view's port (docs/foxglove.md, "Live"): a read-only Foxglove
     #: WebSocket server on ``host`` (0: any free port). Unset: off.
     foxglove_port: Annotated[int, Field(ge=0, le=65535)] | None = None
-    #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port.
+    #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port,
+    #: or "relay" (no transmitter: the console holding it on the shared log sends).
     target: str = SIM_TARGET
     #: With an ME modem target: the vehicle's rosbridge (ws://host:port) that telemetry and
     #: acknowledgements come over, the frames going by the modem (the hybrid link). "": none.
@@ -129,6 +135,12 @@ class Settings(BaseSettings):
     #: At start, take control of each vehicle no console controls (PostgreSQL; a SQLite log
     #: has one console, always in control).
     control_at_start: bool = True
+    #: A relay console (target "relay") waits this long for the transmitting console's
+    #: decision on a command (s); none by then: the command is withdrawn, nothing sent (504).
+    relay_wait_s: Annotated[float, Field(ge=0.5, le=60)] = 5.0
+    #: A console with a transmitter refuses a relayed command that waited longer than this
+    #: in the outbox, on the database's clock (s): stale, never sent late.
+    relay_max_age_s: Annotated[float, Field(ge=1, le=3600)] = 30.0
     bitrate_bps: Annotated[float, Field(gt=0, le=1e7)] = 36000.0
     #: Time allowed for an acknowledgement on top of airtime and the channel's delay (s).
     ack_timeout_s: Annotated[float, Field(gt=0, le=600)] = 5.0
@@ -191,7 +203,7 @@ class Settings(BaseSettings):
     @field_validator("target")
     @classmethod
     def _target(cls, value: str) -> str:
-        if value == SIM_TARGET:
+        if value in (SIM_TARGET, RELAY_TARGET):
             return value
         from station.transmit import open_transmitter
 
@@ -209,7 +221,23 @@ class Settings(BaseSettings):
         return parse_telemetry(value)  # raises ValueError naming the allowed forms
 
     @model_validator(mode="after")
+    def _relay_on_a_shared_log(self) -> Settings:
+        if self.relay and not self.database_url:
+            raise ValueError(
+                "target 'relay' (a console without a transmitter, its commands sent by the "
+                "console that holds it) needs the mission log the consoles share: set "
+                "NEMESYS_DATABASE_URL=postgresql://user:password@host:port/database, the same "
+                "as the transmitting console's"
+            )
+        return self
+
+    @model_validator(mode="after")
     def _telemetry_with_a_modem(self) -> Settings:
+        if self.telemetry and self.relay:
+            raise ValueError(
+                f"telemetry {self.telemetry!r} is for an ME modem target (serial:///dev/..., "
+                "tcp://host:port, loop://); target 'relay' has no link of its own"
+            )
         if self.telemetry and (self.training or self.target.startswith(("ws://", "wss://"))):
             raise ValueError(
                 f"telemetry {self.telemetry!r} is for an ME modem target (serial:///dev/..., "
@@ -265,6 +293,11 @@ class Settings(BaseSettings):
     @property
     def training(self) -> bool:
         return self.target == SIM_TARGET
+
+    @property
+    def relay(self) -> bool:
+        """No transmitter here: the console holding it sends (``target`` "relay")."""
+        return self.target == RELAY_TARGET
 
     @classmethod
     def load(cls, **overrides: Any) -> Settings:

@@ -3,7 +3,8 @@
 Training: the simulated vehicle and its rosbridge server on loopback, reached through the same
 rosbridge client a real vehicle gets (frames only from this console: a per-start secret for
 the rosbridge auth op). Otherwise: the target the settings name (a rosbridge URL, an ME modem,
-or a modem with telemetry over rosbridge: :func:`station.link_modem.open_link`).
+or a modem with telemetry over rosbridge: :func:`station.link_modem.open_link`), or no
+transmitter at all (``relay``: :class:`backend.relay.link.RelayLink`).
 """
 
 from __future__ import annotations
@@ -30,6 +31,10 @@ async def open_vehicle_link(
         ValueError: a target or telemetry setting that names no link (the message says
             which forms are allowed).
     """
+    if s.relay:
+        from backend.relay.link import RelayLink
+
+        return RelayLink(), None, None
     if not s.training:
         link = open_link(
             s.target, s.bitrate_bps, s.telemetry or None, namespace=s.vehicle_namespace

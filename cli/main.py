@@ -192,6 +192,7 @@ BENCHMARKS = (
     "dead_reckoning",
     "export",
     "control_sync",
+    "relay",
 )
 
 

@@ -113,6 +113,30 @@ function renderMissionLog(reach) {
   else resolved("mission-log");
 }
 
+/** A console without a transmitter (target relay): "relay via <the console holding it>"
+ *  (link.relay), or that none holds one; "" on a console that transmits. */
+export function relayText(l) {
+  const r = l && l.relay;
+  if (!r || typeof r !== "object") return "";
+  return r.via ? `relay via ${r.via}` : "relay: no console holds the transmitter";
+}
+
+/** The transmitting console's link as the relay console last read it, for the status row. */
+function relayFacts(r) {
+  if (!r.via) return "no console holding the transmitter is on the mission log";
+  const seen = typeof r.seen_age_s === "number" ? `seen ${age(r.seen_age_s)}` : "";
+  if (!r.fresh) return `${r.via} NOT SEEN (${seen || "never"}): commands cannot be sent`;
+  const link = [r.target, r.connected === false ? "NOT CONNECTED" : "connected", r.level]
+    .filter(Boolean).join(", ");
+  return `its link: ${link}; ${seen}`;
+}
+
+/** A mission log event worth a line in the message row: a relayed command refused by the
+ *  console holding the transmitter (every console's pages get it). */
+export function renderLogEvent(e) {
+  if (e && e.kind === "relay" && e.detail) notify(String(e.detail), "warn", "relay");
+}
+
 /** Who is in control of a vehicle changed (consoles sharing one mission log: a websocket
  *  "control" message), said in the message row, with a request waiting for the owner. */
 export function renderControl(c) {
@@ -157,7 +181,8 @@ function renderIndicator(l) {
   const level = l && reachable ? levelOf(l) : "unknown";
   const problems = problemsOf(l);
   const { glyph, word } = LEVEL[level];
-  let text = l ? `${capabilityText(l)}${word ? ` – ${word}` : ""}` : "waiting…";
+  const relay = relayText(l);
+  let text = l ? `${relay ? `${relay} · ` : ""}${capabilityText(l)}${word ? ` – ${word}` : ""}` : "waiting…";
   let title = l ? (problems.length ? problems.join("\n") : "no problems") : "no vehicle link state yet";
   if (!reachable) {
     text = "unknown (console unreachable)";
@@ -202,6 +227,7 @@ function renderRow() {
   const later = (a) => (typeof a === "number" && Number.isFinite(a) ? a + since : a);
   if (!reachable && l) facts.push(`console unreachable: the vehicle link as of ${Math.round(since)} s ago`);
   if (l) {
+    if (l.relay && typeof l.relay === "object") facts.push(`${relayText(l)} (${relayFacts(l.relay)})`);
     facts.push(capabilityText(l));
     if (l.connected !== undefined && reachable) facts.push(l.connected ? "connected" : "NOT CONNECTED");
     const recent = framesText(l.frames && l.frames.recent);

@@ -44,7 +44,7 @@ router = APIRouter(prefix="/api", tags=["commands"])
     response_model=CommandRecord,
     response_model_exclude_unset=True,
     responses=errors(
-        (*OPERATOR, 409, 413, 422, 429, 503),
+        (*OPERATOR, 409, 413, 422, 429, 503, 504),
         models={
             409: LimitViolationError | ErrorDetail,
             422: ValidationErrorResponse | LimitViolationError,
@@ -61,7 +61,9 @@ async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRe
     422: limits that cannot be overridden or bad values; 409: overridable limits without
     ``override`` (an override is recorded in the log with who gave it), or this console is
     not in control of the vehicle (consoles sharing a log: ``/api/control``); 429: rate
-    limit; 503: the mission log cannot be written or its database is out of reach."""
+    limit; 503: the mission log cannot be written or its database is out of reach. A console
+    without a transmitter (target relay) answers with the record the console holding it
+    made, or that console's refusal (its status and reason); 504: none took it in time."""
     request = SendRequest(
         body.pattern, body.params, "api", override=body.override, copies=body.copies
     )
@@ -73,7 +75,7 @@ async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRe
     status_code=status.HTTP_202_ACCEPTED,
     response_model=CommandRecord,
     response_model_exclude_unset=True,
-    responses=errors((*OPERATOR, 503)),
+    responses=errors((*OPERATOR, 503, 504)),
 )
 async def surface(service: ServiceDep, _op: OperatorDep) -> CommandRecord:
     """Abort: send surface now and again every ``surface_repeat_s``: until acknowledged on a
@@ -88,7 +90,7 @@ async def surface(service: ServiceDep, _op: OperatorDep) -> CommandRecord:
     response_model=CommandRecord,
     response_model_exclude_unset=True,
     responses=errors(
-        (*OPERATOR, 404, 409, 413, 422, 429, 503),
+        (*OPERATOR, 404, 409, 413, 422, 429, 503, 504),
         models={
             409: LimitViolationError | ErrorDetail,
             422: ValidationErrorResponse | LimitViolationError,

@@ -22,6 +22,7 @@ from backend.commands.link_ber import (
     CopiesFrom,
     estimate_view,
 )
+from backend.relay.model import RelayView
 from station.link import Capability
 
 TYPE_CHECKING = False
@@ -104,6 +105,9 @@ class LinkHealth(BaseModel):
     surface_copies: int | None
     #: Whether the mission log's database is reached (not: every send refused, a red problem).
     mission_log: MissionLogReach = MissionLogReach()
+    #: A console without a transmitter (target relay): the console that holds it, and its
+    #: link; its problems are among ``problems``, named by it (null: this console transmits).
+    relay: RelayView | None = None
 
 
 class LinkCheckView(BaseModel):
@@ -186,6 +190,7 @@ def link_health_of(
     copies_from: CopiesFrom,
     datum_problem: str | None = None,
     mission_log: MissionLogReach | None = None,
+    relay: RelayView | None = None,
 ) -> LinkHealth:
     """What the station knows of its link to the vehicle (not the page's websocket): the
     link's own facts, the command ledger's and the telemetry's ages, and the assessment; a
@@ -204,6 +209,10 @@ def link_health_of(
         unknown_recent=hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
         datum_problem=datum_problem,
     )
+    if relay is not None and relay.fresh and relay.problems:
+        named = [f"{relay.via}: {p}" for p in relay.problems]
+        worst: Level = "red" if "red" in (level, relay.level) else "amber"
+        level, problems = worst, [*problems, *named]
     reach = mission_log or MissionLogReach()
     if not reach.reachable:
         level, problems = "red", [reach.refusal, *problems]
@@ -227,4 +236,5 @@ def link_health_of(
         copies=cm.copies_now(),
         surface_copies=cm.surface_copies_now(),
         mission_log=MissionLogReach.model_validate(reach.model_dump()),  # every field said
+        relay=None if relay is None else RelayView.model_validate(relay.model_dump()),
     )

@@ -170,12 +170,14 @@ class CommandManager(CommandRecords):
         origin: str = "api",
         retry_of: int | None = None,
         overrides: dict[str, Any] | None = None,
+        operator: str | None = None,
     ) -> dict[str, Any]:
         """Log the command (queued) with the values asked for (``enc.snaps``), then deliver it
         in the background, replacing whatever is still being repeated; returns the record.
         ``copies``: the operator's count (1..20), else chosen from the link. ``origin``,
         ``retry_of`` and ``overrides`` are written into the record as the command service
-        gives them (:mod:`backend.commands.service` is the only caller in the console).
+        gives them (:mod:`backend.commands.service` is the only caller in the console);
+        ``operator``: who asked, when not this console's operator (a relayed command's).
 
         Raises:
             RateLimited: too many transmissions in the last minute (never for surface).
@@ -197,7 +199,7 @@ class CommandManager(CommandRecords):
             record = self.log.insert_command(
                 self._dive(),
                 {
-                    "operator": self.operator,
+                    "operator": operator or self.operator,
                     "target": self.target,
                     "kind": record_kind,
                     **command_json(enc.command),

@@ -93,19 +93,31 @@ class CommandRecords:
                 return
             self.hub.publish(message)
 
+    def atomic(self) -> contextlib.AbstractContextManager[None]:
+        """A send and the caller's own writes committed together (the relay: the claim of an
+        outbox row, the command record, the row marked taken): see :meth:`_atomic`. The body
+        must not yield to the event loop (another task's writes would join the transaction)."""
+        return self._atomic()
+
     @contextlib.contextmanager
     def _atomic(self) -> Iterator[None]:
         """The log writes inside are committed together (a crash leaves all or none) and
-        announced after the commit."""
+        announced after the commit. Inside another, it is part of that one. Rolled back (a
+        write failed, or anything else raised), the deliveries begun inside are cancelled
+        before their first copy."""
+        if self._held is not None:  # nested: the outer one commits, announces, rolls back
+            yield
+            return
         held: list[dict[str, Any]] = []
         self._held = held
         live = dict(self._live)
         try:
             with self.log.transaction():
                 yield
-        except LogWriteError as err:
+        except BaseException as err:
             self._held = None
-            self._rolled_back(live, err)
+            why = err if isinstance(err, LogWriteError) else LogWriteError(repr(err))
+            self._rolled_back(live, why)
             raise
         finally:
             self._held = None

@@ -26,6 +26,15 @@ the console in control of the vehicle sends (:class:`backend.control.gate.Contro
 others get 409 naming who is; Surface passes from any console), and none while the log's
 database is out of reach (503).
 
+**The relay** (:class:`Relay`, given to the service of a console without a transmitter,
+``NEMESYS_TARGET=relay``): after the checks, the gate and the watchers' ``admit``, the command
+goes to the shared log's outbox instead of the manager, and the service returns the record
+the console holding the transmitter made of it, or raises its refusal
+(:mod:`backend.relay.shore`). That console takes the row through its own service
+(:class:`Relayed` in the request): its own checks, its gate judging the console the command
+came from, a record whose ``origin`` is ``relay:<console>`` and whose operator is the one who
+asked (:mod:`backend.relay.ship`).
+
 **Watchers** (:class:`SendWatcher`, :meth:`CommandService.watch`) are told of every command
 the service hands to the manager, whatever the path: ``admit`` just before the record is
 written (it may refuse), ``sent`` once it is written and its delivery begun, before its first
@@ -137,6 +146,21 @@ def decide(assessment: Assessment, override: bool) -> tuple[SendViolation, ...]:
 
 
 @dataclass(frozen=True)
+class Relayed:
+    """A command another console (one without a transmitter) checked and wrote to the shared
+    log's outbox: row ``outbox_id``, from ``console``, asked by ``operator``."""
+
+    console: str
+    operator: str
+    outbox_id: int
+
+    @property
+    def origin(self) -> str:
+        """The record's ``origin``."""
+        return f"relay:{self.console}"
+
+
+@dataclass(frozen=True)
 class SendRequest:
     """What a path asks the service to send.
 
@@ -147,6 +171,7 @@ class SendRequest:
         copies: the operator's number of copies (None: chosen from the link).
         kind: the record's kind (``script`` for a script's step).
         retry_of: the command this one retries.
+        relayed: taken from another console's outbox row (None: asked of this console).
     """
 
     pattern: str
@@ -156,6 +181,7 @@ class SendRequest:
     copies: int | None = None
     kind: Literal["command", "script"] = "command"
     retry_of: int | None = None
+    relayed: Relayed | None = None
 
 
 @dataclass(frozen=True)
@@ -190,6 +216,16 @@ class SendGate(Protocol):
         """Raise a :class:`SendRefused` (or ``LogWriteError``) to refuse ``request``."""
 
 
+class Relay(Protocol):
+    """Where a console without a transmitter hands its checked commands (see the module's
+    docstring)."""
+
+    async def relay(self, request: SendRequest) -> CommandRecord:
+        """The record the console with the transmitter made of ``request`` (raise a
+        :class:`SendRefused` with its refusal)."""
+        ...
+
+
 class CommandService:
     """The one checked path to the vehicle (see the module's docstring)."""
 
@@ -199,11 +235,13 @@ class CommandService:
         assess: Assessor,
         operator: str,
         gate: SendGate | None = None,
+        relay: Relay | None = None,
     ) -> None:
         self.manager = manager
         self.assess = assess
         self.operator = operator
         self.gate = gate
+        self.relay = relay
         self._watchers: list[SendWatcher] = []
 
     def watch(self, watcher: SendWatcher) -> None:
@@ -245,20 +283,26 @@ class CommandService:
     ) -> SendOutcome:
         """The watchers' ``admit``, the manager's record and delivery, the watchers' ``sent``:
         no ``await`` that yields between them (the manager's ``submit`` does not), so the
-        watchers hear of the command before its first copy can leave."""
+        watchers hear of the command before its first copy can leave (relayed: once the other
+        console made its record)."""
         if self.gate is not None:
             self.gate.check(request)
         for watcher in self._watchers:
             watcher.admit(request)
-        record = await self.manager.submit(
-            enc,
-            kind=kind,
-            copies=copies,
-            origin=request.origin,
-            retry_of=request.retry_of,
-            overrides=self._overrides(overridden),
-        )
-        outcome = SendOutcome(command_record(record), tuple(overridden))
+        if self.relay is not None:
+            outcome = SendOutcome(await self.relay.relay(request), tuple(overridden))
+        else:
+            relayed = request.relayed
+            record = await self.manager.submit(
+                enc,
+                kind=kind,
+                copies=copies,
+                origin=request.origin if relayed is None else relayed.origin,
+                retry_of=request.retry_of,
+                overrides=self._overrides(overridden, relayed),
+                operator=None if relayed is None else relayed.operator,
+            )
+            outcome = SendOutcome(command_record(record), tuple(overridden))
         for watcher in self._watchers:
             try:
                 watcher.sent(request, outcome)
@@ -298,11 +342,13 @@ class CommandService:
             )
         )
 
-    def _overrides(self, overridden: Sequence[SendViolation]) -> dict[str, Any] | None:
+    def _overrides(
+        self, overridden: Sequence[SendViolation], relayed: Relayed | None
+    ) -> dict[str, Any] | None:
         if not overridden:
             return None
         return {
-            "by": self.operator,
+            "by": self.operator if relayed is None else relayed.operator,
             "violations": [
                 {"check": v.check, "param": v.param, "message": v.message} for v in overridden
             ],
@@ -317,6 +363,8 @@ __all__ = [
     "NotRetryableCommand",
     "Origin",
     "OverrideNeeded",
+    "Relay",
+    "Relayed",
     "SendGate",
     "SendOutcome",
     "SendRefused",

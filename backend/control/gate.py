@@ -15,6 +15,10 @@ The command service consults it once, in its check step, for every frame whateve
 * on a log shared by consoles (PostgreSQL), a console not in control of the vehicle gets
   :class:`NotInControl` (409) naming who is (console and operator) or that nobody is; on a
   SQLite log the one console is always in control.
+
+A relayed command (:class:`backend.commands.service.Relayed`: checked by a console without a
+transmitter, taken from the outbox by this one) is judged as the console it came from: that
+console must be in control of the vehicle, not this one; a relayed Surface passes as any.
 """
 
 from __future__ import annotations
@@ -70,13 +74,16 @@ class ControlGate:
         # the vehicle's name: the request's, once a fleet's requests name one
         vehicle = getattr(request, "vehicle", None) or SINGLE_VEHICLE
         held, row, now = self.desk.in_control(vehicle)
-        if held:
-            return
         owner = row.owner(now, self.desk.timeout_s)
+        sender = self.desk.console if request.relayed is None else request.relayed.console
+        allowed = held if request.relayed is None else owner == sender
+        if allowed:
+            return
+        who = "this console" if request.relayed is None else "the console it came from"
         ask = "request control first (POST /api/control, action request)"
         if owner is None:
             raise NotInControl(f"nobody is in control of vehicle {vehicle}: {ask}")
         raise NotInControl(
             f"console {owner!r} (operator {row.operator!r}) is in control of vehicle {vehicle} "
-            f"since {iso(row.since_s)}; this console ({self.desk.console!r}) is not: {ask}"
+            f"since {iso(row.since_s)}; {who} ({sender!r}) is not: {ask}"
         )

@@ -35,6 +35,18 @@ def new_name() -> str:
     return f"{(host or 'console')[:40]}-{secrets.token_hex(2)}"
 
 
+def recovered_by(settings: Settings) -> str | None:
+    """Whose commands left on their way a start makes ``interrupted``
+    (:meth:`backend.mission_log.store.MissionLog.recover_interrupted`): on a log consoles
+    share (PostgreSQL), this console's own, by name (another console's are on their way);
+    on a SQLite file, every one (None).
+
+    Raises:
+        ConsoleNameError: as :func:`console_name`.
+    """
+    return console_name(settings) if settings.database_url else None
+
+
 def name_path(db_path: Path) -> Path:
     return db_path.with_name(db_path.name + SUFFIX)
 

@@ -5,7 +5,8 @@ On PostgreSQL, :class:`backend.mission_log.listen.Listener` hands over the key o
 another console committed (a command written, an event added, a vehicle's control changed);
 :class:`LogSync` re-reads the row over the log's own connection and publishes it on the hub,
 the messages a page already knows: ``command`` (the record, every state change), ``event``,
-``control``. A command of another console that is on its way supersedes this console's
+``control``; a row of the relay's outbox written or decided goes to :attr:`LogSync.on_outbox`
+(:mod:`backend.relay`). A command of another console that is on its way supersedes this console's
 commands still going out (the one rule, across consoles: a Surface from the ship stops the
 shore's repeated copies). The delay is the commit's notification and one read: well under a
 second on one network (``bench control-sync``).
@@ -69,6 +70,9 @@ class LogSync:
         self.commands = commands
         #: Called when the database is lost or back (the console pushes its link health).
         self.on_reach = on_reach
+        #: Called with the id of an outbox row another console wrote or decided (the relay's
+        #: worker or sender: :mod:`backend.relay.runtime` sets it).
+        self.on_outbox: Callable[[int], None] = lambda _row_id: None
         self.listener = Listener(
             url, desk.console, on_notice=self.notice, on_lost=self.lost, on_back=self.back
         )
@@ -105,6 +109,8 @@ class LogSync:
                 self._events(after=n.key - 1, upto=n.key)
             elif n.table == "control" and isinstance(n.key, str) and n.key in self.desk.vehicles:
                 self.desk.told(n.key)
+            elif n.table == "outbox" and isinstance(n.key, int):
+                self.on_outbox(n.key)
         except LogWriteError as err:  # the listener finds the loss itself, if it is one
             logger.warning("%s %s not read again: %s", n.table, n.key, err)
 

@@ -16,7 +16,8 @@ Every difference between the two is here and nowhere else:
 * the database's clock (:attr:`LogDatabase.now_s_sql`: seconds since 1970, what control's
   heartbeats are judged by, the same for every console) and a row locked for the rest of a
   transaction (``FOR UPDATE`` on PostgreSQL; SQLite's ``BEGIN IMMEDIATE`` already holds the
-  whole file);
+  whole file), and one another transaction holds skipped (``FOR UPDATE SKIP LOCKED``: a work
+  queue several consoles take from, the relay's outbox; SQLite's one writer skips nothing);
 * the writing console's name, which PostgreSQL's notifications carry (a session setting,
   ``nemesys.console``, set again on a new connection; SQLite has one console);
 * which driver errors are a write that failed (:class:`LogWriteError`: disk full, read-only,
@@ -137,6 +138,8 @@ class LogDatabase:
     now_s_sql: str
     #: What follows a ``SELECT`` to lock its rows until the transaction ends.
     for_update: str = ""
+    #: The same, leaving out the rows another transaction has locked.
+    skip_locked: str = ""
 
     @property
     def raw(self) -> Any:
@@ -272,6 +275,7 @@ class PostgresDatabase(LogDatabase):
     begin_sql = "BEGIN"
     now_s_sql = "CAST(EXTRACT(EPOCH FROM clock_timestamp()) AS DOUBLE PRECISION)"
     for_update = " FOR UPDATE"
+    skip_locked = " FOR UPDATE SKIP LOCKED"
     #: The console's name (``nemesys.console``, set on every new connection); "": not named.
     console = ""
 

@@ -152,12 +152,15 @@ class MissionLog:
         with self._lock:
             return self._db.check()
 
-    def recover_interrupted(self) -> int:
+    def recover_interrupted(self, console: str | None = None) -> int:
         """Every command an earlier run left on its way (``queued`` or ``transmitted``) becomes
         ``interrupted``, naming the last time the log was written. One transaction; returns
-        how many. Call before the console takes new commands."""
+        how many. Call before the console takes new commands. ``console``: only the records
+        that console wrote (and those that name none): on a log several consoles share, the
+        others' commands on their way are theirs (None: every record, a log of one console)."""
         on_its_way = sorted(ON_ITS_WAY)
         marks = ", ".join("?" * len(on_its_way))
+        mine = "" if console is None else " AND (console = ? OR console IS NULL)"
         target = advance(State.QUEUED, Event.INTERRUPTED)
         with self._lock:
             last = self._db.execute(
@@ -170,8 +173,14 @@ class MissionLog:
                     "reason = 'the console stopped while this command was ' || state || "
                     "' (the log was last written at ' || ? || "
                     "'); whether the vehicle received it is not known' "
-                    f"WHERE state IN ({marks})",
-                    (target, self._now(), last or "an unknown time", *on_its_way),
+                    f"WHERE state IN ({marks}){mine}",
+                    (
+                        target,
+                        self._now(),
+                        last or "an unknown time",
+                        *on_its_way,
+                        *(() if console is None else (console,)),
+                    ),
                 )
         return cur.rowcount
 

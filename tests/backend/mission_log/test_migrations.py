@@ -273,12 +273,19 @@ def test_a_log_of_a_previous_version_is_stamped_and_keeps_its_rows(
 
     after = table_sql(db)
     rebuilt = {"track", "track_dive"} if version == "issue 20" else set()
-    # 0007 (issue 24) adds the console that wrote a command, and the control table
+    # 0007 (issue 24) adds the console that wrote a command, and the control table; 0008 the
+    # relay's outbox (and its index) and transmitters
     kept = {name: sql for name, sql in before.items() if name not in rebuilt | {"commands"}}
     assert {name: after[name] for name in kept} == kept  # not a column added or changed
     assert after["commands"].startswith(before["commands"].rstrip(")"))
     assert after["commands"].endswith("console TEXT)")
-    assert set(after) - set(before) == {"alembic_version", "control"}
+    assert set(after) - set(before) == {
+        "alembic_version",
+        "control",
+        "outbox",
+        "outbox_state",
+        "transmitters",
+    }
     assert track_columns(db) == declared(ISSUE_22_TRACK)
     log = MissionLog(db)
     try:

@@ -80,6 +80,29 @@ def test_recovery_of_an_empty_log_is_nothing(log_backend: LogBackend) -> None:
         log.close()
 
 
+def test_recovery_on_a_shared_log_is_the_consoles_own(log_backend: LogBackend) -> None:
+    """A console starting on a log others share interrupts only what it left on its way (and
+    records naming no console): another console's commands on their way are its own."""
+    log = log_backend.open()
+    try:
+        dive = log.new_dive("sim")
+        ids = {}
+        for console in ("ship", "shore", None):
+            if console is not None:
+                log.name_console(console)
+            else:
+                log.console = None  # a record from before consoles were named
+            rec = log.insert_command(dive, command_fields())
+            log.update_command(rec["id"], state="transmitted", attempts=1)
+            ids[console] = rec["id"]
+        assert log.recover_interrupted("shore") == 2
+        states = {c: (log.command(cid) or {})["state"] for c, cid in ids.items()}
+        assert states == {"ship": "transmitted", "shore": "interrupted", None: "interrupted"}
+        assert log.recover_interrupted() == 1  # every record: a log of one console
+    finally:
+        log.close()
+
+
 # --- (b) end to end: SIGKILL, restart, retry ---------------------------------------------
 
 
