@@ -109,6 +109,16 @@ def log_backend(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[LogB
 
 
 @pytest.fixture
+def pg_log(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[LogBackend]:
+    """The mission log on PostgreSQL only, for what several consoles on one log do (a SQLite
+    log has one console and one writer): a fresh database, dropped after."""
+    server: PgServer = request.getfixturevalue("pg_server")
+    name = server.new_database()
+    yield LogBackend("postgresql", tmp_path, server.url(name))
+    server.drop_database(name)
+
+
+@pytest.fixture
 def make_client(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[MakeClient]:
     """Build a started app (lifespan running) with test settings; stopped at teardown."""
     clear_nemesys_env(monkeypatch)

@@ -148,12 +148,10 @@ def test_notices_parse_only_our_payloads() -> None:
 
 
 @pytest.mark.slow  # a listener connecting, and waiting out what must not come
-def test_postgres_notifies_other_consoles_of_committed_writes(log_backend: LogBackend) -> None:
+def test_postgres_notifies_other_consoles_of_committed_writes(pg_log: LogBackend) -> None:
     """Another console's commit is told with its row's key; a rolled-back write and the
     listener's own console's writes are not; a heartbeat alone is not."""
-    if not log_backend.postgres:
-        pytest.skip("SQLite has one console: nothing to tell")
-    ship, shore = log_backend.open(), log_backend.open()
+    ship, shore = pg_log.open(), pg_log.open()
     ship.name_console("ship")
     shore.name_console("shore")
     got: list[Notice] = []
@@ -161,7 +159,7 @@ def test_postgres_notifies_other_consoles_of_committed_writes(log_backend: LogBa
 
     async def scenario() -> None:
         listener = Listener(
-            log_backend.url,
+            pg_log.url,
             "shore",
             on_notice=got.append,
             on_lost=lambda reason: None,

@@ -104,11 +104,9 @@ def test_transmitters_are_upserted_and_read_newest_first(log_backend: LogBackend
 
 
 def test_a_claimed_row_is_skipped_by_another_console_and_not_withdrawn_under_it(
-    log_backend: LogBackend,
+    pg_log: LogBackend,
 ) -> None:
-    if not log_backend.postgres:
-        pytest.skip("SQLite has one writer at a time: nothing to skip")
-    ship, ship2 = log_backend.open(), log_backend.open()
+    ship, ship2 = pg_log.open(), pg_log.open()
     try:
         row, later = put(ship), put(ship)
         with ship.transaction():
@@ -125,13 +123,11 @@ def test_a_claimed_row_is_skipped_by_another_console_and_not_withdrawn_under_it(
         ship2.close()
 
 
-def test_every_row_written_or_decided_is_notified_with_its_key(log_backend: LogBackend) -> None:
-    if not log_backend.postgres:
-        pytest.skip("SQLite has one console: nothing to tell")
-    log = log_backend.open()
+def test_every_row_written_or_decided_is_notified_with_its_key(pg_log: LogBackend) -> None:
+    log = pg_log.open()
     log.name_console("shore")
     try:
-        with psycopg.connect(log_backend.url, autocommit=True) as listener:
+        with psycopg.connect(pg_log.url, autocommit=True) as listener:
             listener.execute("LISTEN nemesys_log")
             row = put(log)
             assert outbox.withdraw(log, row.id, "shore", "no answer")
