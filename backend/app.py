@@ -20,7 +20,18 @@ from fastapi.staticfiles import StaticFiles
 from starlette.exceptions import HTTPException
 from starlette.types import Scope
 
-from backend.api import authoring, chart, commands, errors_db, live, predict, scripts, training
+from backend.api import (
+    authoring,
+    chart,
+    commands,
+    control,
+    errors_db,
+    live,
+    predict,
+    scripts,
+    survey,
+    training,
+)
 from backend.api import dives as dives_api
 from backend.api import vehicles as vehicles_api
 from backend.api import view as view_api
@@ -94,12 +105,14 @@ def create_app(
     for router in (
         authoring.router,
         commands.router,
+        control.router,
         training.router,
         scripts.router,
         live.router,
         chart.router,
         predict.router,
         dives_api.router,
+        survey.router,
         vehicles_api.router,
     ):
         app.include_router(router)

@@ -33,6 +33,8 @@ from backend.commands.link_ber import BerChoice, CopiesFrom
 from backend.commands.link_settings import ber_now, change_link
 from backend.commands.manager import CommandManager
 from backend.commands.service import Assessment, CommandService, check_vehicle
+from backend.control.identity import recovered_by
+from backend.control.runtime import ControlRuntime, start_control
 from backend.dives import Dives
 from backend.fleet import telemetry, views
 from backend.fleet.state import Fleet, members, vehicle_links
@@ -40,20 +42,23 @@ from backend.messages import ActivePath, EventMessage, VehicleView
 from backend.mission_log.opening import open_checked
 from backend.mission_log.records import log_event
 from backend.mission_log.store import MissionLog
+from backend.relay.runtime import RelayRuntime
 from backend.scripts.guard import RunGuard
 from backend.settings import Settings
 from backend.telemetry import TelemetryHub
-from backend.vehicle_link import link_delay_s, open_vehicle_link
+from backend.vehicle_link import link_delay_s, open_training_fleet, open_vehicle_link
 from backend.viewer.draw_queue import PreviewDrawer
 from codec import Encoded, airtime_s
 from planner import Limits, Plan, VehicleState
 from station.link import Link, RosbridgeLink
+from station.link_fleet import FleetLink
 
 if TYPE_CHECKING:  # the heavy ones, imported when training or the 3D view starts
     from backend.foxglove_live.server import FoxgloveLive
     from backend.scripts.operations import ScriptRunner
     from backend.viewer.viewer import Viewer
     from rosbridge.server import BridgeServer
+    from sim.fleet import FleetSimulation
     from sim.simulation import Simulation
 
 logger = logging.getLogger("backend.console")
@@ -92,7 +97,9 @@ class Console:
         self.tiles: TileSource | None = None  # local map tiles (``tiles`` setting)
         self.log: MissionLog | None = None
         self.dives: Dives | None = None  # the current dive (started when the vehicle is heard)
-        self.sim: Simulation | None = None  # training mode: the simulated vehicle
+        #: Training mode: the simulated vehicle (a fleet's first: each is ``sim_of``'s).
+        self.sim: Simulation | None = None
+        self.fleet_sim: FleetSimulation | None = None  # training with a fleet: every vehicle
         self.bridge: BridgeServer | None = None  # training mode: its rosbridge server
         self.link: Link | None = None
         self.hub = TelemetryHub(settings.telemetry_hz)
@@ -102,6 +109,11 @@ class Console:
         self.beliefs: Beliefs | None = None  # what each vehicle is believed to do
         #: The one checked path to the vehicle (every frame leaves through it).
         self.service: CommandService | None = None
+        #: Who is in control of each vehicle; live sync with other consoles (backend.control).
+        self.control: ControlRuntime | None = None
+        #: Commands from a console without the transmitter, through the shared log
+        #: (backend.relay): this console's sender (target relay) or outbox worker.
+        self.relay: RelayRuntime | None = None
         self.viewer: Viewer | None = None  # the 3D view (None: started without one)
         #: The live Foxglove view (None: off; the app's lifespan sets it: backend.foxglove_live).
         self.foxglove: FoxgloveLive | None = None
@@ -125,11 +137,12 @@ class Console:
         if gps is not None:
             self.gps = GpsReader(gps, on_fix=self._on_fix)
             await self.gps.start()
-        # checked (quick_check, not locked, writable): a LogError names the file and the fix
-        self.log = open_checked(s.db_path)
+        # checked (quick_check, not locked, writable, reachable): a LogError names the file or
+        # the server and the fix
+        self.log = open_checked(s.mission_log)
         # ``nemesys console`` already did this before printing its URL; an app built otherwise
         # (tests, an embedding program) gets it here, before any command is taken
-        recovered = self.log.recover_interrupted()
+        recovered = self.log.recover_interrupted(recovered_by(s))
         if recovered:
             logger.warning(
                 "%d commands an earlier run left on their way are interrupted", recovered
@@ -140,7 +153,7 @@ class Console:
         if self._given_link is not None:
             link: Link = self._given_link
         else:
-            link, self.sim, self.bridge = await open_vehicle_link(s, self.limits)
+            link, self.sim, self.bridge = await self._open_link()
         self.link = link
         for vehicle, its_link in vehicle_links(fleet, link):
             telemetry.listen(self, vehicle, its_link)
@@ -163,7 +176,12 @@ class Console:
             fleet=members(fleet),
             link_ber_of=self.link_ber if fleet.configured else None,
         )
-        self.service = CommandService(self.commands, self.assess, s.operator)
+        # who is in control, and (a shared PostgreSQL log) what the other consoles write
+        self.control = start_control(self)
+        self.relay = RelayRuntime(self)
+        self.service = CommandService(
+            self.commands, self.assess, s.operator, gate=self.control.gate, relay=self.relay.sender
+        )
         self.service.watch(self.script_guard)
         self.beliefs = Beliefs(self, tuple(fleet.names))
         self.beliefs.start()
@@ -171,8 +189,9 @@ class Console:
             mirror = self.commands.addressee(fleet.news_name(vehicle)).mirror
             mirror.on_plan = functools.partial(telemetry.show_active, self, vehicle)
         await link.start()
-        if isinstance(link, RosbridgeLink) and s.training:
+        if isinstance(link, RosbridgeLink | FleetLink) and s.training:
             await link.wait_connected(5.0)
+        self.relay.start(self.service)  # the outbox taken once the link is up (training)
         self._health_task = asyncio.create_task(self._push_health(), name="link health")
         if viewer:
             from backend.viewer.viewer import Viewer
@@ -188,6 +207,10 @@ class Console:
                     await task
         if self.beliefs is not None:
             await self.beliefs.stop()
+        if self.relay is not None:
+            await self.relay.stop()
+        if self.control is not None:
+            await self.control.stop()
         if self.commands is not None:
             await self.commands.close()
         if self.link is not None:
@@ -203,6 +226,21 @@ class Console:
         if self.tiles is not None:
             self.tiles.close()
         self.twin_worker.close()
+
+    async def _open_link(self) -> tuple[Link, Simulation | None, BridgeServer | None]:
+        """The settings' link; in training the simulator (a fleet's: every vehicle on one
+        link, :attr:`fleet_sim`) and its bridge."""
+        s = self.settings
+        if not (s.training and s.fleet):
+            return await open_vehicle_link(s, self.limits)
+        link, self.fleet_sim, bridge = await open_training_fleet(s, self.limits)
+        return link, self.fleet_sim.sim(self.fleet.first.name), bridge
+
+    def sim_of(self, vehicle: str) -> Simulation | None:
+        """Training: vehicle ``vehicle``'s simulation (a fleet's own; the single one's)."""
+        if self.fleet_sim is not None:
+            return self.fleet_sim.sim(vehicle)
+        return self.sim
 
     def start_script_loop(self, coro: Coroutine[Any, Any, None]) -> None:
         """Run a mission script's trigger loop (replacing a finished one)."""
@@ -347,7 +385,11 @@ class Console:
         if self.sim is None or self.dives is None:
             raise RuntimeError("not in training mode")
         dive = self.dives.start_new()  # first: a log that cannot be written changes nothing
-        if start_z_m is None:
+        fleet = self.fleet_sim
+        if fleet is not None:  # every vehicle from its own start; a new first simulation
+            fleet.reset(None if start_z_m is None else replace(fleet.config, start_z_m=start_z_m))
+            self.sim = fleet.sim(self.fleet.first.name)
+        elif start_z_m is None:
             self.sim.reset()
         else:
             self.sim.reset(replace(self.sim.config, start_z_m=start_z_m))

@@ -6,7 +6,8 @@ A dive starts at the first of:
 - the training vehicle reset (always a new dive, even if one is open);
 - the first record the console writes before the vehicle is heard: a command (on a one-way
   modem the vehicle may never be heard, and every command still belongs to a dive) or an
-  event (a datum set from the chart).
+  event (a datum set from the chart; a change of control, e.g. a console on a log shared by
+  consoles taking control of its vehicle at start).
 
 A console that starts and stops with none of these adds no dive (it used to add one at every
 start). The dive's start on the vehicle's clock is its first track point (the first pose

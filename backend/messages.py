@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from backend.belief.model import Belief
 from backend.commands.health import LinkHealth
+from backend.control.model import ControlView
 from backend.mission_log.records import CommandJson, CommandRecord, LogEvent, Params, lenient
 
 
@@ -211,6 +212,15 @@ class BeliefMessage(Message):
     belief: Belief = Field(description="the last sent, the believed command, position, Surface")
 
 
+class ControlMessage(Message):
+    """Who is in control of a vehicle, at every change (a request, a grant or refusal, a
+    release, a takeover, a timeout), made by this console or another sharing the mission
+    log; the owner's page shows a waiting ``request`` with its grant and refuse."""
+
+    type: Literal["control"] = "control"
+    control: ControlView = Field(description="the vehicle's control after the change")
+
+
 #: What the hub publishes to every page.
 News = Annotated[
     TelemetryMessage
@@ -219,7 +229,8 @@ News = Annotated[
     | ActivePathMessage
     | LinkMessage
     | EventMessage
-    | BeliefMessage,
+    | BeliefMessage
+    | ControlMessage,
     Field(discriminator="type"),
 ]
 
@@ -229,6 +240,7 @@ __all__ = [
     "ActivePathMessage",
     "BeliefMessage",
     "CommandMessage",
+    "ControlMessage",
     "EventMessage",
     "LastSent",
     "LinkMessage",

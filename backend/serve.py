@@ -20,6 +20,7 @@ from codec import int_from_text, number_from_text
 if TYPE_CHECKING:
     import uvicorn
 
+    from backend.mission_log.store import MissionLog
     from backend.settings import Settings
 
 #: The exit status of bad input (``cli.common.EXIT_USAGE``): a setting, the mission log,
@@ -57,6 +58,23 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
 
 
+def _recover(log: MissionLog, settings: Settings, out: TextIO) -> str | None:
+    """What an earlier run left on its way made ``interrupted`` (on a log consoles share, only
+    this console's own) and said; or why this console's name cannot be used.
+
+    Raises:
+        LogWriteError: the log cannot be written.
+    """
+    from backend.control.identity import ConsoleNameError, recovered_by
+
+    try:
+        recovered = log.recover_interrupted(recovered_by(settings))
+    except ConsoleNameError as err:
+        return str(err)
+    _report_recovered(recovered, out)
+    return None
+
+
 def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
     import uvicorn
     from pydantic import ValidationError
@@ -83,40 +101,47 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
 
         first = err.errors()[0]
         where = ".".join(str(p) for p in first["loc"])
-        return _usage(f"setting {where}: {error_message(first)}")
-    from backend.mission_log.opening import ELSEWHERE, LogError, open_checked
+        # a rule between settings (a model validator) has no field to name
+        return _usage(f"setting{' ' if where else 's'}{where}: {error_message(first)}")
+    from backend.mission_log.opening import LogError, elsewhere, open_checked
     from backend.mission_log.store import LogWriteError
 
     # before the URL: the log is usable, what an earlier run left on its way is interrupted,
     # not stuck, and the token kept beside the log is read (or made, or replaced)
     try:
-        log = open_checked(settings.db_path)
+        log = open_checked(settings.mission_log)
     except LogError as err:
         return _usage(str(err))
     try:
-        recovered = log.recover_interrupted()
+        if (refused := _recover(log, settings, out)) is not None:
+            return _usage(refused)
         settings, kept = _with_token(settings, rotate=args.new_token)
     except LogWriteError as err:
         return _usage(
-            f"mission log {settings.db_path} cannot be written ({err.reason}): free some space "
-            f"or make it writable, {ELSEWHERE}"
+            f"mission log {settings.mission_log_name} cannot be written ({err.reason}): free "
+            f"some space or make it writable, {elsewhere(settings.mission_log)}"
         )
     except TokenFileError as err:
         return _usage(str(err))
     finally:
         log.close()
-    _report_recovered(recovered, out)
     try:
         sockets = listen_sockets(settings.host, settings.port)
     except OSError as err:
         return _usage(port_problem(settings.host, settings.port, err))
     port = sockets[0].getsockname()[1]  # the one chosen, if asked for port 0
     url = f"http://{settings.host}:{port}/?token={settings.token}"
-    mode = "training (simulated vehicle)" if settings.training else f"vehicle at {settings.target}"
+    mode = (
+        "training (simulated vehicle)"
+        if settings.training
+        else "relay (no transmitter here: the console holding it sends)"
+        if settings.relay
+        else f"vehicle at {settings.target}"
+    )
 
     def announce() -> None:
         out.write(
-            f"NemeSys console, {mode}; mission log {settings.db_path}\n"
+            f"NemeSys console, {mode}; mission log {settings.mission_log_name}\n"
             f"Open this URL (it holds the operator token; without it the page is read-only):\n"
             f"    {url}\n{kept}"
         )

@@ -4,7 +4,9 @@ Defaults are the embedded training set-up: a simulated NemeSys behind its own ro
 loopback, a local SQLite mission log, everything bound to 127.0.0.1. Point ``target`` at a
 real vehicle's rosbridge (``ws://host:9090``) or an ME transmitter (``serial:///dev/ttyUSB0``,
 ``tcp://host:port``) instead, the latter with ``telemetry`` (``ws://host:9090``) when the
-vehicle reports over a rosbridge (the hybrid link). A settings file
+vehicle reports over a rosbridge (the hybrid link); ``relay`` is a console without a
+transmitter of its own (the shore), its commands sent by the console that holds it through a
+shared PostgreSQL log. A settings file
 (``NEMESYS_SETTINGS=path``, ``KEY=value`` lines with the same ``NEMESYS_`` names) is read when
 given.
 """
@@ -15,6 +17,7 @@ import os
 import secrets
 from pathlib import Path
 from typing import Annotated, Any
+from urllib.parse import urlsplit
 
 from pydantic import BeforeValidator, Field, WithJsonSchema, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -24,6 +27,9 @@ from vehicle_contract.fleet import FleetVehicle
 
 #: The target meaning "the embedded simulator" (training mode).
 SIM_TARGET = "sim"
+#: The target meaning "no transmitter here": commands go through the console that holds it
+#: (the shared log's outbox, backend/relay/), which needs a PostgreSQL ``database_url``.
+RELAY_TARGET = "relay"
 
 
 def _number(value: object, *, text: bool) -> float | None:
@@ -94,7 +100,8 @@ class Settings(BaseSettings):
     #: The live Foxglove view's port (docs/foxglove.md, "Live"): a read-only Foxglove
     #: WebSocket server on ``host`` (0: any free port). Unset: off.
     foxglove_port: Annotated[int, Field(ge=0, le=65535)] | None = None
-    #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port.
+    #: "sim" (training: the embedded simulator), ws://..., serial:///dev/..., tcp://host:port,
+    #: or "relay" (no transmitter: the console holding it on the shared log sends).
     target: str = SIM_TARGET
     #: With an ME modem target: the vehicle's rosbridge (ws://host:port) that telemetry and
     #: acknowledgements come over, the frames going by the modem (the hybrid link). "": none.
@@ -111,12 +118,34 @@ class Settings(BaseSettings):
     sim_seed: int = 0
     sim_time_scale: Annotated[float, Field(ge=0, le=50)] = 1.0
     db_path: Path = Path(".nemesys/missions.sqlite3")
+    #: The mission log on a PostgreSQL server instead of the SQLite file ``db_path``:
+    #: postgresql://user:password@host:5432/database (several consoles may share one).
+    #: "": the SQLite file. (The token file stays beside ``db_path`` either way.)
+    database_url: str = ""
     #: The operator token. Not set: the one kept beside the mission log, made on first use
     #: (backend/token_file.py: ``create_app`` and ``nemesys console`` put it here).
     token: Annotated[str, Field(min_length=16)] = Field(
         default_factory=lambda: secrets.token_urlsafe(24)
     )
     operator: Annotated[str, Field(min_length=1, max_length=40)] = "operator"
+    #: This console's name among the consoles sharing a mission log (control, the records'
+    #: ``console``, live sync: backend/control/). "": the one kept beside ``db_path``
+    #: (``<db_path>.console``), made on first use from the host name.
+    console_name: Annotated[
+        str, Field(max_length=64, pattern=r"^([A-Za-z0-9][A-Za-z0-9._-]*)?$")
+    ] = ""
+    #: Control of a vehicle is released when the console holding it has not refreshed its
+    #: heartbeat for this long, on the database's clock (s; PostgreSQL: several consoles).
+    control_timeout_s: Annotated[float, Field(ge=1, le=3600)] = 15.0
+    #: At start, take control of each vehicle no console controls (PostgreSQL; a SQLite log
+    #: has one console, always in control).
+    control_at_start: bool = True
+    #: A relay console (target "relay") waits this long for the transmitting console's
+    #: decision on a command (s); none by then: the command is withdrawn, nothing sent (504).
+    relay_wait_s: Annotated[float, Field(ge=0.5, le=60)] = 5.0
+    #: A console with a transmitter refuses a relayed command that waited longer than this
+    #: in the outbox, on the database's clock (s): stale, never sent late.
+    relay_max_age_s: Annotated[float, Field(ge=1, le=3600)] = 30.0
     bitrate_bps: Annotated[float, Field(gt=0, le=1e7)] = 36000.0
     #: Time allowed for an acknowledgement on top of airtime and the channel's delay (s).
     ack_timeout_s: Annotated[float, Field(gt=0, le=600)] = 5.0
@@ -179,7 +208,7 @@ class Settings(BaseSettings):
     @field_validator("target")
     @classmethod
     def _target(cls, value: str) -> str:
-        if value == SIM_TARGET:
+        if value in (SIM_TARGET, RELAY_TARGET):
             return value
         from station.transmit import open_transmitter
 
@@ -197,7 +226,23 @@ class Settings(BaseSettings):
         return parse_telemetry(value)  # raises ValueError naming the allowed forms
 
     @model_validator(mode="after")
+    def _relay_on_a_shared_log(self) -> Settings:
+        if self.relay and not self.database_url:
+            raise ValueError(
+                "target 'relay' (a console without a transmitter, its commands sent by the "
+                "console that holds it) needs the mission log the consoles share: set "
+                "NEMESYS_DATABASE_URL=postgresql://user:password@host:port/database, the same "
+                "as the transmitting console's"
+            )
+        return self
+
+    @model_validator(mode="after")
     def _telemetry_with_a_modem(self) -> Settings:
+        if self.telemetry and self.relay:
+            raise ValueError(
+                f"telemetry {self.telemetry!r} is for an ME modem target (serial:///dev/..., "
+                "tcp://host:port, loop://); target 'relay' has no link of its own"
+            )
         if self.telemetry and (self.training or self.target.startswith(("ws://", "wss://"))):
             raise ValueError(
                 f"telemetry {self.telemetry!r} is for an ME modem target (serial:///dev/..., "
@@ -209,6 +254,19 @@ class Settings(BaseSettings):
                 )
             )
         return self
+
+    @field_validator("database_url")
+    @classmethod
+    def _database_url(cls, value: str) -> str:
+        value = value.strip()
+        scheme = urlsplit(value).scheme
+        if value and scheme not in ("postgresql", "postgres"):
+            # the scheme only: the rest may hold a password
+            raise ValueError(
+                "database_url must be postgresql://user:password@host:port/database, or empty "
+                f"for the SQLite file db_path; got a URL of scheme {scheme or 'none'!r}"
+            )
+        return value
 
     @field_validator("vehicle_namespace")
     @classmethod
@@ -234,11 +292,10 @@ class Settings(BaseSettings):
                 f"vehicle_namespace {self.vehicle_namespace!r} names one vehicle; with a fleet "
                 "(vehicles) each vehicle's namespace is its name: leave vehicle_namespace empty"
             )
-        if self.training:
+        if self.relay:
             raise ValueError(
-                "a fleet (vehicles) in training needs the fleet simulator, which this console "
-                "does not have yet: leave vehicles empty for training, or give a target (an ME "
-                "modem, with telemetry for a rosbridge, or a rosbridge)"
+                "a console without a transmitter (target relay) drives the single vehicle: "
+                "leave vehicles empty there (the console holding the transmitter has the fleet)"
             )
         return self
 
@@ -258,8 +315,25 @@ class Settings(BaseSettings):
         return value
 
     @property
+    def mission_log(self) -> Path | str:
+        """Where the mission log is: the PostgreSQL URL if set, else the SQLite file."""
+        return self.database_url or self.db_path
+
+    @property
+    def mission_log_name(self) -> str:
+        """The mission log as messages name it (a URL's password masked)."""
+        from backend.mission_log.database import masked
+
+        return masked(self.database_url) if self.database_url else str(self.db_path)
+
+    @property
     def training(self) -> bool:
         return self.target == SIM_TARGET
+
+    @property
+    def relay(self) -> bool:
+        """No transmitter here: the console holding it sends (``target`` "relay")."""
+        return self.target == RELAY_TARGET
 
     @classmethod
     def load(cls, **overrides: Any) -> Settings:

@@ -2,6 +2,10 @@
 
 * One vehicle, 50 Hz physics, 10 Hz guidance, flying the pod patrol's square: simulated
   seconds per wall second on one core (target >= 100x real time).
+* A fleet on one shared ME link (:class:`sim.fleet.FleetSimulation`, every vehicle stepped in
+  one loop in one process, as ``nemesys sim --vehicles N`` runs it) of 1, 5 and 10 vehicles,
+  each flying its square (one square sent to all): simulated seconds per wall second (target
+  >= 100x real time with 10).
 * 20 vehicles together, split over 2 worker processes (this machine has 2 cores), each
   flying its own square: the slower worker's simulated seconds per wall second (target >=
   1x, i.e. real time); the same 20 on one core is shown beside it.
@@ -23,12 +27,19 @@ from typing import TextIO
 from bench._timing import table, verdict
 from bench.reconfig import receive_afresh, retask_cases
 from codec import DICTIONARY, encode_frame
+from sim.fleet import FleetSimulation
 from sim.scenarios import SCENARIOS
 from sim.simulation import SimConfig, Simulation
+from vehicle_contract.fleet import parse_vehicles
 
 TARGET_SPEEDUP = 100.0
 TARGET_FLEET = 20
 TARGET_SETPOINT_MS = 1.0
+#: Fleets on one link measured, and the real-time factor each must reach.
+FLEET_SIZES = (1, 5, 10)
+TARGET_FLEET_SPEEDUP = 100.0
+#: Simulated seconds per advance of the fleet: what the bridge's 20 ms tick asks at 100x.
+FLEET_SLICE_S = 2.0
 WORKERS = 2
 TRIALS = 30
 
@@ -46,6 +57,20 @@ def speedup(sim_s: float) -> float:
     sim = _square_vehicle(0)
     t0 = time.perf_counter()
     sim.run_until(sim.t_s + sim_s)
+    return sim_s / (time.perf_counter() - t0)
+
+
+def one_link_factor(n: int, sim_s: float) -> float:
+    """Simulated seconds per wall second of a fleet of ``n`` on one link, each vehicle flying
+    the square sent to all (address 0), advanced in :data:`FLEET_SLICE_S` slices."""
+    fleet = FleetSimulation(parse_vehicles(str(n)))
+    square = encode_frame("square", speed=0.18, depth=2, side_span=8, direction="cw", address=0)
+    fleet.submit_frame(square.frame.to_bytes())
+    fleet.run_until(1.0)
+    end = fleet.t_s + sim_s
+    t0 = time.perf_counter()
+    while fleet.t_s < end - 1e-9:
+        fleet.advance(FLEET_SLICE_S)
     return sim_s / (time.perf_counter() - t0)
 
 
@@ -105,6 +130,10 @@ def run(out: TextIO, quick: bool = False) -> int:
     fleet2 = [fleet_factor(TARGET_FLEET, fleet_s, WORKERS) for _ in range(rounds)]
     fleet1 = [fleet_factor(TARGET_FLEET, fleet_s, 1) for _ in range(rounds)]
     sp, f2, f1 = statistics.median(speeds), statistics.median(fleet2), statistics.median(fleet1)
+    link_s = 30.0 if quick else 120.0
+    one_link = {
+        n: statistics.median(one_link_factor(n, link_s) for _ in range(rounds)) for n in FLEET_SIZES
+    }
     out.write(f"Simulation speed (median of {rounds} runs; 50 Hz physics, 10 Hz guidance)\n\n")
     rows = [
         [
@@ -120,6 +149,15 @@ def run(out: TextIO, quick: bool = False) -> int:
             verdict(f2 >= 1.0),
         ],
         [f"{TARGET_FLEET} vehicles, one process", f"{f1:,.1f}x real time", "(for comparison)", ""],
+    ]
+    rows += [
+        [
+            f"fleet of {n} on one link, one loop",
+            f"{factor:,.0f}x real time",
+            f">= {TARGET_FLEET_SPEEDUP:.0f}x",
+            verdict(factor >= TARGET_FLEET_SPEEDUP),
+        ]
+        for n, factor in one_link.items()
     ]
     out.write(table(["case", "measured", "target", ""], rows) + "\n\n")
     lat = setpoint_latencies(10 if quick else TRIALS)

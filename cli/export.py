@@ -1,8 +1,9 @@
 """``nemesys export``: a dive of the mission log for the robotics tools, as an MCAP file
 (``--mcap FILE``) and/or a rosbag2 directory (``--rosbag2 DIR``): docs/foxglove.md.
 
-Registered by :mod:`cli.main` (:func:`add_parser`). The log is opened read-only (a console may
-be running on it; an older log is read as it is, never migrated) and read in one snapshot.
+Registered by :mod:`cli.main` (:func:`add_parser`). The log (a SQLite file, or a
+``postgresql://`` URL as the console's ``NEMESYS_DATABASE_URL``) is opened read-only (a console
+may be running on it; an older log is read as it is, never migrated) and read in one snapshot.
 Progress goes to standard error, the result to standard output. Bad input (no such log, dive or
 directory; an output that exists without ``--force``) is one line and exit status 2, with
 nothing written.
@@ -23,6 +24,8 @@ from codec import int_from_text, number_from_text
 #: The console's default mission log (``backend.settings.Settings.db_path``), and its variable.
 DEFAULT_DB = Path(".nemesys/missions.sqlite3")
 DB_VARIABLE = "NEMESYS_DB_PATH"
+#: The console's log on PostgreSQL (``Settings.database_url``): when set, before the file.
+URL_VARIABLE = "NEMESYS_DATABASE_URL"
 
 
 def _datum(text: str) -> tuple[float, float]:
@@ -58,8 +61,9 @@ def add_parser(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None
     )
     p.add_argument(
         "--db",
-        type=Path,
-        help=f"the mission log (default ${DB_VARIABLE}, else {DEFAULT_DB})",
+        metavar="FILE|URL",
+        help="the mission log: a SQLite file or a postgresql:// URL (default, as the console: "
+        f"${URL_VARIABLE}, else ${DB_VARIABLE}, else {DEFAULT_DB})",
     )
     p.add_argument(
         "--datum",
@@ -93,10 +97,15 @@ def cmd_export(args: argparse.Namespace, out: TextIO) -> int:
         raise UsageError("give --mcap FILE, --rosbag2 DIR, or both")
     if args.dive < 1:
         raise UsageError(f"DIVE is a dive's number, 1 and up, got {args.dive}")
-    db_path = args.db or Path(os.environ.get(DB_VARIABLE) or DEFAULT_DB)
+    where: str = (
+        args.db
+        or os.environ.get(URL_VARIABLE, "").strip()
+        or os.environ.get(DB_VARIABLE)
+        or str(DEFAULT_DB)
+    )
     datum = None if args.datum is None else Datum(*args.datum)
     try:
-        db = open_read_only(db_path)
+        db = open_read_only(where)
     except LogError as err:
         raise UsageError(str(err)) from None
     try:

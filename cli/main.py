@@ -191,6 +191,8 @@ BENCHMARKS = (
     "durations",
     "dead_reckoning",
     "export",
+    "control_sync",
+    "relay",
 )
 
 
@@ -241,6 +243,12 @@ def cmd_analyze(args: argparse.Namespace, out: TextIO) -> int:
         if args.trials is not None and args.trials < 1:
             raise UsageError(f"--trials must be at least 1, got {args.trials}")
         return addressing_report.main(out, args.trials, args.seed, args.quick, sys.stderr)
+    if args.target == "surface-all":
+        from analysis import surface_all
+
+        if args.trials is not None and args.trials < 1:
+            raise UsageError(f"--trials must be at least 1, got {args.trials}")
+        return surface_all.main(out, args.trials, args.seed, args.quick)
     raise UsageError(f"unknown analysis {args.target!r}")
 
 
@@ -342,14 +350,21 @@ def build_parser() -> argparse.ArgumentParser:
         "rate of wrong commands accepted with and without the CRC-4. delivery: one command "
         "sent r = 1..3 times through the training channel, against 1 - (1 - P1)^r. "
         "addressing: the ways to address vehicles on one link compared (misaddressed "
-        "acceptance and lost frames, analytic and Monte Carlo), and the one chosen.",
+        "acceptance and lost frames, analytic and Monte Carlo), and the one chosen. "
+        "surface-all: copies and time to get Surface to all of N = 1, 5, 10 vehicles at "
+        "p >= 0.999 on a one-way link at BER 1e-2, against a Surface per vehicle.",
     )
-    p.add_argument("target", choices=["ber", "delivery", "addressing"], help="what to analyze")
+    p.add_argument(
+        "target",
+        choices=["ber", "delivery", "addressing", "surface-all"],
+        help="what to analyze",
+    )
     p.add_argument(
         "--trials",
         type=int_from_text,
         default=None,
-        help="delivery: commands per BER; addressing: frames per design and condition",
+        help="delivery: commands per BER; addressing: frames per design and condition; "
+        "surface-all: Monte Carlo trials per fleet size",
     )
     p.add_argument("--quick", action="store_true", help="fewer frames (under a minute)")
     p.add_argument(

@@ -93,6 +93,22 @@ def add_parsers(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> Non
         default=1.0,
         help="simulated seconds per wall second (default 1: real time)",
     )
+    p.add_argument(
+        "--vehicles",
+        default="",
+        metavar="N|JSON",
+        help="a fleet on one shared ME link: a count (auv1, auv2, ... with addresses 1, 2, ...) "
+        'or a JSON list such as \'[{"name": "alpha", "address": 4}]\'; each vehicle\'s topics '
+        "under its namespace (/auv1/nemesys/pose), a frame on any frame topic or on "
+        "/nemesys/frame heard by all (default: one vehicle, no address)",
+    )
+    p.add_argument(
+        "--spacing",
+        type=_number(0.1, 1000, "--spacing"),
+        default=30.0,
+        metavar="M",
+        help="with --vehicles: metres between neighbouring vehicles at the start (default 30)",
+    )
     p.add_argument("--quiet", action="store_true", help="log warnings only")
 
     p = sub.add_parser(
@@ -148,8 +164,14 @@ def cmd_sim(args: argparse.Namespace, out: TextIO) -> int:
     from rosbridge.server import BridgeServer
     from sim.channel import ChannelConfig
     from sim.environment import CurrentConfig
+    from sim.fleet import FleetSimulation
     from sim.simulation import SimConfig, Simulation
+    from vehicle_contract.fleet import FleetError, parse_vehicles
 
+    try:
+        vehicles = parse_vehicles(args.vehicles)
+    except FleetError as err:
+        raise SimUsageError(f"--vehicles: {err}") from None
     try:
         channel = ChannelConfig(
             bitrate_bps=args.bitrate,
@@ -161,22 +183,31 @@ def cmd_sim(args: argparse.Namespace, out: TextIO) -> int:
         )
         current = CurrentConfig(north_mps=args.current[0], east_mps=args.current[1])
         config = SimConfig(seed=args.seed, channel=channel, current=current)
+        sim: Simulation | FleetSimulation = (
+            FleetSimulation(vehicles, config, spacing_m=args.spacing)
+            if vehicles
+            else Simulation(config)
+        )
     except ValueError as err:
         raise SimUsageError(str(err)) from None
     logging.basicConfig(
         level=logging.WARNING if args.quiet else logging.INFO,
         format="%(asctime)s %(name)s %(levelname)s %(message)s",
     )
-    sim = Simulation(config)
     server = BridgeServer(sim, args.host, args.port, time_scale=args.time_scale)
+    fleet = (
+        " fleet of " + ", ".join(f"{v.name} (address {v.address})" for v in vehicles) + ";"
+        if vehicles
+        else ""
+    )
 
     async def main() -> None:
         await server.start()
         out.write(
             f"NemeSys simulator: rosbridge at ws://{args.host}:{server.port} "
             f"(seed {args.seed}, BER {args.ber:g}, bursts {args.bursts:g}, loss {args.loss:g}, "
-            f"range {args.range:g} m, delay {args.delay:g} s, time x{args.time_scale:g}); "
-            "Ctrl-C stops\n"
+            f"range {args.range:g} m, delay {args.delay:g} s, time x{args.time_scale:g});"
+            f"{fleet} Ctrl-C stops\n"
         )
         out.flush()
         loop = asyncio.get_running_loop()

@@ -6,7 +6,7 @@ import { initAuthoring, current } from "./authoring.js";
 import { renderBelief, setBeliefReachable } from "./belief.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
 import { setDictionary } from "./form.js";
-import { initLinkTest, renderLink, setConsoleReachable, setSessionLink } from "./link.js";
+import { initLinkTest, renderControl, renderLink, renderLogEvent, setConsoleReachable, setSessionLink } from "./link.js";
 import { connectLive } from "./live.js";
 import { initLog, loadLog } from "./log.js";
 import { initChart } from "./chart.js";
@@ -199,7 +199,11 @@ async function main() {
       emit("vehicle", { msg: m });
     },
     link: (m) => renderLink(m.link),
-    event: (m) => emit("log_event", m.event), // a mission log event (script.js: a run stopped)
+    control: (m) => renderControl(m.control), // who is in control (consoles sharing a log)
+    event: (m) => { // a mission log event (script.js: a run stopped; a relayed command refused)
+      emit("log_event", m.event);
+      renderLogEvent(m.event);
+    },
     belief: (m) => renderBelief(m.belief),
     auth_ok: tokenAccepted,
     auth_refused: tokenRefused,

@@ -6,7 +6,7 @@
 
 import { api } from "./api.js";
 import { berText, age } from "./delivery.js";
-import { $, canWrite, el, num, READ_ONLY_TIP, withUnit } from "./ui.js";
+import { $, canWrite, el, notify, num, READ_ONLY_TIP, resolved, withUnit } from "./ui.js";
 
 const CAPABILITY = {
   acks_and_telemetry: "acks + telemetry",
@@ -100,9 +100,58 @@ export function setSessionLink(link) {
   changed();
 }
 
+let logRefusal = null; // the header's line while the mission log is unreachable
+
+/** The mission log's database out of reach (link.mission_log): a line in the header's
+ *  message row until it is back ("mission log unreachable — sends refused"). */
+function renderMissionLog(reach) {
+  const down = reach && reach.reachable === false;
+  const text = down ? `mission log unreachable — sends refused (${reach.problem || "no answer"})` : null;
+  if (text === logRefusal) return; // unchanged: told once, not every second
+  logRefusal = text;
+  if (text) notify(text, "error", "mission-log");
+  else resolved("mission-log");
+}
+
+/** A console without a transmitter (target relay): "relay via <the console holding it>"
+ *  (link.relay), or that none holds one; "" on a console that transmits. */
+export function relayText(l) {
+  const r = l && l.relay;
+  if (!r || typeof r !== "object") return "";
+  return r.via ? `relay via ${r.via}` : "relay: no console holds the transmitter";
+}
+
+/** The transmitting console's link as the relay console last read it, for the status row. */
+function relayFacts(r) {
+  if (!r.via) return "no console holding the transmitter is on the mission log";
+  const seen = typeof r.seen_age_s === "number" ? `seen ${age(r.seen_age_s)}` : "";
+  if (!r.fresh) return `${r.via} NOT SEEN (${seen || "never"}): commands cannot be sent`;
+  const link = [r.target, r.connected === false ? "NOT CONNECTED" : "connected", r.level]
+    .filter(Boolean).join(", ");
+  return `its link: ${link}; ${seen}`;
+}
+
+/** A mission log event worth a line in the message row: a relayed command refused by the
+ *  console holding the transmitter (every console's pages get it). */
+export function renderLogEvent(e) {
+  if (e && e.kind === "relay" && e.detail) notify(String(e.detail), "warn", "relay");
+}
+
+/** Who is in control of a vehicle changed (consoles sharing one mission log: a websocket
+ *  "control" message), said in the message row, with a request waiting for the owner. */
+export function renderControl(c) {
+  if (!c || typeof c !== "object" || c.implicit) return;
+  const who = c.console ? `console ${c.console} (operator ${c.operator})` : "nobody";
+  let text = `control of ${c.vehicle}: ${who}`;
+  const r = c.request;
+  if (r) text += `; console ${r.console} (operator ${r.operator}) asks for it: grant or refuse (POST /api/control)`;
+  notify(text, r ? "warn" : "info", "control");
+}
+
 /** From GET /api/vehicle or a websocket "link" message. */
 export function renderLink(link) {
   if (!link || typeof link !== "object") return;
+  renderMissionLog(link.mission_log);
   vehicleLink = link;
   linkAt = performance.now();
   renderIndicator(link);
@@ -132,7 +181,8 @@ function renderIndicator(l) {
   const level = l && reachable ? levelOf(l) : "unknown";
   const problems = problemsOf(l);
   const { glyph, word } = LEVEL[level];
-  let text = l ? `${capabilityText(l)}${word ? ` – ${word}` : ""}` : "waiting…";
+  const relay = relayText(l);
+  let text = l ? `${relay ? `${relay} · ` : ""}${capabilityText(l)}${word ? ` – ${word}` : ""}` : "waiting…";
   let title = l ? (problems.length ? problems.join("\n") : "no problems") : "no vehicle link state yet";
   if (!reachable) {
     text = "unknown (console unreachable)";
@@ -177,6 +227,7 @@ function renderRow() {
   const later = (a) => (typeof a === "number" && Number.isFinite(a) ? a + since : a);
   if (!reachable && l) facts.push(`console unreachable: the vehicle link as of ${Math.round(since)} s ago`);
   if (l) {
+    if (l.relay && typeof l.relay === "object") facts.push(`${relayText(l)} (${relayFacts(l.relay)})`);
     facts.push(capabilityText(l));
     if (l.connected !== undefined && reachable) facts.push(l.connected ? "connected" : "NOT CONNECTED");
     const recent = framesText(l.frames && l.frames.recent);

@@ -1,10 +1,10 @@
-"""The ROS graph a client sees through the simulated rosbridge, and rosapi's answers about it.
+"""The ROS graph a client sees through the simulated rosbridge.
 
 A real vehicle runs ``rosbridge_websocket``, ``rosapi`` (with its helper ``rosapi_params``)
 and the vehicle's node; the simulator reproduces that graph: :class:`Graph` holds the nodes,
 the topics each publishes and subscribes (the NemeSys contract, the server's own topics, and
-those the bridge creates for its clients), and the services. :meth:`Graph.call_service`
-answers the rosapi services a client uses, in the real ``rosapi`` node's response layout;
+those the bridge creates for its clients), and the services. :func:`rosbridge.rosapi.call_service`
+answers the rosapi services a client uses about it, in the real ``rosapi`` node's layout;
 names are resolved against the root namespace as the real server's ``rclpy`` does
 (:func:`expand_name`: ``rosapi/topics`` is ``/rosapi/topics``).
 """
@@ -13,30 +13,31 @@ from __future__ import annotations
 
 import re
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Final
+from typing import Final
 
-from rosbridge.convert import populate
 from rosbridge.errors import (
-    BridgeError,
     InvalidName,
     JsonObject,
     ServiceError,
     TopicNotEstablished,
     TypeMismatch,
 )
-from rosbridge.typedefs import full_text
 from rosbridge.types import resolve_type
 from vehicle_contract import contract
 from vehicle_contract.contract import VEHICLE_NODE
-from vehicle_contract.messages import stamp
+from vehicle_contract.names import check_namespace, topic_name
 
 #: Node names (a real vehicle: rosbridge_websocket_launch.xml plus the vehicle's node).
 BRIDGE_NODE: Final = "/rosbridge_websocket"
 ROSAPI_NODE: Final = "/rosapi"
 ROSAPI_PARAMS_NODE: Final = "/rosapi_params"
+#: A fleet's graph (:class:`Graph` with namespaces): the surface station's ME transmitter, the
+#: subscriber of the contract's frame topic, through which a frame goes once onto the link
+#: that every vehicle hears.
+TRANSMITTER_NODE: Final = "/nemesys_me_transmitter"
 #: The ROS 2 distribution the simulated graph is modelled on (rosapi/get_ros_version).
 ROS_DISTRO: Final = "jazzy"
 #: Seconds a publisher the bridge made for its clients outlives their last unadvertise.
@@ -102,6 +103,12 @@ ROSAPI_SERVICES: Final = tuple(
 _TOKEN: Final = re.compile(r"[A-Za-z0-9_]*")
 
 
+def vehicle_node_of(namespace: str) -> str:
+    """The vehicle's node under ``namespace``: ``/auv1/nemesys_vehicle`` (the reference node's
+    name, :data:`vehicle_contract.contract.VEHICLE_NODE`, launched in that namespace)."""
+    return check_namespace(namespace) + VEHICLE_NODE
+
+
 def expand_name(name: str, kind: str = "topic", node: str = BRIDGE_NODE) -> str:
     """A topic or service name made absolute as ``rclpy`` does it for the bridge's node (in
     the root namespace): ``x`` -> ``/x``, ``~/x`` -> ``/rosbridge_websocket/x``.
@@ -153,11 +160,32 @@ class Graph:
         clock: Callable[[], float] = time.monotonic,
         ros_time: Callable[[], float] = lambda: 0.0,
         vehicle_node: str = VEHICLE_NODE,
+        namespaces: Sequence[str] = (),
     ) -> None:
         self.clock = clock
         self.ros_time = ros_time
         self.vehicle_node = vehicle_node
-        self._nodes = (BRIDGE_NODE, ROSAPI_NODE, ROSAPI_PARAMS_NODE, vehicle_node)
+        # One vehicle (no namespaces): its node and the contract's names, as ever. A fleet:
+        # each vehicle's node and topics under its namespace, and the station's transmitter
+        # on the contract's frame topic (every frame topic is the one shared link).
+        vehicles = (
+            [(vehicle_node, "")]
+            if not namespaces
+            else [(vehicle_node_of(ns), ns) for ns in namespaces]
+        )
+        fleet_nodes = (TRANSMITTER_NODE,) if namespaces else ()
+        self._nodes = (
+            BRIDGE_NODE,
+            ROSAPI_NODE,
+            ROSAPI_PARAMS_NODE,
+            *(node for node, _ in vehicles),
+            *fleet_nodes,
+        )
+        #: The topics whose messages are frames for the vehicle (or the fleet's shared link).
+        self.frame_topics = frozenset(
+            {topic_name(contract.FRAME_TOPIC, ns) for _, ns in vehicles}
+            | ({contract.FRAME_TOPIC} if namespaces else set())
+        )
         # Static endpoints: topic -> {node: type}.
         self._static_pubs: dict[str, dict[str, str]] = {}
         self._static_subs: dict[str, dict[str, str]] = {}
@@ -168,13 +196,18 @@ class Graph:
             ]
         for topic in (CLIENT_COUNT_TOPIC, CONNECTED_CLIENTS_TOPIC):
             self._static_pubs[topic] = {BRIDGE_NODE: SERVER_TOPIC_TYPES[topic]}
-        for t in contract.TOPICS:
-            if not t.required:  # the simulator publishes no optional topic (no datum)
-                continue
-            side = self._static_subs if t.direction is contract.Direction.TO_VEHICLE else None
-            (side if side is not None else self._static_pubs).setdefault(t.name, {})[
-                vehicle_node
-            ] = t.type
+        for node, ns in vehicles:
+            for t in contract.TOPICS:
+                if not t.required:  # the simulator publishes no optional topic (no datum)
+                    continue
+                side = self._static_subs if t.direction is contract.Direction.TO_VEHICLE else None
+                (side if side is not None else self._static_pubs).setdefault(
+                    topic_name(t.name, ns), {}
+                )[node] = t.type
+        if namespaces:
+            self._static_subs.setdefault(contract.FRAME_TOPIC, {})[TRANSMITTER_NODE] = (
+                contract.TOPIC_TYPES[contract.FRAME_TOPIC]
+            )
         self._bridge_pubs: dict[str, _BridgeTopic] = {}
         self._bridge_subs: dict[str, _BridgeTopic] = {}
         #: Latched (transient local, depth 1) messages: topic -> the last message's JSON.
@@ -290,113 +323,3 @@ class Graph:
             "publishing": sorted(t for t, nodes in pubs.items() if node in nodes),
             "services": sorted(n for n, (_, owner) in self._services.items() if owner == node),
         }
-
-    def call_service(self, service: str, args: Any) -> JsonObject:
-        """Call a service of the graph (``service`` already expanded) with the client's
-        ``args`` (an object, a list of positional values, or anything else for none).
-
-        Raises :class:`ServiceError` with the real server's text: no such service, bad
-        arguments, or a service the simulator does not model (parameters, ``*_details``).
-        """
-        if service not in self._services:
-            raise ServiceError(f"Service {service} does not exist")
-        kind = self._services[service][0]
-        handler = _ROSAPI.get(service)
-        if handler is None:
-            raise ServiceError(
-                f"{service} ({kind}) exists on a real vehicle but is not modelled by the "
-                "NemeSys simulator"
-            )
-        fields, answer = handler
-        request_name = kind.replace("/srv/", "/") + "_Request"
-        if isinstance(args, list):
-            args = dict(zip((name for name, _ in fields), args, strict=False))
-        elif not isinstance(args, dict):
-            args = {}
-        try:
-            request = populate(request_name, args, fields=fields)
-        except BridgeError as exc:
-            raise ServiceError(exc.reason) from None
-        return answer(self, request)
-
-
-def _topics(graph: Graph, _: JsonObject) -> JsonObject:
-    topics = graph.topics()
-    return {"topics": list(topics), "types": list(topics.values())}
-
-
-def _topics_and_raw_types(graph: Graph, _: JsonObject) -> JsonObject:
-    """rosapi's answer Foxglove's rosbridge player asks for: each type's full definition."""
-    topics = graph.topics()
-    kinds = list(topics.values())
-    return {
-        "topics": list(topics),
-        "types": kinds,
-        "typedefs_full_text": list(map(full_text, kinds)),
-    }
-
-
-def _topics_for_type(graph: Graph, request: JsonObject) -> JsonObject:
-    return {"topics": [t for t, kind in graph.topics().items() if kind == request["type"]]}
-
-
-def _services(graph: Graph, _: JsonObject) -> JsonObject:
-    return {"services": list(graph.services())}
-
-
-def _services_for_type(graph: Graph, request: JsonObject) -> JsonObject:
-    return {"services": [s for s, kind in graph.services().items() if kind == request["type"]]}
-
-
-def _service_providers(graph: Graph, request: JsonObject) -> JsonObject:
-    wanted = request["service"]
-    return {
-        "providers": [
-            node
-            for node in graph.nodes()
-            if any(graph.services()[s] == wanted for s in graph.node_details(node)["services"])
-        ]
-    }
-
-
-def _service_node(graph: Graph, request: JsonObject) -> JsonObject:
-    nodes = [n for n in graph.nodes() if request["service"] in graph.node_details(n)["services"]]
-    return {"node": nodes[0] if nodes else ""}
-
-
-_STRING: Final = "string"
-#: rosapi services answered: name -> (request fields, answer).
-_ROSAPI: Final[
-    Mapping[str, tuple[tuple[tuple[str, str], ...], Callable[[Graph, JsonObject], JsonObject]]]
-] = MappingProxyType(
-    {
-        "/rosapi/topics": ((), _topics),
-        "/rosapi/topics_for_type": ((("type", _STRING),), _topics_for_type),
-        "/rosapi/topics_and_raw_types": ((), _topics_and_raw_types),
-        "/rosapi/services": ((), _services),
-        "/rosapi/services_for_type": ((("type", _STRING),), _services_for_type),
-        "/rosapi/nodes": ((), lambda g, _: {"nodes": g.nodes()}),
-        "/rosapi/node_details": ((("node", _STRING),), lambda g, r: g.node_details(r["node"])),
-        "/rosapi/action_servers": ((), lambda g, _: {"action_servers": []}),
-        "/rosapi/topic_type": (
-            (("topic", _STRING),),
-            lambda g, r: {"type": g.topics().get(r["topic"], "")},
-        ),
-        "/rosapi/service_type": (
-            (("service", _STRING),),
-            lambda g, r: {"type": g.services().get(r["service"], "")},
-        ),
-        "/rosapi/publishers": (
-            (("topic", _STRING),),
-            lambda g, r: {"publishers": sorted(g.publishers_by_topic().get(r["topic"], {}))},
-        ),
-        "/rosapi/subscribers": (
-            (("topic", _STRING),),
-            lambda g, r: {"subscribers": sorted(g.subscribers_by_topic().get(r["topic"], {}))},
-        ),
-        "/rosapi/service_providers": ((("service", _STRING),), _service_providers),
-        "/rosapi/service_node": ((("service", _STRING),), _service_node),
-        "/rosapi/get_time": ((), lambda g, _: {"time": stamp(g.ros_time())}),
-        "/rosapi/get_ros_version": ((), lambda g, _: {"version": 2, "distro": ROS_DISTRO}),
-    }
-)

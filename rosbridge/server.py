@@ -45,9 +45,6 @@ from rosbridge.protocol import (
     CLIENT_COUNT_TOPIC,
     CONNECTED_CLIENTS_TOPIC,
     DEFAULT_MAX_MESSAGE_BYTES,
-    MISSION_TOPIC,
-    POSE_TOPIC,
-    STATUS_TOPIC,
     BridgeError,
     ClientSession,
     Graph,
@@ -59,7 +56,8 @@ from rosbridge.protocol import (
     pose_stamped_msg,
 )
 from rosbridge.rosout import BridgeLog
-from vehicle_contract.endpoint import VehicleEndpoint
+from vehicle_contract.endpoint import FleetEndpoint, VehicleEndpoint
+from vehicle_contract.names import TopicNames, topic_names
 
 logger = logging.getLogger("rosbridge.server")
 
@@ -67,8 +65,6 @@ logger = logging.getLogger("rosbridge.server")
 DEFAULT_TICK_S: Final = 0.02
 #: Longest simulated step taken in one tick, wall seconds (a stalled loop does not leap).
 MAX_TICK_STEP_S: Final = 0.5
-#: Topics streamed latest-wins to each client.
-_STREAMED: Final = frozenset({POSE_TOPIC, STATUS_TOPIC})
 
 
 class BridgeServer:
@@ -83,11 +79,17 @@ class BridgeServer:
     ``None`` serves any path. ``port=0`` picks a free port; read :attr:`port` after
     :meth:`start`. With ``auth_secret`` (the console's training bridge) a client may publish
     only after the ``auth`` op (:mod:`rosbridge.auth`); before it may subscribe.
+
+    A :class:`~vehicle_contract.endpoint.FleetEndpoint` (``nemesys sim --vehicles``) is served
+    on one server: each vehicle's node and topics under its namespace (``/auv1/nemesys/pose``,
+    node ``/auv1/nemesys_vehicle``), its pose, status and acknowledgements published there, and
+    a frame published on any vehicle's frame topic or on ``/nemesys/frame`` (the station's
+    transmitter, node ``/nemesys_me_transmitter``) handed once to the fleet's shared link.
     """
 
     def __init__(
         self,
-        endpoint: VehicleEndpoint,
+        endpoint: VehicleEndpoint | FleetEndpoint,
         host: str = "127.0.0.1",
         port: int = 9090,
         time_scale: float = 1.0,
@@ -114,6 +116,17 @@ class BridgeServer:
         if not (tick_s > 0.0 and send_timeout_s > 0.0 and max_queue > 0):
             raise ValueError("tick_s, send_timeout_s and max_queue must be > 0")
         self._endpoint = endpoint
+        #: Each vehicle with its topic names: the one endpoint under the contract's names, or
+        #: a fleet's vehicles under their namespaces.
+        self._vehicles: tuple[tuple[TopicNames, VehicleEndpoint], ...] = (
+            tuple((topic_names(ns), v) for ns, v in endpoint.members.items())
+            if isinstance(endpoint, FleetEndpoint)
+            else ((topic_names(), endpoint),)
+        )
+        #: Topics streamed latest-wins to each client (every vehicle's pose and status).
+        self._streamed = frozenset(
+            name for names, _ in self._vehicles for name in (names.pose, names.status)
+        )
         self._host = host
         self._requested_port = port
         self.time_scale = time_scale
@@ -127,7 +140,11 @@ class BridgeServer:
         self._tick_s = min(tick_s, self._pose_period_s / 2.0)
         self._send_timeout_s = send_timeout_s
         self._max_queue = max_queue
-        self.graph = Graph(clock=time.monotonic, ros_time=self._ros_time)
+        self.graph = Graph(
+            clock=time.monotonic,
+            ros_time=self._ros_time,
+            namespaces=(tuple(endpoint.members) if isinstance(endpoint, FleetEndpoint) else ()),
+        )
         self._server: Server | None = None
         self._tick_task: asyncio.Task[None] | None = None
         self._clients: set[ClientOutbox] = set()
@@ -317,23 +334,29 @@ class BridgeServer:
                 self._log_lines(client, client.session.drain_logs())
 
     def tick(self, sim_dt_s: float) -> None:
-        """Advance the vehicle by ``sim_dt_s`` simulated seconds and publish its acks."""
+        """Advance the vehicle (every vehicle of a fleet) by ``sim_dt_s`` simulated seconds and
+        publish its acks."""
         if sim_dt_s > 0.0:
             self._guard("endpoint.advance", lambda: self._endpoint.advance(sim_dt_s))
-        missions = self._guard("endpoint.take_missions", self._endpoint.take_missions)
-        for mission in missions or ():
-            try:
-                msg = json_string_msg(mission)
-            except (TypeError, ValueError):
-                logger.exception("mission acknowledgement not serializable, dropped: %r", mission)
-                continue
-            self._publish(MISSION_TOPIC, msg)
+        for names, vehicle in self._vehicles:
+            missions = self._guard("endpoint.take_missions", vehicle.take_missions)
+            for mission in missions or ():
+                try:
+                    msg = json_string_msg(mission)
+                except (TypeError, ValueError):
+                    logger.exception(
+                        "mission acknowledgement not serializable, dropped: %r", mission
+                    )
+                    continue
+                self._publish(names.mission, msg)
 
     def _publish_pose(self) -> None:
-        self._stream(POSE_TOPIC, "endpoint.pose", self._endpoint.pose, pose_stamped_msg)
+        for names, vehicle in self._vehicles:
+            self._stream(names.pose, "endpoint.pose", vehicle.pose, pose_stamped_msg)
 
     def _publish_status(self) -> None:
-        self._stream(STATUS_TOPIC, "endpoint.status", self._endpoint.status, json_string_msg)
+        for names, vehicle in self._vehicles:
+            self._stream(names.status, "endpoint.status", vehicle.status, json_string_msg)
 
     def _stream(
         self, topic: str, what: str, read: Callable[[], Any], to_msg: Callable[[Any], JsonObject]
@@ -351,7 +374,7 @@ class BridgeServer:
         each client's subscription (throttle, queue, fragments)."""
         for client in self._subscribers(topic):
             texts = client.session.deliver(topic, msg)
-            if topic in _STREAMED:
+            if topic in self._streamed:
                 client.offer_latest(topic, *texts)
             else:
                 client.enqueue(*texts)

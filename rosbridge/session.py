@@ -56,6 +56,7 @@ from rosbridge.messages import (
     op_of,
     parse_object,
 )
+from rosbridge.rosapi import call_service
 from rosbridge.wire import (
     LOG_ERROR,
     LOG_INFO,
@@ -66,7 +67,6 @@ from rosbridge.wire import (
     service_response,
     wire_json,
 )
-from vehicle_contract import contract
 
 #: Default limit on one incoming message, UTF-8 bytes (tornado's, as the real server has it).
 DEFAULT_MAX_MESSAGE_BYTES: Final = 10 * 1024 * 1024
@@ -252,7 +252,7 @@ class ClientSession:
         msg = extract(kind, message)
         if request.latch or expanded in self._latched:
             self.graph.latched[expanded] = msg
-        frame = bytes(message["data"]) if expanded == contract.FRAME_TOPIC else None
+        frame = bytes(message["data"]) if expanded in self.graph.frame_topics else None
         return Outcome(request, publication=Publication(expanded, kind, msg, frame))
 
     def _subscribe(self, request: Subscribe) -> Outcome:
@@ -313,7 +313,7 @@ class ClientSession:
             cid = service[service.find("#") + 1 :]
         name = service.split("#", 1)[0]
         try:
-            values = self.graph.call_service(expand_name(name, "service"), request.args)
+            values = call_service(self.graph, expand_name(name, "service"), request.args)
         except (ServiceError, InvalidName) as exc:
             kind = {
                 InvalidName: "InvalidServiceNameException",

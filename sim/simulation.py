@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
-from codec import FRAME_BYTES
+from codec import FRAME_BITS, FRAME_BYTES
 from onboard.agent import OnboardAgent, command_json
 from onboard.guidance import Guidance, GuidanceConfig, Reference
 from planner import Limits, VehicleState
@@ -66,6 +66,10 @@ class SimConfig:
     battery_start_h: float = 0.0
     #: Samples per second kept in :attr:`Simulation.track` (0: none).
     record_hz: float = 0.0
+    #: The vehicle's frame address in a fleet on one ME link, 1-15 (docs/protocol.md,
+    #: "Addressing"): its agent then takes 108-bit addressed frames to it or to all, and of
+    #: 100-bit frames only surface. ``None`` (no fleet): today's frames only.
+    address: int | None = None
 
     def __post_init__(self) -> None:
         for name in ("physics_hz", "guidance_hz"):
@@ -115,7 +119,14 @@ class Simulation:
         self.autopilot = Autopilot(cfg.vehicle, cfg.gains)
         self.guidance = Guidance(cfg.guidance)
         self.guidance.hold_here(cfg.start_x_m, cfg.start_y_m, cfg.start_z_m, cfg.start_heading_deg)
-        self.agent = OnboardAgent(self.guidance, cfg.limits)
+        self.agent = OnboardAgent(self.guidance, cfg.limits, cfg.address)
+        # A fleet's vehicle also takes the addressed frame's length (the codec's addressed
+        # module is loaded only then, as the onboard agent loads it).
+        self._addressed = (0, 0)  # (bytes, bits) of the addressed frame, if taken
+        if cfg.address is not None:
+            from codec import ADDRESSED_FRAME_BITS, ADDRESSED_FRAME_BYTES
+
+            self._addressed = (ADDRESSED_FRAME_BYTES, ADDRESSED_FRAME_BITS)
         #: When the pattern guidance flies was done (:mod:`sim.completion`'s rule).
         self.completion = Completion()
         self.channel = MEChannel(cfg.channel, seed=seed)
@@ -144,13 +155,20 @@ class Simulation:
     # --- the endpoint contract -----------------------------------------------------------
 
     def submit_frame(self, data: bytes) -> None:
-        """A frame leaves the surface station now; the channel decides what arrives, when."""
+        """A frame leaves the surface station now; the channel decides what arrives, when.
+
+        A vehicle with an address (``SimConfig.address``) takes the 14-byte addressed frame
+        too (108 bits on the air)."""
         self.frames_in += 1
-        if len(data) != FRAME_BYTES:
+        if len(data) == FRAME_BYTES:
+            n_bits = FRAME_BITS
+        elif len(data) == self._addressed[0]:
+            n_bits = self._addressed[1]
+        else:
             # not a frame: acknowledged as malformed on the next tick, nothing transmitted
             heapq.heappush(self._inbox, (self.t_s, self.frames_in, None, 8 * len(data)))
             return
-        delivery = self.channel.transmit_bytes(bytes(data), self.t_s, self.distance_m)
+        delivery = self.channel.transmit_bytes(bytes(data), self.t_s, self.distance_m, n_bits)
         if delivery is None:
             self.frames_lost += 1
             return
@@ -196,7 +214,7 @@ class Simulation:
         active = self.agent.active
         cfg = self.channel.config
         distance_m = self.distance_m
-        return {
+        status: dict[str, Any] = {
             "t_s": self.t_s,
             "x_m": v.x,
             "y_m": v.y,
@@ -224,6 +242,9 @@ class Simulation:
                 "ber": cfg.ber,
             },
         }
+        if self.config.address is not None:  # a fleet's vehicle says which it is (contract 2.1)
+            status["address"] = self.config.address
+        return status
 
     # --- state for the planner -----------------------------------------------------------
 

@@ -132,6 +132,15 @@ class FleetLink(_Follows):
             await link.stop()
         await self.frames.stop()
 
+    async def wait_connected(self, timeout_s: float) -> bool:
+        """Wait for the transmitter and every vehicle's own rosbridge link to be ready (each
+        within ``timeout_s``; a modem is ready once started); whether all are connected."""
+        links = [self.frames, *self._own()]
+        for link in links:
+            if isinstance(link, RosbridgeLink):
+                await link.wait_connected(timeout_s)
+        return all(link.connected for link in links)
+
     async def transmit(self, frame: Frame) -> str | None:
         return await self.frames.transmit(frame)
 

@@ -9,12 +9,13 @@ All positions are NED metres (x north, y east, z down = depth), angles degrees, 
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any, Protocol, runtime_checkable
 
 from codec import FRAME_BYTES  # one packed frame: 100 bits MSB first plus 4 zero bits
 
-__all__ = ["FRAME_BYTES", "Pose", "VehicleEndpoint"]
+__all__ = ["FRAME_BYTES", "FleetEndpoint", "Pose", "VehicleEndpoint"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -61,4 +62,36 @@ class VehicleEndpoint(Protocol):
 
     def status(self) -> dict[str, Any]:
         """JSON-ready status: depth, heading, speed, battery, mode, link state."""
+        ...
+
+
+@runtime_checkable
+class FleetEndpoint(Protocol):
+    """What a bridge needs from a fleet: several vehicles on one shared ME link, each under
+    its own namespace (:func:`vehicle_contract.names.topic_names`), on one clock.
+
+    The bridge advances and feeds the fleet as a whole (one :meth:`submit_frame` is one
+    transmission, which every vehicle hears) and reads each vehicle in :attr:`members`
+    (its pose, status and acknowledgements) under that vehicle's namespace;
+    :class:`sim.fleet.FleetSimulation` is the simulated fleet.
+    """
+
+    @property
+    def t_s(self) -> float:
+        """The fleet's simulated time in seconds (every vehicle's)."""
+        ...
+
+    @property
+    def members(self) -> Mapping[str, VehicleEndpoint]:
+        """Each vehicle by its namespace (``"/auv1"``), in the fleet's order. The bridge calls
+        only their ``pose``, ``status`` and ``take_missions``."""
+        ...
+
+    def submit_frame(self, data: bytes) -> None:
+        """One frame on the shared link, now: every vehicle receives it through its own
+        channel (its own errors, its own range), and each acknowledges what reaches it."""
+        ...
+
+    def advance(self, dt_s: float) -> None:
+        """Advance every vehicle by ``dt_s`` simulated seconds."""
         ...

@@ -46,10 +46,14 @@ router = APIRouter(prefix="/api", tags=["commands"])
     response_model=CommandRecord,
     response_model_exclude_unset=True,
     responses=errors(
-        (*OPERATOR, 409, 413, 422, 429, 503),
-        models={409: LimitViolationError, 422: ValidationErrorResponse | LimitViolationError},
+        (*OPERATOR, 409, 413, 422, 429, 503, 504),
+        models={
+            409: LimitViolationError | ErrorDetail,
+            422: ValidationErrorResponse | LimitViolationError,
+        },
         why={
-            409: "limits an operator may override, without override: true",
+            409: "limits an operator may override, without override: true; or another "
+            "console (named) is in control of the vehicle",
             422: "invalid input, or limits no operator can override (the depth rating)",
         },
     ),
@@ -57,8 +61,12 @@ router = APIRouter(prefix="/api", tags=["commands"])
 async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRecord:
     """Queue a command for transmission (logged first), through the command service's checks.
     422: limits that cannot be overridden or bad values, or (with a fleet) no ``vehicle`` or
-    one the fleet has not (naming its vehicles); 409: overridable limits without ``override``
-    (an override is recorded in the log with who gave it); 429: rate limit."""
+    one the fleet has not (naming its vehicles); 409: overridable limits without
+    ``override`` (an override is recorded in the log with who gave it), or this console is
+    not in control of the vehicle (consoles sharing a log: ``/api/control``); 429: rate
+    limit; 503: the mission log cannot be written or its database is out of reach. A console
+    without a transmitter (target relay) answers with the record the console holding it
+    made, or that console's refusal (its status and reason); 504: none took it in time."""
     request = SendRequest(
         body.pattern,
         body.params,
@@ -75,7 +83,7 @@ async def send(body: SendIn, service: ServiceDep, _op: OperatorDep) -> CommandRe
     status_code=status.HTTP_202_ACCEPTED,
     response_model=CommandRecord | FleetSurface,
     response_model_exclude_unset=True,
-    responses=errors((*OPERATOR, 413, 422, 503)),
+    responses=errors((*OPERATOR, 413, 422, 503, 504)),
 )
 async def surface(
     service: ServiceDep, _op: OperatorDep, body: SurfaceIn | None = None
@@ -99,7 +107,7 @@ async def surface(
     response_model=CommandRecord,
     response_model_exclude_unset=True,
     responses=errors(
-        (*OPERATOR, 404, 409, 413, 422, 429, 503),
+        (*OPERATOR, 404, 409, 413, 422, 429, 503, 504),
         models={
             409: LimitViolationError | ErrorDetail,
             422: ValidationErrorResponse | LimitViolationError,

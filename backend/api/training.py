@@ -77,14 +77,22 @@ def channel(body: ChannelIn, console: ConsoleDep, _op: OperatorDep) -> ChannelSe
     fields = _given(body)
     if "range_m" in body.model_fields_set and body.range_m is None:
         fields["range_m"] = math.inf
-    sim.channel.set_config(replace(sim.channel.config, **fields))
+    config = replace(sim.channel.config, **fields)
+    if console.fleet_sim is not None:  # the one link every vehicle of the fleet shares
+        console.fleet_sim.set_channel_config(config)
+    else:
+        sim.channel.set_config(config)
     return _channel(sim)
 
 
 @router.put("/current", response_model=CurrentSettings, responses=SETTING)
 def current(body: CurrentIn, console: ConsoleDep, _op: OperatorDep) -> CurrentSettings:
     sim = _sim(console)
-    sim.current.set_config(replace(sim.current.config, **_given(body)))
+    config = replace(sim.current.config, **_given(body))
+    if console.fleet_sim is not None:  # the water every vehicle of the fleet is in
+        console.fleet_sim.set_current_config(config)
+    else:
+        sim.current.set_config(config)
     return CurrentSettings.model_validate(asdict(sim.current.config))
 
 
@@ -129,6 +137,8 @@ async def scenario(name: str, console: ConsoleDep, _op: OperatorDep) -> Scenario
     from sim.scenarios import SCENARIOS
 
     _sim(console)
+    if console.fleet_sim is not None:
+        raise HTTPException(409, "the paper's scenarios drive one vehicle: not with a fleet")
     if name not in SCENARIOS:
         raise HTTPException(404, f"no scenario {name!r}; choose from {', '.join(SCENARIO_PRESETS)}")
     sc = SCENARIOS[name]

@@ -9,7 +9,6 @@ log's own (the ``datum`` events up to the dive, each from when it was set), star
 
 from __future__ import annotations
 
-import sqlite3
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,6 +18,7 @@ from backend.bag.dive import DatumWalk, Message, dive_messages
 from backend.bag.write import Progress, Written, mcap_bytes, write_mcap_file, write_rosbag2_dir
 from backend.chart.geo import Datum
 from backend.mission_log.dive_reader import DiveReader, snapshot
+from backend.mission_log.read_only import ReadOnlyDatabase
 
 #: What an export says about its time base (MCAP metadata, rosbag2 custom data).
 TIME_BASE = (
@@ -65,7 +65,7 @@ def plan(
 
 
 def export_files(
-    db: sqlite3.Connection,
+    db: ReadOnlyDatabase,
     dive: int,
     *,
     mcap: Path | None = None,
@@ -74,8 +74,9 @@ def export_files(
     datum: Datum | None = None,
     progress: Progress | None = None,
 ) -> list[Written]:
-    """``dive`` of the log ``db`` as an MCAP file and/or a rosbag2 directory (one pass of the
-    log each, in one read snapshot).
+    """``dive`` of the log ``db`` (a read-only connection to a SQLite file or a PostgreSQL
+    database) as an MCAP file and/or a rosbag2 directory (one pass of the log each, in one read
+    snapshot).
 
     Raises:
         NoSuchDive: the log has no such dive (nothing written).
@@ -100,7 +101,7 @@ def export_files(
     return out
 
 
-def stream_mcap(db: sqlite3.Connection, dive: int, fallback: Datum | None) -> Iterator[bytes]:
+def stream_mcap(db: ReadOnlyDatabase, dive: int, fallback: Datum | None) -> Iterator[bytes]:
     """``dive`` as MCAP bytes, a piece at a time, in one read snapshot of ``db`` (held until
     the last piece, or until the consumer closes the iterator)."""
     with snapshot(db) as reader:

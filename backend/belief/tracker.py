@@ -77,6 +77,8 @@ class Runtime(Protocol):
     @property
     def dive(self) -> int | None: ...
 
+    def sim_of(self, vehicle: str) -> Simulation | None: ...
+
 
 def _echo_of(doc: Mapping[str, Any], at_s: float, what: str) -> Echo | None:
     """The echo a status or an acknowledgement carries (None: it says nothing of it)."""
@@ -125,6 +127,8 @@ class BeliefTracker:
         self._lock = threading.Lock()
         self._seq = 0
         self._cached: tuple[float, Belief] | None = None
+        #: The records read last (the belief goes on with them while the log is unreadable).
+        self._records: list[dict[str, Any]] = []
         self._pushed: Belief | None = None
         self._pushed_at = -math.inf
         self._drawn = False  # the 3D view shows a believed position
@@ -186,11 +190,14 @@ class BeliefTracker:
             dive = rt.dive if rt.sim is not None else None
             if rt.sim is None or dive is not None:
                 vehicle = self.vehicle if rt.fleet.configured else None
-                newest = rt.log.commands(
-                    target=cm.target, dive=dive, vehicle=vehicle, limit=RECORDS_WINDOW
-                )
-                records = newest[::-1]
-        sim = rt.sim
+                try:
+                    newest = rt.log.commands(
+                        target=cm.target, dive=dive, vehicle=vehicle, limit=RECORDS_WINDOW
+                    )
+                    records = self._records = newest[::-1]
+                except rt.log.read_errors:  # a database out of reach: what was read last
+                    records = self._records
+        sim = rt.sim_of(self.vehicle) if rt.sim is not None else None  # its own twin
         if sim is not None:
             c = sim.config
             start = Start(

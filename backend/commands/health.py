@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from typing import Final, Literal
 
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
 from backend.commands.ledger import WINDOW, FrameCounts, FrameLedger, FrameTotals, Outcome
 from backend.commands.link_ber import (
@@ -22,6 +22,7 @@ from backend.commands.link_ber import (
     CopiesFrom,
     estimate_view,
 )
+from backend.relay.model import RelayView
 from station.link import Capability
 
 TYPE_CHECKING = False
@@ -42,6 +43,7 @@ __all__ = [
     "LinkCheckView",
     "LinkHealth",
     "LinkTestResult",
+    "MissionLogReach",
     "Outcome",
     "assess",
     "link_health_of",
@@ -54,6 +56,21 @@ RED_TELEMETRY_S: Final = 10.0
 UNKNOWN_VALUES_RECENT_S: Final = 10.0
 
 Level = Literal["green", "amber", "red"]
+
+
+class MissionLogReach(BaseModel):
+    """Whether the console reaches its mission log's database now (a PostgreSQL server it
+    shares with other consoles: :mod:`backend.control.sync`; a SQLite file is always
+    reached). Unreached, every send is refused (503) until it is back."""
+
+    reachable: bool = True
+    problem: str | None = Field(default=None, description="why not, in the driver's words")
+    since: str | None = Field(default=None, description="unreachable since (ISO 8601, UTC)")
+
+    @property
+    def refusal(self) -> str:
+        """What the header says while it is unreached."""
+        return f"mission log unreachable — sends refused ({self.problem or 'no answer'})"
 
 
 class LinkHealth(BaseModel):
@@ -86,6 +103,11 @@ class LinkHealth(BaseModel):
     copies: int
     #: Copies a Surface gets now; null: repeated until acknowledged (two-way link).
     surface_copies: int | None
+    #: Whether the mission log's database is reached (not: every send refused, a red problem).
+    mission_log: MissionLogReach = MissionLogReach()
+    #: A console without a transmitter (target relay): the console that holds it, and its
+    #: link; its problems are among ``problems``, named by it (null: this console transmits).
+    relay: RelayView | None = None
 
 
 class LinkCheckView(BaseModel):
@@ -167,11 +189,15 @@ def link_health_of(
     ber: BerNow,
     copies_from: CopiesFrom,
     datum_problem: str | None = None,
+    mission_log: MissionLogReach | None = None,
+    relay: RelayView | None = None,
     vehicle: str | None = None,
 ) -> LinkHealth:
     """What the station knows of its link to the vehicle (not the page's websocket): the
-    link's own facts, the command ledger's and the telemetry's ages, and the assessment. A
-    fleet's ``vehicle``: ``link`` and ``hub`` are its own, and so are the ledger's counts."""
+    link's own facts, the command ledger's and the telemetry's ages, and the assessment; a
+    mission log that is not reached (``mission_log``) is the first problem, red: nothing can
+    be sent. A fleet's ``vehicle``: ``link`` and ``hub`` are its own, and so are the ledger's
+    counts."""
     v = cm.addressee(vehicle)
     totals = v.ledger.totals()
     telemetry_age_s = hub.age_s()
@@ -186,6 +212,13 @@ def link_health_of(
         unknown_recent=hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
         datum_problem=datum_problem,
     )
+    if relay is not None and relay.fresh and relay.problems:
+        named = [f"{relay.via}: {p}" for p in relay.problems]
+        worst: Level = "red" if "red" in (level, relay.level) else "amber"
+        level, problems = worst, [*problems, *named]
+    reach = mission_log or MissionLogReach()
+    if not reach.reachable:
+        level, problems = "red", [reach.refusal, *problems]
     return LinkHealth(
         target=target,
         connected=link.connected,
@@ -205,4 +238,6 @@ def link_health_of(
         delivery_target=cm.delivery_target,
         copies=cm.copies_now(vehicle),
         surface_copies=cm.surface_copies_now(vehicle),
+        mission_log=MissionLogReach.model_validate(reach.model_dump()),  # every field said
+        relay=None if relay is None else RelayView.model_validate(relay.model_dump()),
     )

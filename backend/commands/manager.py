@@ -187,6 +187,7 @@ class CommandManager(CopyPlanning):
         origin: str = "api",
         retry_of: int | None = None,
         overrides: dict[str, Any] | None = None,
+        operator: str | None = None,
         vehicle: str | None = None,
     ) -> dict[str, Any]:
         """:meth:`submit_all` for one vehicle: its record."""
@@ -197,6 +198,7 @@ class CommandManager(CopyPlanning):
             origin=origin,
             retry_of=retry_of,
             overrides=overrides,
+            operator=operator,
             vehicle=vehicle,
         )
         return records[0]
@@ -210,6 +212,7 @@ class CommandManager(CopyPlanning):
         origin: str = "api",
         retry_of: int | None = None,
         overrides: dict[str, Any] | None = None,
+        operator: str | None = None,
         vehicle: str | None = None,
     ) -> list[dict[str, Any]]:
         """Log the command (queued) with the values asked for (``enc.snaps``), then deliver it
@@ -219,7 +222,8 @@ class CommandManager(CopyPlanning):
         name (None: the single vehicle; :data:`ALL_VEHICLES`: a fleet's Surface to all).
         ``copies``: the operator's count (1..20), else chosen from the link. ``origin``,
         ``retry_of`` and ``overrides`` are written into the record as the command service
-        gives them (:mod:`backend.commands.service` is the only caller in the console).
+        gives them (:mod:`backend.commands.service` is the only caller in the console);
+        ``operator``: who asked, when not this console's operator (a relayed command's).
 
         Raises:
             RateLimited: too many transmissions in the last minute (never for surface).
@@ -252,7 +256,7 @@ class CommandManager(CopyPlanning):
                 record = self.log.insert_command(
                     self._dive(),
                     {
-                        "operator": self.operator,
+                        "operator": operator or self.operator,
                         "target": self.target,
                         "kind": record_kind,
                         **command_json(enc.command),

@@ -77,6 +77,23 @@ class CommandRecords:
             return
         self._update(command_id, state=state, **fields)
 
+    def superseded_elsewhere(self, by: int, console: str | None) -> list[int]:
+        """Another console sharing the log wrote command ``by`` (a Surface from anyone, or a
+        command of the console now in control): the one rule across consoles, every older
+        command of this one whose copies are still going out ends ``superseded`` by it, and
+        none of their frames leaves after; returns their ids (LogWriteError: not all were
+        written)."""
+        stopped = [cid for cid in self._live if cid < by]
+        for cid in stopped:
+            self._end(
+                cid,
+                Event.SUPERSEDED,
+                "sent",
+                reason=f"superseded by command {by} from console {console!r}",
+                superseded_by=by,
+            )
+        return stopped
+
     def _update(self, command_id: int, **fields: Any) -> dict[str, Any]:
         record = self.log.update_command(command_id, **fields)
         self._announce(record)
@@ -93,19 +110,31 @@ class CommandRecords:
                 return
             self.hub.publish(message)
 
+    def atomic(self) -> contextlib.AbstractContextManager[None]:
+        """A send and the caller's own writes committed together (the relay: the claim of an
+        outbox row, the command record, the row marked taken): see :meth:`_atomic`. The body
+        must not yield to the event loop (another task's writes would join the transaction)."""
+        return self._atomic()
+
     @contextlib.contextmanager
     def _atomic(self) -> Iterator[None]:
         """The log writes inside are committed together (a crash leaves all or none) and
-        announced after the commit."""
+        announced after the commit. Inside another, it is part of that one. Rolled back (a
+        write failed, or anything else raised), the deliveries begun inside are cancelled
+        before their first copy."""
+        if self._held is not None:  # nested: the outer one commits, announces, rolls back
+            yield
+            return
         held: list[dict[str, Any]] = []
         self._held = held
         live = dict(self._live)
         try:
             with self.log.transaction():
                 yield
-        except LogWriteError as err:
+        except BaseException as err:
             self._held = None
-            self._rolled_back(live, err)
+            why = err if isinstance(err, LogWriteError) else LogWriteError(repr(err))
+            self._rolled_back(live, why)
             raise
         finally:
             self._held = None

@@ -27,6 +27,21 @@ address 0, one record per vehicle). The checks are that vehicle's (where it is, 
 and its frame carries its address. Without a fleet, ``vehicle`` is absent or the single
 vehicle's name, and everything is as it always was.
 
+**The gate** (:class:`SendGate`, given to the service): consulted once for every command
+after the checks, before anything is written: on a mission log several consoles share, only
+the console in control of the vehicle sends (:class:`backend.control.gate.ControlGate`:
+others get 409 naming who is; Surface passes from any console), and none while the log's
+database is out of reach (503).
+
+**The relay** (:class:`Relay`, given to the service of a console without a transmitter,
+``NEMESYS_TARGET=relay``): after the checks, the gate and the watchers' ``admit``, the command
+goes to the shared log's outbox instead of the manager, and the service returns the record
+the console holding the transmitter made of it, or raises its refusal
+(:mod:`backend.relay.shore`). That console takes the row through its own service
+(:class:`Relayed` in the request): its own checks, its gate judging the console the command
+came from, a record whose ``origin`` is ``relay:<console>`` and whose operator is the one who
+asked (:mod:`backend.relay.ship`).
+
 **Watchers** (:class:`SendWatcher`, :meth:`CommandService.watch`) are told of every command
 the service hands to the manager, whatever the path: ``admit`` just before the record is
 written (it may refuse), ``sent`` once it is written and its delivery begun, before its first
@@ -147,6 +162,21 @@ def decide(assessment: Assessment, override: bool) -> tuple[SendViolation, ...]:
 
 
 @dataclass(frozen=True)
+class Relayed:
+    """A command another console (one without a transmitter) checked and wrote to the shared
+    log's outbox: row ``outbox_id``, from ``console``, asked by ``operator``."""
+
+    console: str
+    operator: str
+    outbox_id: int
+
+    @property
+    def origin(self) -> str:
+        """The record's ``origin``."""
+        return f"relay:{self.console}"
+
+
+@dataclass(frozen=True)
 class SendRequest:
     """What a path asks the service to send.
 
@@ -159,6 +189,7 @@ class SendRequest:
         retry_of: the command this one retries.
         vehicle: the fleet's vehicle it is for (``"all"``: a Surface to every vehicle); None
             without a fleet (the single vehicle's name is taken too).
+        relayed: taken from another console's outbox row (None: asked of this console).
     """
 
     pattern: str
@@ -169,6 +200,7 @@ class SendRequest:
     kind: Literal["command", "script"] = "command"
     retry_of: int | None = None
     vehicle: str | None = None
+    relayed: Relayed | None = None
 
 
 @dataclass(frozen=True)
@@ -180,6 +212,10 @@ class SendOutcome:
     record: CommandRecord
     overridden: tuple[SendViolation, ...] = field(default=())
     records: tuple[CommandRecord, ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        if not self.records:  # one record (a relayed command's too): itself
+            object.__setattr__(self, "records", (self.record,))
 
 
 def check_vehicle(name: str | None, fleet: Sequence[str], *, surface: bool = False) -> str | None:
@@ -235,13 +271,39 @@ class SendWatcher(Protocol):
         begun; no copy of it has left yet."""
 
 
+class SendGate(Protocol):
+    """Who may send now (see the module's docstring)."""
+
+    def check(self, request: SendRequest) -> None:
+        """Raise a :class:`SendRefused` (or ``LogWriteError``) to refuse ``request``."""
+
+
+class Relay(Protocol):
+    """Where a console without a transmitter hands its checked commands (see the module's
+    docstring)."""
+
+    async def relay(self, request: SendRequest) -> CommandRecord:
+        """The record the console with the transmitter made of ``request`` (raise a
+        :class:`SendRefused` with its refusal)."""
+        ...
+
+
 class CommandService:
     """The one checked path to the vehicle (see the module's docstring)."""
 
-    def __init__(self, manager: CommandManager, assess: Assessor, operator: str) -> None:
+    def __init__(
+        self,
+        manager: CommandManager,
+        assess: Assessor,
+        operator: str,
+        gate: SendGate | None = None,
+        relay: Relay | None = None,
+    ) -> None:
         self.manager = manager
         self.assess = assess
         self.operator = operator
+        self.gate = gate
+        self.relay = relay
         self._watchers: list[SendWatcher] = []
 
     def watch(self, watcher: SendWatcher) -> None:
@@ -255,7 +317,9 @@ class CommandService:
             codec.EncodeError / planner.PlanError: a value the frame cannot carry, named.
             LimitRefused / OverrideNeeded: the policy (:func:`decide`).
             RateLimited: too many transmissions in the last minute (never Surface).
-            LogWriteError: the mission log cannot be written; nothing was transmitted.
+            LogWriteError: the mission log cannot be written (or, the gate: its database is
+                out of reach); nothing was transmitted.
+            SendRefused: the gate's (another console in control: 409).
         """
         vehicle = self.vehicle_of(request.vehicle, surface=request.pattern == "surface")
         if request.pattern == "surface":
@@ -314,20 +378,28 @@ class CommandService:
     ) -> SendOutcome:
         """The watchers' ``admit``, the manager's record and delivery, the watchers' ``sent``:
         no ``await`` that yields between them (the manager's ``submit`` does not), so the
-        watchers hear of the command before its first copy can leave."""
+        watchers hear of the command before its first copy can leave (relayed: once the other
+        console made its record)."""
+        if self.gate is not None:
+            self.gate.check(request)
         for watcher in self._watchers:
             watcher.admit(request)
-        rows = await self.manager.submit_all(
-            enc,
-            kind=kind,
-            copies=copies,
-            origin=request.origin,
-            retry_of=request.retry_of,
-            overrides=self._overrides(overridden),
-            vehicle=vehicle,
-        )
-        records = tuple(command_record(row) for row in rows)
-        outcome = SendOutcome(records[0], tuple(overridden), records)
+        if self.relay is not None:
+            outcome = SendOutcome(await self.relay.relay(request), tuple(overridden))
+        else:
+            relayed = request.relayed
+            rows = await self.manager.submit_all(
+                enc,
+                kind=kind,
+                copies=copies,
+                origin=request.origin if relayed is None else relayed.origin,
+                retry_of=request.retry_of,
+                overrides=self._overrides(overridden, relayed),
+                operator=None if relayed is None else relayed.operator,
+                vehicle=vehicle,
+            )
+            records = tuple(command_record(row) for row in rows)
+            outcome = SendOutcome(records[0], tuple(overridden), records)
         for watcher in self._watchers:
             try:
                 watcher.sent(request, outcome)
@@ -374,11 +446,13 @@ class CommandService:
             )
         )
 
-    def _overrides(self, overridden: Sequence[SendViolation]) -> dict[str, Any] | None:
+    def _overrides(
+        self, overridden: Sequence[SendViolation], relayed: Relayed | None
+    ) -> dict[str, Any] | None:
         if not overridden:
             return None
         return {
-            "by": self.operator,
+            "by": self.operator if relayed is None else relayed.operator,
             "violations": [
                 {"check": v.check, "param": v.param, "message": v.message} for v in overridden
             ],
@@ -393,6 +467,9 @@ __all__ = [
     "NotRetryableCommand",
     "Origin",
     "OverrideNeeded",
+    "Relay",
+    "Relayed",
+    "SendGate",
     "SendOutcome",
     "SendRefused",
     "SendRequest",

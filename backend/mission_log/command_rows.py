@@ -6,14 +6,14 @@ may set, the log's wire order, and a row read back as a dict (the store's SQL is
 from __future__ import annotations
 
 import json
-import sqlite3
+from collections.abc import Mapping
 from typing import Any
 
 from backend.commands.lifecycle import TERMINAL, State
 
 #: Columns holding JSON text.
 JSON_COLUMNS = ("params", "requested", "ack", "overrides")
-#: Columns holding booleans (SQLite integers).
+#: Columns holding booleans (integers 0/1, on PostgreSQL too: one schema for both).
 BOOL_COLUMNS = ("two_way",)
 #: Columns a command update may set.
 UPDATABLE = frozenset(
@@ -40,8 +40,12 @@ FINAL_STATES = frozenset(str(s) for s in TERMINAL)
 
 
 def column_value(column: str, value: Any) -> Any:
-    """``value`` as the column holds it (JSON text for a JSON column)."""
-    return json.dumps(value) if column in JSON_COLUMNS else value
+    """``value`` as the column holds it (JSON text for a JSON column, 0/1 for a boolean)."""
+    if column in JSON_COLUMNS:
+        return json.dumps(value)
+    if column in BOOL_COLUMNS and value is not None:
+        return int(bool(value))
+    return value
 
 
 def checked_update(fields: dict[str, Any]) -> dict[str, Any]:
@@ -91,7 +95,7 @@ def commands_query(
     return sql, args
 
 
-def command_row(row: sqlite3.Row) -> dict[str, Any]:
+def command_row(row: Mapping[str, Any]) -> dict[str, Any]:
     """A command's row as a dict: its JSON columns parsed, its booleans as bool; ``vehicle``
     only where it names one (a fleet's: without a fleet the record is as it always was)."""
     out = dict(row)

@@ -1,10 +1,13 @@
 """A dive read back row by row, for the exports: a read-only connection of its own and a cursor
-per table, so a long dive streams in constant memory and never holds the console's lock.
+per table, so a long dive streams in constant memory and never holds the console's lock. The
+log is a SQLite file or a PostgreSQL database alike: what differs for such a read (the snapshot,
+server-side cursors on PostgreSQL) is :mod:`backend.mission_log.read_only`'s.
 
 The reader is one read transaction (:func:`snapshot`): every query sees the log as it was at
 the first, so a dive still being written is exported as it stood then, its counts and its rows
-alike (no half-written row: SQLite's WAL shows committed transactions only). An older log is
-read as it is, never migrated: a column it lacks reads as null.
+alike (no half-written row: SQLite's WAL and PostgreSQL's repeatable read show committed
+transactions only). An older log is read as it is, never migrated: a column it lacks reads as
+null.
 
 Each table's rows come in the order of their own console time (the stamps of
 :data:`backend.clock.CONSOLE_UTC`): the track in arrival order, the commands by when they were
@@ -22,11 +25,14 @@ from pathlib import Path
 from typing import Any, Final
 
 from backend.mission_log.command_rows import command_row
-from backend.mission_log.opening import LogError, classify
+from backend.mission_log.database import Row, is_postgres_url, masked
+from backend.mission_log.opening import LogError, classify, classify_postgres
+from backend.mission_log.read_only import ReadOnlyDatabase
+from backend.mission_log.read_only import open_read_only as _open
 from backend.mission_log.store import EXPORT_CACHE_KIB
 from backend.mission_log.track import TRACK_COLUMNS
 
-#: Rows fetched from SQLite at a time.
+#: Rows fetched from the database at a time.
 BATCH_ROWS: Final = 512
 
 
@@ -49,52 +55,49 @@ class NoSuchDive(LookupError):
         self.dive = dive
 
 
-def open_read_only(path: Path | str) -> sqlite3.Connection:
-    """The log at ``path`` opened read-only (nothing of it is changed, an older one not migrated).
+def open_read_only(where: Path | str) -> ReadOnlyDatabase:
+    """The log at ``where`` (a SQLite file, or a ``postgresql://`` URL) opened read-only
+    (nothing of it is changed, an older one not migrated).
 
     Raises:
-        LogError: the file does not exist, is not a SQLite database, or cannot be read.
+        LogError: the file does not exist, is not a SQLite database, or cannot be read; the
+            server cannot be reached, refuses the login, or has no such database (the URL's
+            password masked).
     """
-    where = Path(path)
-    if not where.is_file():
-        raise NoSuchLog(where, "does not exist", "give the console's --db file")
+    if is_postgres_url(where):
+        import psycopg
+
+        try:
+            return _open(where, cache_kib=EXPORT_CACHE_KIB)
+        except psycopg.Error as err:
+            raise classify_postgres(masked(str(where)), err) from None
+    path = Path(where)
+    if not path.is_file():
+        raise NoSuchLog(path, "does not exist", "give the console's --db file")
     try:
-        db = sqlite3.connect(
-            f"{where.resolve().as_uri()}?mode=ro", uri=True, check_same_thread=False
-        )
-        db.execute(f"PRAGMA cache_size = -{EXPORT_CACHE_KIB}")
-        db.execute("SELECT COUNT(*) FROM sqlite_master").fetchone()
+        return _open(path, cache_kib=EXPORT_CACHE_KIB)
     except sqlite3.Error as err:
-        raise classify(where, err) from None
-    return db
+        raise classify(path, err) from None
 
 
 @contextlib.contextmanager
-def snapshot(db: sqlite3.Connection) -> Iterator[DiveReader]:
+def snapshot(db: ReadOnlyDatabase) -> Iterator[DiveReader]:
     """A :class:`DiveReader` of ``db`` in one read transaction (ended on leaving)."""
-    db.row_factory = sqlite3.Row
-    if db.in_transaction:  # a caller's own transaction: its view is the snapshot
+    with db.snapshot():
         yield DiveReader(db)
-        return
-    db.execute("BEGIN")
-    try:
-        yield DiveReader(db)
-    finally:
-        db.execute("ROLLBACK")
 
 
 class DiveReader:
     """A dive's rows out of a log connection (:func:`snapshot` makes one)."""
 
-    def __init__(self, db: sqlite3.Connection) -> None:
+    def __init__(self, db: ReadOnlyDatabase) -> None:
         self._db = db
         self._columns: dict[str, set[str]] = {}
 
     def columns(self, table: str) -> set[str]:
         """The columns ``table`` has in this log."""
         if table not in self._columns:
-            rows = self._db.execute(f"PRAGMA table_info({table})").fetchall()
-            self._columns[table] = {str(r[1]) for r in rows}
+            self._columns[table] = self._db.columns(table)
         return self._columns[table]
 
     def dive(self, dive: int) -> dict[str, Any]:
@@ -103,9 +106,9 @@ class DiveReader:
         Raises:
             NoSuchDive: naming it and the dives the log has.
         """
-        row = self._db.execute("SELECT * FROM dives WHERE id = ?", (dive,)).fetchone()
+        row = self._db.one("SELECT * FROM dives WHERE id = ?", (dive,))
         if row is None:
-            known = [int(r[0]) for r in self._db.execute("SELECT id FROM dives ORDER BY id")]
+            known = [int(r["id"]) for r in self._db.all("SELECT id FROM dives ORDER BY id")]
             raise NoSuchDive(dive, known)
         return dict(row)
 
@@ -117,37 +120,31 @@ class DiveReader:
     def counts(self, dive: int) -> dict[str, int]:
         """How many rows of each kind the dive has: ``track`` (every point), ``positioned``
         (with a position), ``commands``, ``frames`` (sent), ``acks`` and ``events``."""
-        one = self._db.execute
         sent = self._time("first_sent_at", "sent_at")
-        return {
-            "track": one("SELECT COUNT(*) FROM track WHERE dive = ?", (dive,)).fetchone()[0],
-            "positioned": one(
-                "SELECT COUNT(*) FROM track WHERE dive = ? AND x_m IS NOT NULL", (dive,)
-            ).fetchone()[0],
-            "commands": one("SELECT COUNT(*) FROM commands WHERE dive = ?", (dive,)).fetchone()[0],
-            "frames": one(
-                f"SELECT COUNT(*) FROM commands WHERE dive = ? AND {sent} IS NOT NULL", (dive,)
-            ).fetchone()[0],
-            "acks": one(
-                "SELECT COUNT(*) FROM commands WHERE dive = ? AND ack IS NOT NULL", (dive,)
-            ).fetchone()[0],
-            "events": one("SELECT COUNT(*) FROM events WHERE dive = ?", (dive,)).fetchone()[0],
+        where = {
+            "track": "track WHERE dive = ?",
+            "positioned": "track WHERE dive = ? AND x_m IS NOT NULL",
+            "commands": "commands WHERE dive = ?",
+            "frames": f"commands WHERE dive = ? AND {sent} IS NOT NULL",
+            "acks": "commands WHERE dive = ? AND ack IS NOT NULL",
+            "events": "events WHERE dive = ?",
         }
+        out = {}
+        for kind, rows in where.items():
+            row = self._db.one(f"SELECT COUNT(*) AS n FROM {rows}", (dive,))
+            out[kind] = 0 if row is None else int(row["n"])
+        return out
 
-    def _rows(self, sql: str, args: tuple[Any, ...]) -> Iterator[sqlite3.Row]:
-        cursor = self._db.execute(sql, args)
-        try:
-            while batch := cursor.fetchmany(BATCH_ROWS):
-                yield from batch
-        finally:
-            cursor.close()
+    def _rows(self, sql: str, args: tuple[Any, ...]) -> Iterator[Row]:
+        return self._db.stream(sql, args, BATCH_ROWS)
 
     def track(self, dive: int) -> Iterator[dict[str, Any]]:
         """The dive's track points in arrival order, every column (one this log lacks: null;
         ``active`` parsed, ``nav_valid`` a boolean)."""
         have = self.columns("track")
         cols = ", ".join(c if c in have else f"NULL AS {c}" for c in TRACK_COLUMNS[1:])
-        for r in self._rows(f"SELECT {cols} FROM track WHERE dive = ? ORDER BY rowid", (dive,)):
+        sql = f"SELECT {cols} FROM track WHERE dive = ? ORDER BY {self._db.track_order}"
+        for r in self._rows(sql, (dive,)):
             row = dict(r)
             row["active"] = None if row["active"] is None else json.loads(row["active"])
             row["nav_valid"] = None if row["nav_valid"] is None else bool(row["nav_valid"])
@@ -189,15 +186,15 @@ class DiveReader:
     def datums(self, dive: int) -> list[tuple[str, float, float]]:
         """``(at, lat_deg, lon_deg)`` of every datum set up to the end of ``dive`` (the ``datum``
         events of it and of the dives before), oldest first: few rows, read at once."""
-        rows = self._db.execute(
+        rows = self._db.all(
             "SELECT at, data FROM events WHERE kind = 'datum' AND dive <= ? AND data IS NOT NULL "
             "ORDER BY dive, id",
             (dive,),
-        ).fetchall()
+        )
         out = []
-        for at, data in rows:
-            doc = json.loads(data)
+        for row in rows:
+            doc = json.loads(row["data"])
             lat, lon = doc.get("lat_deg"), doc.get("lon_deg")
             if isinstance(lat, int | float) and isinstance(lon, int | float):
-                out.append((str(at), float(lat), float(lon)))
+                out.append((str(row["at"]), float(lat), float(lon)))
         return out

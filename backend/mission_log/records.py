@@ -24,6 +24,10 @@ ParamValue = Annotated[
 ]
 #: Parameters by name (units as in ``/api/dictionary``).
 Params = dict[str, ParamValue]
+#: The path a command came by: one of this console's, or ``relay:<console>`` (a command another
+#: console without a transmitter checked and handed over: :mod:`backend.relay`).
+PathOrigin = Literal["api", "ws", "surface", "retry", "script", "scenario", "cli"]
+RelayOrigin = Annotated[str, Field(pattern=r"^relay:[A-Za-z0-9][A-Za-z0-9._-]{0,63}$")]
 
 
 def lenient(description: str) -> Any:
@@ -123,8 +127,11 @@ class CommandRecord(BaseModel):
     ber: float | None = Field(description="the bit-error rate the copies were chosen from")
     two_way: bool | None = Field(description="an acknowledgement was expected")
     superseded_by: int | None
-    origin: Literal["api", "ws", "surface", "retry", "script", "scenario", "cli"] | None = Field(
-        None, description="the path it came by (null: a record from before paths were logged)"
+    origin: PathOrigin | RelayOrigin | None = Field(
+        None,
+        description="the path it came by; relay:<console>: checked by that console (one without "
+        "a transmitter) and sent by this record's console (null: a record from before paths "
+        "were logged)",
     )
     retry_of: int | None = Field(None, description="the command this one retries")
     overrides: Overrides | None = Field(
@@ -132,6 +139,11 @@ class CommandRecord(BaseModel):
     )
     first_sent_at: str | None = Field(
         None, description="when its first copy left (ISO 8601, UTC): the log's wire order"
+    )
+    console: str | None = Field(
+        None,
+        description="the console that wrote it (consoles sharing a log; null: a record from "
+        "before consoles were named)",
     )
     vehicle: str | None = Field(
         None,
@@ -154,7 +166,10 @@ class LogEvent(BaseModel):
     id: int
     dive: int
     at: str = Field(description="ISO 8601, UTC")
-    kind: str = Field(description="echo_mismatch, datum, copies_from, script_stopped")
+    kind: str = Field(
+        description="echo_mismatch, datum, copies_from, script_stopped, control (who is in "
+        "control), relay (a relayed command refused by the console holding the transmitter)"
+    )
     detail: str = Field(description="what happened, in words")
     data: dict[str, JsonValue] | None = Field(description="the kind's figures (null: none)")
     vehicle: str | None = Field(

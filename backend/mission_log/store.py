@@ -1,11 +1,16 @@
 """The mission log: every command, written before it is transmitted, and the dives' tracks.
 
-SQLite in WAL mode with ``synchronous=FULL``: a committed row survives a killed process or a
-power cut. One connection guarded by a lock (the console is one process; writes are small).
-Rows are only ever inserted or updated field by field, so no record is half written. A write
-that fails (disk full, the file made read-only) raises :class:`LogWriteError`. Track points are
-written within :data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that;
-the buffer is :mod:`backend.mission_log.track`).
+A SQLite file (the embedded default: WAL mode, ``synchronous=FULL``) or a PostgreSQL database
+(``postgresql://...``, several consoles sharing it; ``synchronous_commit=on``): either way a
+committed row survives a killed process or a power cut. The two differ only in
+:mod:`backend.mission_log.database`; the tables are the migrations'
+(:mod:`backend.mission_log.migrating`), brought up to date when the log is opened. One
+connection guarded by a lock (the console is one process; writes are small). Rows are only
+ever inserted or updated field by field, each statement or :meth:`MissionLog.transaction`
+committed whole, so no record is half written. A write that fails (disk full, the file made
+read-only, the server gone) raises :class:`LogWriteError`. Track points are written within
+:data:`TRACK_FLUSH_S` of their arrival (a killed console loses less than that; the buffer is
+:mod:`backend.mission_log.track`).
 Opening a log with its checks: :func:`backend.mission_log.opening.open_checked`.
 """
 
@@ -13,7 +18,6 @@ from __future__ import annotations
 
 import contextlib
 import json
-import sqlite3
 import threading
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
@@ -30,8 +34,10 @@ from backend.mission_log.command_rows import (
     command_row,
     commands_query,
 )
+from backend.mission_log.database import LogDatabase, open_database
 from backend.mission_log.errors import LogWriteError
-from backend.mission_log.schema import create_or_migrate
+from backend.mission_log.migrating import migrate
+from backend.mission_log.read_only import ReadOnlyDatabase, read_only_of
 from backend.mission_log.track import (
     TRACK_BATCH,
     TRACK_BUFFER_MAX,
@@ -64,17 +70,6 @@ BUSY_TIMEOUT_S = 1.0
 EXPORT_CACHE_KIB = 256
 
 
-@contextlib.contextmanager
-def _writing() -> Iterator[None]:
-    """SQLite's errors of a write as :class:`LogWriteError` (our own misuse stays as it is)."""
-    try:
-        yield
-    except (sqlite3.IntegrityError, sqlite3.ProgrammingError):
-        raise
-    except sqlite3.DatabaseError as err:
-        raise LogWriteError(str(err)) from err
-
-
 def now_iso() -> str:
     """Current UTC time on the console's monotonic-anchored clock (:data:`CONSOLE_UTC`: the
     log's stamps never go back within a run), ISO 8601 with milliseconds."""
@@ -82,81 +77,111 @@ def now_iso() -> str:
 
 
 class MissionLog:
-    """The SQLite mission log. Thread-safe."""
+    """The mission log, in a SQLite file or on PostgreSQL. Thread-safe.
+
+    ``where``: the SQLite file (or ``":memory:"``), or a ``postgresql://`` URL. Opening
+    brings the tables to the newest migration. ``now``: the stamps the log writes (ISO UTC);
+    a benchmark that fills a long dive in seconds passes its own clock, the console keeps
+    :func:`now_iso`.
+
+    Raises:
+        sqlite3.Error, psycopg.Error: the database cannot be opened or migrated (what is
+            wrong, in words: :func:`backend.mission_log.opening.open_checked`).
+    """
 
     def __init__(
         self,
-        path: Path | str,
+        where: Path | str,
         *,
         busy_timeout_s: float = BUSY_TIMEOUT_S,
         now: Callable[[], str] = now_iso,
     ) -> None:
-        """``now``: the stamps the log writes (ISO UTC); a benchmark that fills a long dive in
-        seconds passes its own clock, the console keeps :func:`now_iso`."""
-        self.path = Path(path)
+        self._db: LogDatabase = open_database(where, busy_timeout_s)
+        #: The SQLite file (None on PostgreSQL).
+        self.path = Path(where) if self._db.kind == "sqlite" else None
+        #: The log as messages name it: the file, or the URL with its password masked.
+        self.where = self._db.where
         self._now = now
         self._busy_timeout_s = busy_timeout_s
-        if str(path) != ":memory:":
-            self.path.parent.mkdir(parents=True, exist_ok=True)
         self._lock = threading.RLock()  # re-entered by the writes of a transaction()
         self._track = TrackBuffer(self._lock, self._write_track)
         self._closed = False
-        self._db = sqlite3.connect(
-            str(path), timeout=busy_timeout_s, check_same_thread=False, isolation_level=None
-        )
-        self._db.row_factory = sqlite3.Row
+        #: The console writing (:meth:`name_console`; None: not named).
+        self.console: str | None = None
         try:
-            self._db.execute("PRAGMA journal_mode=WAL")
-            self._db.execute("PRAGMA synchronous=FULL")
-            self._db.execute("PRAGMA foreign_keys=ON")
-            create_or_migrate(self._db)
+            migrate(self._db)
         except BaseException:
             self._db.close()
             raise
 
+    @property
+    def kind(self) -> str:
+        """``"sqlite"`` or ``"postgresql"``."""
+        return self._db.kind
+
+    @property
+    def read_errors(self) -> tuple[type[Exception], ...]:
+        """The driver's errors a read raises when the database is out of reach (a PostgreSQL
+        server gone): a reader that can go on with what it read last catches them."""
+        return self._db.write_errors
+
     def set_busy_timeout(self, busy_timeout_s: float = BUSY_TIMEOUT_S) -> None:
         """How long a write waits for another connection's lock before it fails."""
         with self._lock:
-            self._db.execute(f"PRAGMA busy_timeout = {round(busy_timeout_s * 1000)}")
+            self._db.set_busy_timeout(busy_timeout_s)
+            self._busy_timeout_s = busy_timeout_s
+
+    def name_console(self, console: str) -> None:
+        """This console's name among those sharing the log: written into every command it
+        records, and carried by PostgreSQL's notifications of its writes (so it can tell
+        its own: :mod:`backend.mission_log.listen`)."""
+        with self._lock:
+            self._db.name_console(console)
+            self.console = console
+
+    @contextlib.contextmanager
+    def connection(self) -> Iterator[LogDatabase]:
+        """The log's connection under its lock, for the SQL kept beside the store (the
+        control table: :mod:`backend.mission_log.control`)."""
+        with self._lock:
+            yield self._db
 
     def check(self) -> list[str]:
-        """SQLite's ``quick_check``: the problems it finds (none: the file is intact). Then a
-        write that changes nothing, rolled back: raises ``sqlite3.OperationalError`` if the log
-        is locked by another process or read-only."""
+        """The database's integrity check (SQLite's ``quick_check``): the problems it finds
+        (none: intact). Then a write that changes nothing, rolled back: raises the driver's
+        error if the log is locked by another process or read-only."""
         with self._lock:
-            rows = self._db.execute("PRAGMA quick_check").fetchall()
-            self._db.execute("BEGIN IMMEDIATE")  # busy: locked
-            try:
-                self._db.execute("DELETE FROM dives WHERE 0")  # read-only, as opened
-            finally:
-                self._db.execute("ROLLBACK")
-        return [
-            line
-            for row in rows
-            for line in str(row[0]).splitlines()
-            if line != "ok" and not line.startswith("***")
-        ]
+            return self._db.check()
 
-    def recover_interrupted(self) -> int:
+    def recover_interrupted(self, console: str | None = None) -> int:
         """Every command an earlier run left on its way (``queued`` or ``transmitted``) becomes
         ``interrupted``, naming the last time the log was written. One transaction; returns
-        how many. Call before the console takes new commands."""
+        how many. Call before the console takes new commands. ``console``: only the records
+        that console wrote (and those that name none): on a log several consoles share, the
+        others' commands on their way are theirs (None: every record, a log of one console)."""
         on_its_way = sorted(ON_ITS_WAY)
         marks = ", ".join("?" * len(on_its_way))
+        mine = "" if console is None else " AND (console = ? OR console IS NULL)"
         target = advance(State.QUEUED, Event.INTERRUPTED)
         with self._lock:
             last = self._db.execute(
-                "SELECT MAX(t) FROM (SELECT MAX(updated_at) AS t FROM commands "
-                "UNION ALL SELECT MAX(started_at) FROM dives)"
-            ).fetchone()[0]
-            with self.transaction(), _writing():
+                "SELECT MAX(t) AS last FROM (SELECT MAX(updated_at) AS t FROM commands "
+                "UNION ALL SELECT MAX(started_at) FROM dives) AS times"
+            ).fetchone()["last"]
+            with self.transaction(), self._db.writing():
                 cur = self._db.execute(
                     "UPDATE commands SET state = ?, updated_at = ?, "
                     "reason = 'the console stopped while this command was ' || state || "
                     "' (the log was last written at ' || ? || "
                     "'); whether the vehicle received it is not known' "
-                    f"WHERE state IN ({marks})",
-                    (target, self._now(), last or "an unknown time", *on_its_way),
+                    f"WHERE state IN ({marks}){mine}",
+                    (
+                        target,
+                        self._now(),
+                        last or "an unknown time",
+                        *on_its_way,
+                        *(() if console is None else (console,)),
+                    ),
                 )
         return cur.rowcount
 
@@ -168,15 +193,15 @@ class MissionLog:
             if self._db.in_transaction:  # nested: part of the outer one
                 yield
                 return
-            with _writing():
-                self._db.execute("BEGIN IMMEDIATE")
+            with self._db.writing():
+                self._db.execute(self._db.begin_sql)
             try:
                 yield
-                with _writing():
+                with self._db.writing():
                     self._db.execute("COMMIT")
             except BaseException:
                 if self._db.in_transaction:  # SQLite may have rolled back already
-                    with contextlib.suppress(sqlite3.Error):
+                    with contextlib.suppress(*self._db.write_errors):
                         self._db.execute("ROLLBACK")
                 raise
 
@@ -189,20 +214,20 @@ class MissionLog:
             self._db.close()
 
     @contextlib.contextmanager
-    def exporting(self) -> Iterator[sqlite3.Connection]:
+    def exporting(self) -> Iterator[ReadOnlyDatabase]:
         """A connection for a long read (an export) that does not hold the log's lock: a
-        read-only one of its own, the track buffer written first. An in-memory log (tests)
-        has no second connection: its own, under the lock throughout."""
+        read-only one of its own (SQLite's file, or the same PostgreSQL database), the track
+        buffer written first. An in-memory log (tests) has no second connection: its own,
+        under the lock throughout.
+
+        Raises:
+            sqlite3.Error, psycopg.Error: the second connection cannot be opened.
+        """
         self.flush_track()
-        if str(self.path) == ":memory:":
-            with self._lock:
-                yield self._db
-            return
-        uri = f"{self.path.resolve().as_uri()}?mode=ro"
-        db = sqlite3.connect(uri, uri=True, timeout=self._busy_timeout_s, check_same_thread=False)
-        db.execute(f"PRAGMA cache_size = -{EXPORT_CACHE_KIB}")  # one pass in order
+        db = read_only_of(self._db, cache_kib=EXPORT_CACHE_KIB, busy_timeout_s=self._busy_timeout_s)
         try:
-            yield db
+            with self._lock if db.shared else contextlib.nullcontext():
+                yield db
         finally:
             db.close()
 
@@ -214,11 +239,10 @@ class MissionLog:
 
     def new_dive(self, target: str) -> int:
         """Open a new dive (``backend.dives`` decides when); returns its number."""
-        with self._lock, _writing():
-            cur = self._db.execute(
+        with self._lock, self._db.writing():
+            return self._db.insert(
                 "INSERT INTO dives (started_at, target) VALUES (?, ?)", (self._now(), target)
             )
-            return int(cur.lastrowid or 0)
 
     def dives(self) -> list[dict[str, Any]]:
         with self._lock:
@@ -251,16 +275,17 @@ class MissionLog:
             "updated_at": stamp,
             "state": "queued",
             "attempts": 0,
+            "console": self.console,
             **record,
         }
         cols = list(row)
         values = [column_value(c, row[c]) for c in cols]
-        with self._lock, _writing():
-            cur = self._db.execute(
+        with self._lock, self._db.writing():
+            new_id = self._db.insert(
                 f"INSERT INTO commands ({', '.join(cols)}) VALUES ({', '.join('?' * len(cols))})",
                 values,
             )
-            got = self._command(int(cur.lastrowid or 0))
+            got = self._command(new_id)
         assert got is not None
         return got
 
@@ -270,7 +295,7 @@ class MissionLog:
         fields["updated_at"] = self._now()
         sets = ", ".join(f"{k} = ?" for k in fields)
         values = [column_value(k, v) for k, v in fields.items()]
-        with self._lock, _writing():
+        with self._lock, self._db.writing():
             self._db.execute(f"UPDATE commands SET {sets} WHERE id = ?", [*values, command_id])
             got = self._command(command_id)
         if got is None:
@@ -349,22 +374,24 @@ class MissionLog:
         it with its id (``vehicle`` in it only when it names one)."""
         text = None if data is None else json.dumps(data)
         row = (dive, self._now(), kind, detail, text, vehicle)
-        with self._lock, _writing():
-            cur = self._db.execute(
+        with self._lock, self._db.writing():
+            new_id = self._db.insert(
                 "INSERT INTO events (dive, at, kind, detail, data, vehicle) "
                 "VALUES (?, ?, ?, ?, ?, ?)",
                 row,
             )
         keys = ("dive", "at", "kind", "detail")
         named = {} if vehicle is None else {"vehicle": vehicle}
-        event = {"id": int(cur.lastrowid or 0), **dict(zip(keys, row, strict=False))}
+        event = {"id": new_id, **dict(zip(keys, row, strict=False))}
         return {**event, "data": data, **named}
 
-    def events(self, dive: int | None = None) -> list[dict[str, Any]]:
-        """Events, oldest first (of one dive)."""
-        sql = "SELECT * FROM events" + (" WHERE dive = ?" if dive is not None else "")
+    def events(self, dive: int | None = None, *, after: int = 0) -> list[dict[str, Any]]:
+        """Events, oldest first (of one dive; with an id above ``after``)."""
+        sql = "SELECT * FROM events WHERE id > ?" + (" AND dive = ?" if dive is not None else "")
         with self._lock:
-            rows = self._db.execute(sql + " ORDER BY id", () if dive is None else (dive,))
+            rows = self._db.execute(
+                sql + " ORDER BY id", (after,) + (() if dive is None else (dive,))
+            )
             out = [dict(r) for r in rows.fetchall()]
         for event in out:
             event["data"] = None if event["data"] is None else json.loads(event["data"])
@@ -406,7 +433,7 @@ class MissionLog:
         """Commit ``points`` together (the track buffer's write)."""
         cols = ", ".join(TRACK_WRITE_COLUMNS)
         marks = ", ".join("?" * len(TRACK_WRITE_COLUMNS))
-        with self.transaction(), _writing():
+        with self.transaction(), self._db.writing():
             self._db.executemany(f"INSERT INTO track ({cols}) VALUES ({marks})", points)
 
     def track(self, dive: int, vehicle: str | None = None) -> list[dict[str, float]]:

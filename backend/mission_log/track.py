@@ -34,7 +34,7 @@ TRACK_BUFFER_MAX = 3600
 #: made from a status without navigation), then what the status said (depth_m, speed_mps,
 #: battery_pct, mode; None: not said), the active command the vehicle reported (JSON text,
 #: None: none or not said), the station's clock (ISO, :data:`backend.clock.CONSOLE_UTC`), the
-#: depth that command asks for, whether the navigation was valid and its age (s), and the
+#: depth that command asks for, whether the navigation was valid (1/0) and its age (s), and the
 #: fleet's vehicle it is of (None without a fleet).
 TrackPoint = tuple[
     int,
@@ -50,7 +50,7 @@ TrackPoint = tuple[
     str | None,
     str,
     float | None,
-    bool | None,
+    int | None,
     float | None,
     str | None,
 ]
@@ -85,7 +85,8 @@ def track_point(
     """The row of one point: ``position`` (t_s, x_m, y_m, z_m, heading_deg), what ``status``
     says (a number it does not hold, or a mode that is not text: null; an ``active`` that is
     not a command object: null; a ``nav_valid`` that is not a boolean: null, a 1.x vehicle's
-    "taken as true"), the commanded depth of its ``active`` command
+    "taken as true"; a boolean is kept as 0/1, on PostgreSQL too: one schema for both), the
+    commanded depth of its ``active`` command
     (:func:`~backend.mission_log.series.commanded_depth_m`), the station's clock ``at`` and the
     fleet's ``vehicle`` it is of."""
     t_s, x_m, y_m, z_m, heading_deg = position
@@ -106,7 +107,7 @@ def track_point(
         json.dumps(active) if isinstance(active, dict) else None,
         at,
         commanded_depth_m(active if isinstance(active, dict) else None),
-        nav_valid if isinstance(nav_valid, bool) else None,
+        int(nav_valid) if isinstance(nav_valid, bool) else None,
         number(status.get("nav_age_s")),
         vehicle,
     )

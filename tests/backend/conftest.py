@@ -4,7 +4,12 @@ test marked ``training``, and ``make_client``: the simulated vehicle at 50x behi
 rosbridge), the operator token, and polling helpers with deadlines (no fixed long sleeps).
 
 A test takes the light app unless it needs the simulator (a vehicle that moves, its telemetry
-stream, the training controls and datum) or a real transport. Tests marked ``training`` or
+stream, the training controls and datum) or a real transport.
+
+The mission log's tests run on both back-ends through ``log_backend`` (a SQLite file, or a
+fresh database on the worker's PostgreSQL server ``pg_server``: ``tests/pg_server.py``, one per
+xdist worker, started at its first use; without PostgreSQL installed those tests fail saying
+how to install it). Tests marked ``training`` or
 using ``make_client`` are ``console`` tests (and so ``slow``: not in ``make test-fast``):
 ``tests/conftest.py``."""
 
@@ -27,7 +32,9 @@ from backend.mission_log.store import FINAL_STATES
 from backend.settings import Settings
 from codec import encode_frame
 from tests.agent_link import TARGET, AgentLink
+from tests.backend.log_backend import KINDS, LogBackend
 from tests.manual_clock import ManualClock
+from tests.pg_server import PgServer, PostgresMissing
 
 TOKEN = "x" * 20
 WRONG_TOKEN = "y" * 20
@@ -70,6 +77,45 @@ def settings_for(db_path: Path, **overrides: Any) -> Settings:
         **overrides,
     }
     return Settings(**values)
+
+
+#: This process's PostgreSQL server, once started: one for every conftest that takes
+#: ``pg_server`` from here (tests/cli's too), stopped by the first of them at the session's end.
+_PG_SERVER: list[PgServer] = []
+
+
+@pytest.fixture(scope="session")
+def pg_server() -> Iterator[PgServer]:
+    """This worker's PostgreSQL server (a temporary directory, a free loopback port)."""
+    if not _PG_SERVER:
+        try:
+            _PG_SERVER.append(PgServer())
+        except PostgresMissing as err:
+            pytest.fail(str(err), pytrace=False)
+    yield _PG_SERVER[0]
+    _PG_SERVER[0].stop()  # again by another conftest's: does nothing
+
+
+@pytest.fixture(params=KINDS)
+def log_backend(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[LogBackend]:
+    """The mission log on SQLite, then on PostgreSQL (a fresh database, dropped after)."""
+    if request.param == "sqlite":
+        yield LogBackend("sqlite", tmp_path)
+        return
+    server: PgServer = request.getfixturevalue("pg_server")
+    name = server.new_database()
+    yield LogBackend("postgresql", tmp_path, server.url(name))
+    server.drop_database(name)
+
+
+@pytest.fixture
+def pg_log(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[LogBackend]:
+    """The mission log on PostgreSQL only, for what several consoles on one log do (a SQLite
+    log has one console and one writer): a fresh database, dropped after."""
+    server: PgServer = request.getfixturevalue("pg_server")
+    name = server.new_database()
+    yield LogBackend("postgresql", tmp_path, server.url(name))
+    server.drop_database(name)
 
 
 @pytest.fixture

@@ -1,5 +1,6 @@
 """A dive read back from the mission log: ``GET /api/series`` (the plots),
-``GET /api/dives/{dive}/timeline`` and ``PUT /api/replay/at`` (the replay's slider)."""
+``GET /api/dives/{dive}/timeline`` and ``PUT /api/replay/at`` (the replay's slider), and
+``GET /api/dives/{dive}/export.mcap`` (on both back-ends: ``log_backend``)."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from planner import VehicleState
 from station.link import Capability
 from tests.agent_link import HOLDING, AgentLink
 from tests.backend.conftest import MakeLightClient, console_of, send, wait_state
+from tests.backend.log_backend import LogBackend
 
 
 def test_before_any_dive_the_series_is_empty(make_light_client: MakeLightClient) -> None:
@@ -172,7 +174,10 @@ def test_the_slider_gives_the_vehicle_at_a_time_and_refuses_one_outside_the_dive
         assert client.put("/api/replay/at", json=bad).status_code == 422, bad
 
 
-def test_a_dive_downloads_as_mcap_with_the_logs_rows(client: TestClient) -> None:
+def test_a_dive_downloads_as_mcap_with_the_logs_rows(
+    make_light_client: MakeLightClient, log_backend: LogBackend
+) -> None:
+    client = make_light_client(**log_backend.settings())
     console = console_of(client)
     assert console.log is not None and console.dive == 1
     for k in range(1, 6):
@@ -197,7 +202,10 @@ def test_a_dive_downloads_as_mcap_with_the_logs_rows(client: TestClient) -> None
     assert got["/nemesys/fix"] == len(rows) - 1
 
 
-def test_exporting_a_dive_that_does_not_exist_is_404_naming_it(client: TestClient) -> None:
+def test_exporting_a_dive_that_does_not_exist_is_404_naming_it(
+    make_light_client: MakeLightClient, log_backend: LogBackend
+) -> None:
+    client = make_light_client(**log_backend.settings())
     r = client.get("/api/dives/99/export.mcap")
     assert r.status_code == 404 and r.json() == {"detail": "no dive 99"}
     r = client.get("/api/dives/0/export.mcap")

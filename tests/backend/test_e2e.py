@@ -1,6 +1,6 @@
 """End to end: the real ``nemesys console`` (uvicorn, viser, the simulated vehicle behind its
 rosbridge) as a subprocess, driven over HTTP with httpx on 127.0.0.1 only; and the mission
-log surviving a killed server (SIGKILL), row by row."""
+log surviving a killed server (SIGKILL), row by row, on SQLite and on PostgreSQL."""
 
 from __future__ import annotations
 
@@ -14,10 +14,11 @@ from typing import Any
 import httpx
 import pytest
 
-from backend.mission_log.store import STATES, MissionLog
+from backend.mission_log.store import STATES
 from backend.settings import Settings
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import CIRCLE, FINAL, SQUARE, TOKEN, clear_nemesys_env, wait_until
+from tests.backend.log_backend import LogBackend
 
 #: `nemesys console` subprocesses: make test, not make test-fast.
 pytestmark = pytest.mark.slow
@@ -39,18 +40,19 @@ JS_IMPORT = re.compile(r"""\bfrom\s*["'](\./[^"']+)["']|\bimport\s*\(\s*["'](\./
 @pytest.fixture
 def start_server(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> Iterator[Callable[[Path], ConsoleProcess]]:
-    """Start ``nemesys console`` on a free port with ``db``; every server is stopped at the
-    end of the test (killed if it does not stop)."""
+) -> Iterator[Callable[..., ConsoleProcess]]:
+    """Start ``nemesys console`` on a free port with ``db`` (and ``env``: the log on
+    PostgreSQL); every server is stopped at the end of the test (killed if it does not
+    stop)."""
     clear_nemesys_env(monkeypatch)
     servers: list[ConsoleProcess] = []
 
-    def start(db: Path) -> ConsoleProcess:
+    def start(db: Path, env: dict[str, str] | None = None) -> ConsoleProcess:
         server = start_console(
             tmp_path / f"console-{len(servers)}.log",
             TOKEN,
             *("--db", str(db), "--time-scale", "10"),
-            env={"NO_PROXY": "127.0.0.1,localhost"},
+            env={"NO_PROXY": "127.0.0.1,localhost", **(env or {})},
         )
         servers.append(server)
         assert server.base_url == f"http://{server.host}:{server.port}", server.base_url
@@ -168,10 +170,10 @@ def test_console_drives_the_simulated_vehicle_and_serves_the_page(
 
 
 def test_the_log_survives_a_killed_server(
-    tmp_path: Path, start_server: Callable[[Path], ConsoleProcess]
+    start_server: Callable[..., ConsoleProcess], log_backend: LogBackend
 ) -> None:
-    db = tmp_path / "missions.sqlite3"
-    first = start_server(db)
+    db, env = log_backend.path, log_backend.console_env()
+    first = start_server(db, env)
     with first.client() as c:
         wait_until(lambda: c.get("/api/vehicle").json()["pose"], what="a pose")
         cmd = post_command(c, "circle", CIRCLE)
@@ -179,8 +181,8 @@ def test_the_log_survives_a_killed_server(
     first.kill()  # right after the acknowledgement was reported
     assert acked["state"] == "acknowledged"
 
-    # the file is readable as it was left (no shutdown ran)
-    log = MissionLog(db)
+    # the log is readable as it was left (no shutdown ran)
+    log = log_backend.open()
     try:
         got = log.command(cmd["id"])
         assert got is not None and got["state"] == "acknowledged"
@@ -188,7 +190,7 @@ def test_the_log_survives_a_killed_server(
     finally:
         log.close()
 
-    second = start_server(db)
+    second = start_server(db, env)
     with second.client() as c:
         rec = c.get(f"/api/commands/{cmd['id']}").json()
         assert rec["state"] == "acknowledged"
@@ -201,10 +203,11 @@ def test_the_log_survives_a_killed_server(
     second.kill()
     assert queued["state"] == "queued" and queued["dive"] == 2
 
-    with sqlite3.connect(db) as raw:
-        assert raw.execute("PRAGMA integrity_check").fetchone() == ("ok",)
+    if log_backend.kind == "sqlite":
+        with sqlite3.connect(db) as raw:
+            assert raw.execute("PRAGMA integrity_check").fetchone() == ("ok",)
 
-    third = start_server(db)
+    third = start_server(db, env)
     with third.client() as c:
         rows = c.get("/api/commands").json()
         assert [r["id"] for r in rows] == [queued["id"], cmd["id"]]

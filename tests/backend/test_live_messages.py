@@ -220,4 +220,7 @@ def test_every_message_on_the_wire_is_documented(client: TestClient) -> None:
         assert put.status_code == 200, put.text
         assert receive(ws, "event")["event"]["kind"] == "datum"
         receive(ws, "link")  # every second
+        took = client.post("/api/control", json={"action": "request"}, headers=AUTH)
+        assert took.status_code == 200, took.text
+        assert receive(ws, "control")["control"]["vehicle"] == "nemesys"
     assert set(seen) == set(message_types(ServerMessage))

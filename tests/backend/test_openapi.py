@@ -31,6 +31,7 @@ from backend.api import authoring, commands, scripts, training
 from backend.api.commands import LogFilter
 from backend.mission_log.store import LogWriteError
 from codec import describe_dictionary
+from tests.backend.api.test_survey import SURVEY
 from tests.backend.chart.test_tiles import tile_dir
 from tests.backend.conftest import (
     AUTH,
@@ -57,6 +58,7 @@ OPERATOR_OPS = {
     ("POST", "/api/commands"),
     ("POST", "/api/commands/{}/retry"),
     ("POST", "/api/surface"),
+    ("POST", "/api/control"),
     ("POST", "/api/dives/{}/replay"),
     ("PUT", "/api/link"),
     ("POST", "/api/link/test"),
@@ -309,6 +311,7 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     body = {"pattern": "circle", "params": CIRCLE}
     c.call("POST", "/api/preview", json=body)
     c.call("POST", "/api/predict?horizon_s=30", json=body)
+    c.call("POST", "/api/survey/preview", json=SURVEY)
     frame = c.call("POST", "/api/encode", json=body).json()["hex"]
     c.call("POST", "/api/decode", json={"frame": frame})
     sent = c.call("POST", "/api/commands", json=body, headers=AUTH).json()
@@ -353,6 +356,8 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     wait_until(lambda: c.call("GET", "/api/scripts/run").json()["next"], what="step 2 proposed")
     c.call("POST", "/api/scripts/run/stop", headers=AUTH)
     c.call("GET", "/api/scripts/run")
+    c.call("POST", "/api/control", json={"action": "request"}, headers=AUTH)
+    c.call("GET", "/api/control")
     ok = {(m, p) for m, p, status in c.seen if status < 300}
     assert ok == {(m, normal(p)) for m, p, _ in c.operations()}
 
@@ -665,16 +670,37 @@ def test_docs_api_md_lists_every_operation_as_the_openapi_does(client: TestClien
         assert row["errors"] == {code for code in codes if code >= 400}, f"{key}: errors"
 
 
-@pytest.mark.parametrize("shape", ["Command record", "Preview response", "Link health"])
+#: The survey preview's models, all named in its one section.
+SURVEY_MODELS = (
+    "SurveyPreviewDoc",
+    "SurveyVehicleDoc",
+    "SurveyPosition",
+    "SurveyBlock",
+    "SurveyEntry",
+    "SurveyFootprint",
+    "SurveyPath",
+    "SurveyCoverage",
+)
+
+
+@pytest.mark.parametrize(
+    "shape", ["Command record", "Preview response", "Link health", "Survey preview"]
+)
 def test_docs_api_md_names_every_field_of_its_shapes(client: TestClient, shape: str) -> None:
     """The documented shapes name every property of their models."""
     schemas = contract(client).spec["components"]["schemas"]
-    model = {
-        "Command record": "CommandRecord",
-        "Preview response": "PreviewDoc",
-        "Link health": "LinkHealth",
+    models = {
+        "Command record": ("CommandRecord",),
+        "Preview response": ("PreviewDoc",),
+        "Link health": ("LinkHealth",),
+        "Survey preview": SURVEY_MODELS,
     }[shape]
     text = DOCS.read_text()
     section = text.split(f"### {shape}", 1)[1].split("\n### ", 1)[0]
-    missing = [p for p in schemas[model]["properties"] if not re.search(rf"\b{p}\b", section)]
+    missing = [
+        p
+        for model in models
+        for p in schemas[model]["properties"]
+        if not re.search(rf"\b{p}\b", section)
+    ]
     assert not missing, f"docs/api.md '{shape}' does not mention {missing}"

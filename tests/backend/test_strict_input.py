@@ -43,6 +43,18 @@ SCRIPT: dict[str, Any] = {
     "steps": [{"pattern": "circle", "params": CIRCLE, "trigger": {"kind": "at", "t_s": 0}}],
 }
 #: A valid body of every request model, by its OpenAPI schema name; a test changes one value.
+#: A fleet survey of two lanes for one vehicle (POST /api/survey/preview).
+SURVEY_AREA: dict[str, Any] = {
+    "origin_x_m": 0.0,
+    "origin_y_m": 0.0,
+    "heading_deg": 0.0,
+    "width_m": 20.0,
+    "length_m": 50.0,
+    "lane_spacing_m": 10.0,
+    "depth_m": 5.0,
+    "speed_mps": 0.18,
+}
+SURVEY_VEHICLE: dict[str, Any] = {"vehicle": "auv1", "x_m": 0.0, "y_m": 0.0, "heading_deg": 0.0}
 BASES: dict[str, dict[str, Any]] = {
     "CommandIn": {"pattern": "circle", "params": CIRCLE},
     "SendIn": {"pattern": "circle", "params": CIRCLE, "override": False, "copies": 1},
@@ -56,6 +68,8 @@ BASES: dict[str, dict[str, Any]] = {
     "RunIn": {"script": SCRIPT, "mode": "step"},
     "DatumIn": {"lat_deg": 1.0, "lon_deg": 2.0},
     "ReplayAtIn": {"dive": 1, "t_s": 0.0},
+    "SurveyIn": {"area": SURVEY_AREA, "vehicles": [SURVEY_VEHICLE]},
+    "ControlIn": {"action": "request", "vehicle": "nemesys", "takeover_allowed": False},
 }
 #: A value for every path parameter of the API.
 PATH_VALUES = {"command_id": "1", "dive": "1", "z": "0", "x": "0", "y": "0", "name": "wreck"}
@@ -188,7 +202,8 @@ def refused(http: httpx.Client, ep: Endpoint, body: str, path: Loc) -> dict[str,
 def test_the_openapi_has_the_json_endpoints_expected() -> None:
     """The walk finds every JSON endpoint and its fields (a smaller set would test less)."""
     urls = {str(ep) for ep in ENDPOINTS}
-    assert len(urls) == 15 and {"PUT /api/datum", "POST /api/scripts/run"} <= urls
+    assert len(urls) == 17 and {"PUT /api/datum", "POST /api/survey/preview"} <= urls
+    assert "POST /api/control" in urls
     assert sum(len(ep.slots) for ep in ENDPOINTS) > 60
     by_url = {str(ep): ep.slots for ep in ENDPOINTS}
     assert Slot(("steps", 0, "params", "radius"), True, True) in by_url["POST /api/scripts/preview"]

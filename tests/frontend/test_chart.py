@@ -213,9 +213,17 @@ def test_chart_draws_graticule_range_rings_and_preview_without_leaving_the_machi
     }
     expect(page.get_by_test_id("chart-missing")).to_be_hidden()
     # the graticule: lines both ways, labelled in degrees and decimal minutes near the datum
+    # (the chart opens on a wider view and fits the datum and the first preview: its labels
+    # are waited for in whole degrees of the datum, not only for being there)
     page.wait_for_function(
-        "() => document.querySelectorAll('.graticule-lat').length >= 2"
-        " && document.querySelectorAll('.graticule-lon').length >= 2",
+        """([lat, lon]) => {
+          const degrees = (cls) => [...document.querySelectorAll(cls)]
+            .map((e) => Number((e.textContent.match(/^(\\d+)°/) || [])[1]));
+          const la = degrees('.graticule-lat'), lo = degrees('.graticule-lon');
+          return la.length >= 2 && lo.length >= 2
+            && la.every((d) => d === lat) && lo.every((d) => d === lon);
+        }""",
+        arg=[int(abs(TRAINING_DATUM.lat_deg)), int(abs(TRAINING_DATUM.lon_deg))],
         polling=POLL_MS,
     )
     assert page.locator("path.graticule-line").count() >= 4

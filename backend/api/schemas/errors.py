@@ -72,6 +72,8 @@ ERROR_TEXT: Mapping[int, str] = {
     429: "too many transmissions in the last minute; retry after Retry-After seconds",
     503: "the console cannot take commands now (starting, or the mission log cannot be "
     "written); nothing was sent",
+    504: "a console without a transmitter (target relay): no console holding the transmitter "
+    "took the command within relay_wait_s; it was withdrawn, nothing was sent",
 }
 _HEADERS: Mapping[int, dict[str, Any]] = {
     401: {"WWW-Authenticate": {"description": "Bearer", "schema": {"type": "string"}}},

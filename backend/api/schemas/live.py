@@ -20,6 +20,7 @@ from backend.messages import (
     ActivePathMessage,
     BeliefMessage,
     CommandMessage,
+    ControlMessage,
     EventMessage,
     LinkMessage,
     Message,
@@ -67,7 +68,7 @@ class ErrorReply(Message):
     )
     status: int | None = Field(
         default=None,
-        description="the HTTP status REST answers the same refusal with (422, 409, 429, 503)",
+        description="the HTTP status REST answers the same refusal with (422, 409, 429, 503, 504)",
     )
     violations: list[LimitViolation] | None = Field(
         default=None, description="the limits the command breaks (a refusal by the checks)"
@@ -113,6 +114,7 @@ _Server = (
     | LinkMessage
     | EventMessage
     | BeliefMessage
+    | ControlMessage
     | AuthOk
     | AuthRefused
     | Queued

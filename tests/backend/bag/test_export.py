@@ -1,7 +1,8 @@
 """A dive exported as MCAP and as rosbag2, read back by two independent readers (``mcap``'s
 reader with ``mcap_ros2``'s decoder, and rosbags' AnyReader): every topic, as many messages as
-the log has rows, log times that never go back, a pose equal to its row; an older log exported
-without being migrated; outputs never half written."""
+the log has rows, log times that never go back, a pose equal to its row; on both back-ends (the
+dive's log on SQLite, then on PostgreSQL: ``dive_log``); an older SQLite log exported without
+being migrated; outputs never half written."""
 
 from __future__ import annotations
 
@@ -25,23 +26,25 @@ from backend.bag.msgdefs import typestore
 from backend.bag.write import ExportExists
 from backend.chart.geo import Datum
 from backend.mission_log.dive_reader import NoSuchDive, open_read_only
+from backend.mission_log.read_only import ReadOnlyDatabase
 from backend.mission_log.store import MissionLog
 from bench._dive_log import DATUM
 from tests.backend.bag.conftest import DiveLog
-from tests.backend.mission_log.test_status_series import ISSUE_20_TRACK
+from tests.backend.log_backend import LogBackend
+from tests.backend.mission_log.test_migrations import ISSUE_20_TRACK
 from vehicle_contract.frames import EnuPose, enu_to_ned
 
 
 @pytest.fixture(scope="module")
-def db(dive_log: DiveLog) -> Iterator[sqlite3.Connection]:
-    conn = open_read_only(dive_log.path)
+def db(dive_log: DiveLog) -> Iterator[ReadOnlyDatabase]:
+    conn = open_read_only(dive_log.where)
     yield conn
     conn.close()
 
 
 @pytest.fixture(scope="module")
 def exported(
-    dive_log: DiveLog, db: sqlite3.Connection, tmp_path_factory: pytest.TempPathFactory
+    dive_log: DiveLog, db: ReadOnlyDatabase, tmp_path_factory: pytest.TempPathFactory
 ) -> dict[str, Path]:
     out = tmp_path_factory.mktemp("out")
     export_files(db, dive_log.filled.dive, mcap=out / "dive.mcap", rosbag2=out / "dive_bag")
@@ -51,7 +54,7 @@ def exported(
 @pytest.fixture(scope="module")
 def log_rows(dive_log: DiveLog) -> dict[str, Any]:
     """The dive as the store reads it back (not the exporter's reader)."""
-    log = MissionLog(dive_log.path)
+    log = MissionLog(dive_log.where)
     try:
         dive = dive_log.filled.dive
         commands = log.commands(dive=dive, limit=10_000, oldest_first=True)
@@ -184,14 +187,15 @@ def test_the_rosbag2_directory_has_its_metadata_and_one_mcap(exported: dict[str,
         assert f"name: {topic.name}" in meta and f"type: {topic.type}" in meta
 
 
-def test_without_a_datum_there_is_no_fix_and_a_given_one_places_it(tmp_path: Path) -> None:
-    path = tmp_path / "log.sqlite3"
-    log = MissionLog(path)
+def test_without_a_datum_there_is_no_fix_and_a_given_one_places_it(
+    log_backend: LogBackend, tmp_path: Path
+) -> None:
+    log = log_backend.open()
     dive = log.new_dive("sim")
     for k in range(5):
         log.add_track(dive, float(k), 10.0, 5.0, 1.0, 0.0)
     log.close()
-    db = open_read_only(path)
+    db = open_read_only(log_backend.where)
     try:
         (bare,) = export_files(db, dive, mcap=tmp_path / "bare.mcap")
         (placed,) = export_files(db, dive, mcap=tmp_path / "placed.mcap", datum=Datum(43.0, 5.0))
@@ -252,7 +256,7 @@ def test_an_older_log_is_exported_as_it_is_without_migrating_it(tmp_path: Path) 
 
 
 def test_an_unknown_dive_is_named_and_nothing_is_written(
-    db: sqlite3.Connection, tmp_path: Path
+    db: ReadOnlyDatabase, tmp_path: Path
 ) -> None:
     with pytest.raises(NoSuchDive, match=r"no dive 7 in the mission log \(its only dive is 1\)"):
         export_files(db, 7, mcap=tmp_path / "x.mcap", rosbag2=tmp_path / "x_bag")
@@ -260,7 +264,7 @@ def test_an_unknown_dive_is_named_and_nothing_is_written(
 
 
 def test_an_existing_output_is_replaced_only_when_asked(
-    db: sqlite3.Connection, tmp_path: Path
+    db: ReadOnlyDatabase, tmp_path: Path
 ) -> None:
     target = tmp_path / "dive.mcap"
     target.write_bytes(b"mine")
@@ -278,7 +282,7 @@ def test_an_existing_output_is_replaced_only_when_asked(
 
 @pytest.mark.parametrize("form", ["mcap", "rosbag2"])
 def test_a_failure_midway_leaves_nothing_behind(
-    db: sqlite3.Connection, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, form: str
+    db: ReadOnlyDatabase, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, form: str
 ) -> None:
     calls = 0
     status = m.status

@@ -77,8 +77,15 @@ class RecordingHub(TelemetryHub):
 
 
 class Rig:
-    def __init__(self, tmp_path: Path, capability: Capability, ber: float = 1e-2) -> None:
-        self.log = MissionLog(tmp_path / "missions.sqlite3")
+    def __init__(
+        self,
+        tmp_path: Path,
+        capability: Capability,
+        ber: float = 1e-2,
+        where: Path | str | None = None,
+    ) -> None:
+        """``where``: the log (default: a SQLite file in ``tmp_path``)."""
+        self.log = MissionLog(where or tmp_path / "missions.sqlite3")
         self.dive = self.log.new_dive("fake")
         self.clock = ManualClock()
         self.link = FakeLink(capability, self.clock)

@@ -44,11 +44,13 @@ def test_a_fleet_fault_is_refused_naming_it(value: str, said: str) -> None:
     assert said in str(err.value)
 
 
-def test_a_fleet_takes_no_single_namespace_and_no_training_yet() -> None:
+def test_a_fleet_takes_no_single_namespace_and_no_relay() -> None:
     with pytest.raises(ValidationError, match="leave vehicle_namespace empty"):
         Settings(target="tcp://127.0.0.1:9", vehicles="2", vehicle_namespace="auv1")
-    with pytest.raises(ValidationError, match="fleet simulator"):
-        Settings(vehicles="2")  # target "sim"
+    url = "postgresql://u@127.0.0.1/nemesys"
+    with pytest.raises(ValidationError, match="leave vehicles empty there"):
+        Settings(vehicles="2", target="relay", database_url=url)
+    assert len(Settings(vehicles="2").fleet) == 2  # training: the fleet simulator
 
 
 def test_the_console_stops_before_starting_naming_the_setting(

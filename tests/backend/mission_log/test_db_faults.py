@@ -2,9 +2,10 @@
 a database, a corrupted one, a read-only one, one locked by another process, a directory that
 cannot be made, and a busy port each give one line on stderr naming the file (or port) and
 exit 2, with no URL and no traceback; a missing directory is created; the URL is printed only
-once the server answers. While running: a write that fails fails the send with 503 and its
-reason, and no frame leaves that the log does not hold; a write failing after a frame left
-stops that delivery, logged. Track points are on disk within a second of their arrival.
+once the server answers (on PostgreSQL: test_postgres_start.py). While running, on both
+back-ends (``log_backend``): a write that fails fails the send with 503 and its reason, and no
+frame leaves that the log does not hold; a write failing after a frame left stops that
+delivery, logged. Track points are on disk within a second of their arrival.
 
 Running as root, chmod does not make a file read-only; the read-only case is then run with
 SQLite's own read-only open (``mode=ro``, what SQLite falls back to on a file it may not
@@ -34,6 +35,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from backend.commands.manager import CommandManager
+from backend.mission_log.database import LogDatabase
 from backend.mission_log.store import TRACK_FLUSH_S, LogWriteError, MissionLog
 from bench._server import REPO, free_port
 from station.link import Capability
@@ -51,6 +53,7 @@ from tests.backend.conftest import (
     console_of,
     wait_until,
 )
+from tests.backend.log_backend import LogBackend
 from tests.manual_clock import ManualClock
 
 #: The line with the operator URL (viser prints a URL of its own, without a token).
@@ -77,10 +80,11 @@ runpy.run_module("cli.main", run_name="__main__")
 # --- helpers ------------------------------------------------------------------------------
 
 
-def console_env() -> dict[str, str]:
+def console_env(**more: str) -> dict[str, str]:
     env = {k: v for k, v in os.environ.items() if not k.startswith("NEMESYS_")}
     env["NEMESYS_TOKEN"] = TOKEN
     env["PYTHONDONTWRITEBYTECODE"] = "1"
+    env.update(more)
     return env
 
 
@@ -89,15 +93,16 @@ def console_args(db: Path, port: int) -> list[str]:
 
 
 def run_console(
-    db: Path, port: int | None = None, *, prelude: str | None = None
+    db: Path, port: int | None = None, *, prelude: str | None = None, database_url: str = ""
 ) -> subprocess.CompletedProcess[str]:
     """``nemesys console`` to its end (a fault ends it at once; a console that starts instead
-    is stopped at the timeout and fails the test)."""
+    is stopped at the timeout and fails the test); its log on ``database_url`` when given."""
     start = ["-c", prelude] if prelude else ["-m", "cli.main"]
+    more = {"NEMESYS_DATABASE_URL": database_url} if database_url else {}
     return subprocess.run(
         [sys.executable, *start, *console_args(db, port or free_port())],
         cwd=REPO,
-        env=console_env(),
+        env=console_env(**more),
         stdin=subprocess.DEVNULL,
         capture_output=True,
         text=True,
@@ -145,26 +150,40 @@ def corrupt(path: Path) -> None:
             f.write(bytes(200))
 
 
-class FailingWrites:
-    """A connection whose statements beginning with one of ``verbs`` fail as SQLite fails them
-    on a full disk (``sqlite3.OperationalError``); the rest go to the real one."""
+def full_disk(db: LogDatabase, message: str) -> Exception:
+    """The driver's error of a write on a full disk: SQLite's ``OperationalError``,
+    PostgreSQL's ``DiskFull`` (53100)."""
+    if db.kind == "postgresql":
+        import psycopg
 
-    def __init__(self, db: sqlite3.Connection, verbs: Sequence[str], message: str) -> None:
+        return psycopg.errors.DiskFull(message)
+    return sqlite3.OperationalError(message)
+
+
+class FailingWrites:
+    """The log's connection, whose statements beginning with one of ``verbs`` fail as the
+    database fails them on a full disk (:func:`full_disk`); the rest go to the real one."""
+
+    def __init__(self, db: LogDatabase, verbs: Sequence[str], message: str) -> None:
         self.db = db
         self.verbs = tuple(v.upper() for v in verbs)
         self.message = message
 
     def _check(self, sql: str) -> None:
         if sql.lstrip().upper().startswith(self.verbs):
-            raise sqlite3.OperationalError(self.message)
+            raise full_disk(self.db, self.message)
 
-    def execute(self, sql: str, parameters: Any = ()) -> sqlite3.Cursor:
+    def execute(self, sql: str, parameters: Any = ()) -> Any:
         self._check(sql)
         return self.db.execute(sql, parameters)
 
-    def executemany(self, sql: str, parameters: Any) -> sqlite3.Cursor:
+    def executemany(self, sql: str, parameters: Any) -> None:
         self._check(sql)
-        return self.db.executemany(sql, parameters)
+        self.db.executemany(sql, parameters)
+
+    def insert(self, sql: str, parameters: Any) -> int:
+        self._check(sql)
+        return self.db.insert(sql, parameters)
 
     def __getattr__(self, name: str) -> Any:
         return getattr(self.db, name)
@@ -176,7 +195,7 @@ def failing_writes(
 ) -> Iterator[FailingWrites]:
     """``log``'s statements beginning with ``verbs`` fail while inside."""
     with log._lock:
-        real: sqlite3.Connection = log._db
+        real: LogDatabase = log._db
         proxy = FailingWrites(real, verbs, message)
         log._db = proxy  # type: ignore[assignment]
     try:
@@ -186,9 +205,8 @@ def failing_writes(
             log._db = real
 
 
-def command_rows(db: Path) -> int:
-    with sqlite3.connect(db) as raw:
-        count: int = raw.execute("SELECT COUNT(*) FROM commands").fetchone()[0]
+def command_rows(log_backend: LogBackend) -> int:
+    count: int = log_backend.scalar("SELECT COUNT(*) FROM commands")
     return count
 
 
@@ -383,10 +401,10 @@ def post_circle(client: TestClient) -> httpx.Response:
     ],
 )
 def test_a_send_the_log_cannot_record_is_503_and_nothing_leaves(
-    make_light_client: MakeLightClient, verb: str, message: str
+    make_light_client: MakeLightClient, log_backend: LogBackend, verb: str, message: str
 ) -> None:
     clock, link = ManualClock(), AgentLink()
-    client = make_light_client(link, clock=clock)
+    client = make_light_client(link, clock=clock, **log_backend.settings())
     console = console_of(client)
     assert console.log is not None
     with failing_writes(console.log, verb, message=message):
@@ -406,36 +424,45 @@ def test_a_send_the_log_cannot_record_is_503_and_nothing_leaves(
     assert link.frames == [sent.json()["hex"]]
 
 
+#: The database's own refusal of a write on a read-only connection.
+READ_ONLY = {
+    "sqlite": ("PRAGMA query_only = {on}", "attempt to write a readonly database"),
+    "postgresql": (
+        "SET default_transaction_read_only = {on}",
+        "cannot execute INSERT in a read-only transaction",
+    ),
+}
+
+
 def test_a_real_read_only_connection_fails_the_send(
-    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch
+    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch, log_backend: LogBackend
 ) -> None:
-    client = make_client()
+    client = make_client(**log_backend.settings())
     console = console_of(client)
     assert console.log is not None
     spy = spy_transmit(client, monkeypatch)
     log = console.log
+    statement, refusal = READ_ONLY[log_backend.kind]
 
-    def query_only(on: bool) -> None:  # SQLite refuses every write of the connection
+    def read_only(on: bool) -> None:  # the database refuses every write of the connection
         with log._lock:
-            log._db.execute(f"PRAGMA query_only = {int(on)}")
+            log._db.execute(statement.format(on=int(on) if log.kind == "sqlite" else on))
 
-    query_only(True)
+    read_only(True)
     try:
         r = post_circle(client)
     finally:
-        query_only(False)
+        read_only(False)
     assert r.status_code == 503, r.text
     detail = r.json()["detail"]
-    assert detail == (
-        f"the mission log cannot be written: attempt to write a readonly database{NOTHING_SENT}"
-    )
-    assert spy.frames == [] and command_rows(console.log.path) == 0
+    assert detail == f"the mission log cannot be written: {refusal}{NOTHING_SENT}"
+    assert spy.frames == [] and command_rows(log_backend) == 0
 
 
 def test_surface_and_retry_the_log_cannot_record_are_503(
-    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch
+    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch, log_backend: LogBackend
 ) -> None:
-    client = make_client()
+    client = make_client(**log_backend.settings())
     console = console_of(client)
     log, dives = console.log, console.dives
     assert log is not None and dives is not None
@@ -455,9 +482,12 @@ def test_surface_and_retry_the_log_cannot_record_are_503(
 
 
 def test_a_write_failing_after_a_frame_left_stops_the_delivery_logged(
-    make_client: MakeClient, monkeypatch: pytest.MonkeyPatch, caplog: pytest.LogCaptureFixture
+    make_client: MakeClient,
+    monkeypatch: pytest.MonkeyPatch,
+    caplog: pytest.LogCaptureFixture,
+    log_backend: LogBackend,
 ) -> None:
-    client = make_client()
+    client = make_client(**log_backend.settings())
     console = console_of(client)
     cm = console.commands
     assert console.log is not None and cm is not None
@@ -495,8 +525,8 @@ def test_a_write_failing_after_a_frame_left_stops_the_delivery_logged(
 # --- the command manager: what a failed commit leaves ----------------------------------------
 
 
-def run_rig(tmp_path: Path, scenario: Callable[[Rig], Awaitable[None]]) -> None:
-    rig = Rig(tmp_path, Capability.NONE)
+def run_rig(log_backend: LogBackend, scenario: Callable[[Rig], Awaitable[None]]) -> None:
+    rig = Rig(log_backend.tmp, Capability.NONE, where=log_backend.where)
 
     async def main() -> None:
         try:
@@ -508,7 +538,9 @@ def run_rig(tmp_path: Path, scenario: Callable[[Rig], Awaitable[None]]) -> None:
     asyncio.run(main())
 
 
-def test_a_failed_commit_sends_nothing_and_stops_what_it_superseded(tmp_path: Path) -> None:
+def test_a_failed_commit_sends_nothing_and_stops_what_it_superseded(
+    log_backend: LogBackend,
+) -> None:
     async def scenario(rig: Rig) -> None:
         cm: CommandManager = rig.cm
         old = await cm.submit(CIRCLE_FRAME, copies=20)
@@ -526,30 +558,29 @@ def test_a_failed_commit_sends_nothing_and_stops_what_it_superseded(tmp_path: Pa
         assert done["state"] == "interrupted" and "could not record" in done["reason"]
         assert [c["id"] for c in rig.log.commands()] == [old["id"]]
 
-    run_rig(tmp_path, scenario)
+    run_rig(log_backend, scenario)
 
 
 # --- track points -----------------------------------------------------------------------------
 
 
-def on_disk(db: Path) -> int:
-    with sqlite3.connect(db) as raw:  # another connection: what a crash would leave
-        count: int = raw.execute("SELECT COUNT(*) FROM track").fetchone()[0]
+def on_disk(log_backend: LogBackend) -> int:
+    """Track points another connection sees: what a crash would leave."""
+    count: int = log_backend.scalar("SELECT COUNT(*) FROM track")
     return count
 
 
 @pytest.mark.slow  # the log's real flush period, ~1 s
-def test_a_track_point_is_on_disk_within_a_second(tmp_path: Path) -> None:
-    db = tmp_path / "missions.sqlite3"
-    log = MissionLog(db)
+def test_a_track_point_is_on_disk_within_a_second(log_backend: LogBackend) -> None:
+    log = log_backend.open()
     try:
         dive = log.new_dive("sim")
         for count in (1, 3):  # one point, then a few
-            before = on_disk(db)
+            before = on_disk(log_backend)
             added_s = time.monotonic()
             for i in range(count):
                 log.add_track(dive, float(i), 0.0, 0.0, 2.0, 0.0)
-            while on_disk(db) < before + count:
+            while on_disk(log_backend) < before + count:
                 assert time.monotonic() - added_s <= 1.0, "a track point is not on disk after 1 s"
                 time.sleep(0.01)
         assert TRACK_FLUSH_S <= 0.5
@@ -559,10 +590,9 @@ def test_a_track_point_is_on_disk_within_a_second(tmp_path: Path) -> None:
 
 @pytest.mark.slow  # the log's real flush period, ~1 s
 def test_track_points_the_log_cannot_take_are_kept_and_written_later(
-    tmp_path: Path, caplog: pytest.LogCaptureFixture
+    log_backend: LogBackend, caplog: pytest.LogCaptureFixture
 ) -> None:
-    db = tmp_path / "missions.sqlite3"
-    log = MissionLog(db)
+    log = log_backend.open()
     caplog.set_level(logging.ERROR, logger="backend.mission_log.store")
     try:
         dive = log.new_dive("sim")
@@ -575,8 +605,8 @@ def test_track_points_the_log_cannot_take_are_kept_and_written_later(
                 timeout_s=5.0,
                 what="the failed flush",
             )
-            assert on_disk(db) == 0
+            assert on_disk(log_backend) == 0
         log.add_track(dive, 12.0, 0.0, 0.0, 2.0, 0.0)
-        wait_until(lambda: on_disk(db) == 13, timeout_s=1.0, interval_s=0.01)
+        wait_until(lambda: on_disk(log_backend) == 13, timeout_s=1.0, interval_s=0.01)
     finally:
         log.close()

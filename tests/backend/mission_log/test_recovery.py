@@ -1,12 +1,12 @@
 """Recovery of what a stopped console left on its way: ``MissionLog.recover_interrupted`` on
-every state, an old-format log migrated at open, and end to end a SIGKILLed ``nemesys
-console`` on a one-way TCP link whose transmitted command is interrupted at the next start and
-retried to ``sent``, its frames decoded on the loopback listener."""
+every state, and end to end a SIGKILLed ``nemesys console`` on a one-way TCP link whose
+transmitted command is interrupted at the next start and retried to ``sent``, its frames
+decoded on the loopback listener: both on SQLite and on PostgreSQL (``log_backend``). Older
+logs: test_migrations.py."""
 
 from __future__ import annotations
 
 import re
-import sqlite3
 from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
@@ -15,10 +15,10 @@ import httpx
 import pytest
 
 from backend.commands.lifecycle import ON_ITS_WAY, State
-from backend.mission_log.store import MissionLog
 from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import CIRCLE, TOKEN, clear_nemesys_env, command_fields, wait_until
+from tests.backend.log_backend import LogBackend
 
 #: `nemesys console` subprocesses, killed and restarted: make test, not make test-fast.
 pytestmark = pytest.mark.slow
@@ -31,54 +31,11 @@ RECOVERED_LINE = re.compile(
 )
 URL_LINE = re.compile(r"^\s*http://\S+/\?token=", re.M)
 
-#: The ``commands`` table before copies, copies_sent, p_delivered, ber, two_way and
-#: superseded_by (``git show HEAD~3:backend/mission_log/store.py``), written out: the old format.
-OLD_SCHEMA = """
-CREATE TABLE dives (
-    id INTEGER PRIMARY KEY,
-    started_at TEXT NOT NULL,
-    target TEXT NOT NULL
-);
-CREATE TABLE commands (
-    id INTEGER PRIMARY KEY,
-    dive INTEGER NOT NULL REFERENCES dives(id),
-    created_at TEXT NOT NULL,
-    updated_at TEXT NOT NULL,
-    operator TEXT NOT NULL,
-    target TEXT NOT NULL,
-    kind TEXT NOT NULL,
-    pattern TEXT NOT NULL,
-    pattern_id INTEGER NOT NULL,
-    params TEXT NOT NULL,
-    requested TEXT NOT NULL,
-    bits TEXT NOT NULL,
-    hex TEXT NOT NULL,
-    state TEXT NOT NULL,
-    attempts INTEGER NOT NULL DEFAULT 0,
-    sent_at TEXT,
-    acked_at TEXT,
-    ack TEXT,
-    reason TEXT
-);
-CREATE INDEX commands_dive ON commands(dive);
-CREATE TABLE track (
-    dive INTEGER NOT NULL REFERENCES dives(id),
-    t_s REAL NOT NULL,
-    x_m REAL NOT NULL,
-    y_m REAL NOT NULL,
-    z_m REAL NOT NULL,
-    heading_deg REAL NOT NULL
-);
-CREATE INDEX track_dive ON track(dive, t_s);
-"""
-NEW_COLUMNS = ("copies", "copies_sent", "p_delivered", "ber", "two_way", "superseded_by")
-
-
 # --- (a) the log's recovery --------------------------------------------------------------
 
 
-def test_recovery_interrupts_exactly_what_was_on_its_way(tmp_path: Path) -> None:
-    log = MissionLog(tmp_path / "missions.sqlite3")
+def test_recovery_interrupts_exactly_what_was_on_its_way(log_backend: LogBackend) -> None:
+    log = log_backend.open()
     try:
         dive = log.new_dive("tcp://127.0.0.1:9")
         ids: dict[State, int] = {}
@@ -115,86 +72,38 @@ def test_recovery_interrupts_exactly_what_was_on_its_way(tmp_path: Path) -> None
         log.close()
 
 
-def test_recovery_of_an_empty_log_is_nothing(tmp_path: Path) -> None:
-    log = MissionLog(tmp_path / "missions.sqlite3")
+def test_recovery_of_an_empty_log_is_nothing(log_backend: LogBackend) -> None:
+    log = log_backend.open()
     try:
         assert log.recover_interrupted() == 0
     finally:
         log.close()
 
 
-# --- (b) an old-format log ----------------------------------------------------------------
-
-
-def test_an_old_format_log_is_migrated_and_readable(tmp_path: Path) -> None:
-    db = tmp_path / "old.sqlite3"
-    old = command_fields()
-    with sqlite3.connect(db) as raw:
-        raw.executescript(OLD_SCHEMA)
-        raw.execute("INSERT INTO dives VALUES (1, '2024-05-01T10:00:00.000+00:00', 'sim')")
-        for cid, state, ack in (
-            (1, "acknowledged", '{"outcome": "accepted", "corrected_bits": 0}'),
-            (2, "transmitted", None),
-        ):
-            raw.execute(
-                "INSERT INTO commands (id, dive, created_at, updated_at, operator, target, kind, "
-                "pattern, pattern_id, params, requested, bits, hex, state, attempts, sent_at, "
-                "ack) VALUES (?, 1, ?, ?, 'operator', 'sim', 'command', ?, ?, ?, ?, ?, ?, ?, 1, "
-                "?, ?)",
-                (
-                    cid,
-                    f"2024-05-01T10:0{cid}:00.000+00:00",
-                    f"2024-05-01T10:0{cid}:01.000+00:00",
-                    old["pattern"],
-                    old["pattern_id"],
-                    '{"speed": 0.18, "depth": 3, "radius": 5.0, "direction": "cw"}',
-                    '{"radius": 5.0}',
-                    old["bits"],
-                    old["hex"],
-                    state,
-                    f"2024-05-01T10:0{cid}:00.500+00:00",
-                    ack,
-                ),
-            )
-    raw.close()
-
-    log = MissionLog(db)
+def test_recovery_on_a_shared_log_is_the_consoles_own(log_backend: LogBackend) -> None:
+    """A console starting on a log others share interrupts only what it left on its way (and
+    records naming no console): another console's commands on their way are its own."""
+    log = log_backend.open()
     try:
-        with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as raw:
-            columns = {r[1] for r in raw.execute("PRAGMA table_info(commands)")}
-        raw.close()
-        assert set(NEW_COLUMNS) <= columns
-        acked = log.command(1)
-        assert acked is not None
-        assert acked["state"] == "acknowledged" and acked["ack"]["outcome"] == "accepted"
-        assert acked["params"]["radius"] == 5.0 and acked["hex"] == old["hex"]
-        assert acked["attempts"] == 1 and acked["sent_at"] == "2024-05-01T10:01:00.500+00:00"
-        # the declared defaults for what the old format did not record
-        assert acked["copies"] is None and acked["ber"] is None and acked["two_way"] is None
-        assert acked["copies_sent"] == 0 and acked["p_delivered"] == 0
-        assert acked["superseded_by"] is None
-        assert [r["id"] for r in log.commands()] == [2, 1]
-        # the old run left command 2 transmitted: recovered like any other
-        assert log.recover_interrupted() == 1
-        got = log.command(2)
-        assert got is not None and got["state"] == "interrupted"
-        assert "(the log was last written at 2024-05-01T10:02:01.000+00:00)" in got["reason"]
-        # new records use the new columns
-        new = log.insert_command(
-            1,
-            {
-                **command_fields("circle", **{**CIRCLE, "radius": 4.0}),
-                "copies": 5,
-                "two_way": False,
-            },
-        )
-        assert new["copies"] == 5 and new["two_way"] is False and new["copies_sent"] == 0
+        dive = log.new_dive("sim")
+        ids = {}
+        for console in ("ship", "shore", None):
+            if console is not None:
+                log.name_console(console)
+            else:
+                log.console = None  # a record from before consoles were named
+            rec = log.insert_command(dive, command_fields())
+            log.update_command(rec["id"], state="transmitted", attempts=1)
+            ids[console] = rec["id"]
+        assert log.recover_interrupted("shore") == 2
+        states = {c: (log.command(cid) or {})["state"] for c, cid in ids.items()}
+        assert states == {"ship": "transmitted", "shore": "interrupted", None: "interrupted"}
+        assert log.recover_interrupted() == 1  # every record: a log of one console
     finally:
         log.close()
-    MissionLog(db).close()  # opening a migrated log again changes nothing and does not fail
 
 
-# --- (c) end to end: SIGKILL, restart, retry ---------------------------------------------
+# --- (b) end to end: SIGKILL, restart, retry ---------------------------------------------
 
 
 @pytest.fixture
@@ -206,18 +115,27 @@ def listener() -> Iterator[FrameGateway]:
 
 @pytest.fixture
 def start_server(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, listener: FrameGateway
-) -> Iterator[Callable[[Path], ConsoleProcess]]:
-    """``nemesys console`` on a one-way TCP link to ``listener``, copies 0.5 s apart."""
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    listener: FrameGateway,
+    log_backend: LogBackend,
+) -> Iterator[Callable[[], ConsoleProcess]]:
+    """``nemesys console`` on a one-way TCP link to ``listener``, copies 0.5 s apart, its log
+    on ``log_backend``."""
     clear_nemesys_env(monkeypatch)
     servers: list[ConsoleProcess] = []
 
-    def start(db: Path) -> ConsoleProcess:
+    def start() -> ConsoleProcess:
         server = start_console(
             tmp_path / f"console-{len(servers)}.log",
             TOKEN,
-            *("--db", str(db), "--target", f"tcp://127.0.0.1:{listener.port}"),
-            env={"NEMESYS_COPY_INTERVAL_S": "0.5", "NO_PROXY": "127.0.0.1,localhost"},
+            *log_backend.console_args(),
+            *("--target", f"tcp://127.0.0.1:{listener.port}"),
+            env={
+                "NEMESYS_COPY_INTERVAL_S": "0.5",
+                "NO_PROXY": "127.0.0.1,localhost",
+                **log_backend.console_env(),
+            },
         )
         servers.append(server)
         assert server.host == "127.0.0.1"
@@ -236,10 +154,9 @@ def get(c: httpx.Client, command_id: int) -> dict[str, Any]:
 
 
 def test_a_killed_console_interrupts_and_retries_on_restart(
-    tmp_path: Path, start_server: Callable[[Path], ConsoleProcess], listener: FrameGateway
+    start_server: Callable[[], ConsoleProcess], listener: FrameGateway, log_backend: LogBackend
 ) -> None:
-    db = tmp_path / "missions.sqlite3"
-    first = start_server(db)
+    first = start_server()
     with first.client() as c:
         r = c.post(
             "/api/commands",
@@ -263,9 +180,12 @@ def test_a_killed_console_interrupts_and_retries_on_restart(
     wait_until(lambda: listener.closed == 1, what="the killed console's connection closed")
     before_kill = listener.frames(0)
     assert before_kill and set(before_kill) == {cmd["hex"]}
-    assert log_state(db, cmd["id"]) == "transmitted"  # as the kill left it
+    # as the kill left it, read over a connection of its own
+    assert log_backend.query("SELECT state FROM commands WHERE id = ?", (cmd["id"],)) == [
+        ("transmitted",)
+    ]
 
-    second = start_server(db)
+    second = start_server()
     printed = second.log_path.read_text()
     recovered, url = RECOVERED_LINE.search(printed), URL_LINE.search(printed)
     assert recovered is not None and url is not None, printed
@@ -298,11 +218,3 @@ def test_a_killed_console_interrupts_and_retries_on_restart(
     # the listener got the retry's two copies on the restarted console's connection
     assert listener.connections == 2 and not listener.rejected
     assert listener.frames(1) == [cmd["hex"]] * 2
-
-
-def log_state(db: Path, command_id: int) -> str:
-    """A record's state read straight from the file (read-only)."""
-    with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as raw:
-        row = raw.execute("SELECT state FROM commands WHERE id = ?", (command_id,)).fetchone()
-    raw.close()
-    return str(row[0])

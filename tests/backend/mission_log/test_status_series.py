@@ -1,22 +1,24 @@
 """The dive's status series in the track (issue 22, item 3): commanded depth, navigation
 validity and its age logged beside each point, points without a position while the navigation
-is not valid, an older log opened with its track made able to hold them, and the console's
-monotonic-anchored UTC that stamps every row."""
+is not valid, an older log opened with its track made able to hold them (migration 0006), and
+the console's monotonic-anchored UTC that stamps every row; on both back-ends (``log_backend``)."""
 
 from __future__ import annotations
 
-import sqlite3
 from collections.abc import Iterator
 from datetime import UTC, datetime
-from pathlib import Path
 from typing import Any
 
 import pytest
 
 from backend.clock import AnchoredUtc
 from backend.dives import Dives
+from backend.mission_log.database import open_database
+from backend.mission_log.dive_reader import open_read_only, snapshot
+from backend.mission_log.migrating import migrate
 from backend.mission_log.series import dive_series
 from backend.mission_log.store import MissionLog
+from tests.backend.log_backend import LogBackend
 
 CIRCLE: dict[str, Any] = {
     "pattern": "circle",
@@ -29,8 +31,8 @@ HELIX: dict[str, Any] = {
 
 
 @pytest.fixture
-def log(tmp_path: Path) -> Iterator[MissionLog]:
-    opened = MissionLog(tmp_path / "missions.sqlite3")
+def log(log_backend: LogBackend) -> Iterator[MissionLog]:
+    opened = log_backend.open()
     yield opened
     opened.close()
 
@@ -85,62 +87,61 @@ def test_an_older_rows_commanded_depth_comes_from_its_active_command() -> None:
     assert dive_series([old, logged], 10)["commanded_depth_m"] == [3.0, 4.0]
 
 
-#: The track as issue 20 left it: the position NOT NULL, no navigation columns.
-ISSUE_20_TRACK = """
-CREATE TABLE dives (id INTEGER PRIMARY KEY, started_at TEXT NOT NULL, target TEXT NOT NULL);
-CREATE TABLE track (
-    dive INTEGER NOT NULL REFERENCES dives(id),
-    t_s REAL NOT NULL,
-    x_m REAL NOT NULL,
-    y_m REAL NOT NULL,
-    z_m REAL NOT NULL,
-    heading_deg REAL NOT NULL,
-    depth_m REAL,
-    speed_mps REAL,
-    battery_pct REAL,
-    mode TEXT,
-    active TEXT,
-    at TEXT
-);
-CREATE INDEX track_dive ON track(dive, t_s);
-"""
-
-
-def test_an_older_track_is_opened_with_its_rows_and_takes_points_without_position(
-    tmp_path: Path,
+def test_an_older_track_is_migrated_with_its_rows_and_takes_points_without_position(
+    log_backend: LogBackend,
 ) -> None:
-    db = tmp_path / "old.sqlite3"
-    raw = sqlite3.connect(db)
-    raw.executescript(ISSUE_20_TRACK)
-    raw.execute("INSERT INTO dives VALUES (1, '2025-01-01T10:00:00.000+00:00', 'sim')")
-    # inserted out of time order: the copy keeps the arrival order (rowid) as well
-    for t_s in (3.0, 1.0, 2.0):
-        raw.execute(
-            "INSERT INTO track VALUES (1, ?, 1, 2, 3, 4, 3.5, 0.2, 88, 'running', ?, ?)",
-            (t_s, '{"pattern": "circle", "params": {"depth": 3}}', f"2025-01-01T10:00:0{t_s:.0f}Z"),
-        )
-    raw.commit()
-    raw.close()
-
-    log = MissionLog(db)
+    """A log migrated up to 0005 (issue 20's track: the position NOT NULL, no navigation
+    columns) is brought to 0006 at open: the columns added, the position nullable (SQLite:
+    the table made again), its rows kept in their arrival order, its index kept."""
+    old = open_database(log_backend.where, 1.0)
     try:
-        with sqlite3.connect(f"file:{db}?mode=ro", uri=True) as ro:
-            info = {r[1]: bool(r[3]) for r in ro.execute("PRAGMA table_info(track)")}
-            order = [r[0] for r in ro.execute("SELECT t_s FROM track ORDER BY rowid")]
-            indexes = {r[1] for r in ro.execute("PRAGMA index_list(track)")}
-        ro.close()
-        assert not any(info[c] for c in ("x_m", "y_m", "z_m", "heading_deg"))
+        migrate(old, to="0005")
+        old.execute("INSERT INTO dives (id, started_at, target) VALUES (1, 't0', 'sim')")
+        # inserted out of time order: the copy keeps the arrival order as well
+        for n, t_s in enumerate((3.0, 1.0, 2.0)):
+            old.execute(
+                "INSERT INTO track VALUES (1, ?, 1, 2, 3, 4, 3.5, 0.2, 88, 'running', ?, ?)",
+                (t_s, '{"pattern": "circle", "params": {"depth": 3}}', f"2025-01-01T10:00:0{n}Z"),
+            )
+    finally:
+        old.close()
+    with pytest.raises(log_backend.integrity_error):  # the position was NOT NULL
+        log_backend.query("INSERT INTO track (dive, t_s) VALUES (1, 9.0)")
+
+    log = log_backend.open()
+    try:
+        if log_backend.postgres:
+            info = {
+                str(name): nullable == "YES"
+                for name, nullable in log_backend.query(
+                    "SELECT column_name, is_nullable FROM information_schema.columns "
+                    "WHERE table_name = 'track'"
+                )
+            }
+            indexes = {r[0] for r in log_backend.query("SELECT indexname FROM pg_indexes")}
+        else:
+            info = {str(r[1]): not r[3] for r in log_backend.query("PRAGMA table_info(track)")}
+            indexes = {r[1] for r in log_backend.query("PRAGMA index_list(track)")}
+        assert all(info[c] for c in ("x_m", "y_m", "z_m", "heading_deg"))
         assert {"commanded_depth_m", "nav_valid", "nav_age_s"} <= set(info)
-        assert order == [3.0, 1.0, 2.0] and "track_dive" in indexes
+        assert "track_dive" in indexes
+        reader = open_read_only(log_backend.where)
+        try:
+            with snapshot(reader) as dive:
+                assert [r["t_s"] for r in dive.track(1)] == [3.0, 1.0, 2.0]  # arrival order
+        finally:
+            reader.close()
         rows = log.track_rows(1)
         assert [r["t_s"] for r in rows] == [1.0, 2.0, 3.0]
         assert rows[0]["battery_pct"] == 88 and rows[0]["nav_valid"] is None
         assert dive_series(rows, 10)["commanded_depth_m"] == [3.0, 3.0, 3.0]
         log.add_status_point(1, 4.0, {"nav_valid": False, "mode": "nav_fault"})
-        assert [r["x_m"] for r in log.track_rows(1, positioned=False)][-1] is None
+        last = log.track_rows(1, positioned=False)[-1]
+        assert last["x_m"] is None and last["nav_valid"] is False
     finally:
         log.close()
-    MissionLog(db).close()  # opening it again changes nothing and does not fail
+    log_backend.open().close()  # opening it again changes nothing and does not fail
+    assert log_backend.scalar("SELECT COUNT(*) FROM track") == 4
 
 
 def test_the_consoles_utc_moves_with_the_monotonic_clock_only() -> None:

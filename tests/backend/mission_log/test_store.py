@@ -1,5 +1,6 @@
-"""The mission log (SQLite): commands inserted, updated field by field, filtered and ordered;
-JSON columns; tracks in batches; dives; the CSV export; persistence across reopening."""
+"""The mission log, on SQLite and on PostgreSQL (``log_backend``): commands inserted, updated
+field by field, filtered and ordered; JSON columns; tracks in batches; dives; the CSV export;
+persistence across reopening; the tables at the newest migration."""
 
 from __future__ import annotations
 
@@ -15,8 +16,10 @@ from typing import Any
 import pytest
 
 from backend.mission_log.export import csv_rows
-from backend.mission_log.store import FINAL_STATES, STATES, MissionLog, now_iso
+from backend.mission_log.migrating import head
+from backend.mission_log.store import FINAL_STATES, STATES, LogWriteError, MissionLog, now_iso
 from tests.backend.conftest import SQUARE, command_fields
+from tests.backend.log_backend import LogBackend
 
 #: The export's columns, written out: the contract (not imported from the store).
 CSV_HEADER = [
@@ -57,13 +60,8 @@ ACK: dict[str, Any] = {
 
 
 @pytest.fixture
-def db(tmp_path: Path) -> Path:
-    return tmp_path / "log" / "missions.sqlite3"
-
-
-@pytest.fixture
-def log(db: Path) -> Iterator[MissionLog]:
-    opened = MissionLog(db)
+def log(log_backend: LogBackend) -> Iterator[MissionLog]:
+    opened = log_backend.open()
     yield opened
     opened.close()
 
@@ -74,11 +72,37 @@ def test_now_iso_is_utc_with_milliseconds() -> None:
     assert len(stamp.split(".")[1]) == len("123+00:00")
 
 
-def test_opening_creates_the_folder_and_uses_wal(db: Path, log: MissionLog) -> None:
-    assert db.exists()
-    with sqlite3.connect(db) as raw:
-        assert raw.execute("PRAGMA journal_mode").fetchone() == ("wal",)
-    assert log.commands() == [] and log.dives() == []
+def test_opening_creates_the_folder_and_uses_wal(tmp_path: Path) -> None:
+    db = tmp_path / "log" / "missions.sqlite3"
+    log = MissionLog(db)
+    try:
+        assert db.exists() and log.kind == "sqlite"
+        with sqlite3.connect(db) as raw:
+            assert raw.execute("PRAGMA journal_mode").fetchone() == ("wal",)
+        assert log.commands() == [] and log.dives() == []
+    finally:
+        log.close()
+
+
+def test_opening_makes_the_tables_of_the_newest_migration(
+    log_backend: LogBackend, log: MissionLog
+) -> None:
+    assert log.kind == log_backend.kind
+    assert log_backend.query("SELECT version_num FROM alembic_version") == [(head(),)]
+    tables = (
+        "SELECT name FROM sqlite_master WHERE type = 'table'"
+        if log_backend.kind == "sqlite"
+        else "SELECT table_name FROM information_schema.tables WHERE table_schema = 'public'"
+    )
+    names = {row[0] for row in log_backend.query(tables)}
+    assert {"dives", "commands", "track", "events", "alembic_version"} <= names
+    assert log.commands() == [] and log.dives() == [] and log.events() == []
+    log.close()
+    again = log_backend.open()  # at the newest already: nothing to do, nothing changed
+    try:
+        assert log_backend.query("SELECT version_num FROM alembic_version") == [(head(),)]
+    finally:
+        again.close()
 
 
 def test_insert_is_queued_with_its_fields(log: MissionLog) -> None:
@@ -96,8 +120,8 @@ def test_insert_is_queued_with_its_fields(log: MissionLog) -> None:
     assert log.command(99) is None
 
 
-def test_insert_needs_an_existing_dive(log: MissionLog) -> None:
-    with pytest.raises(sqlite3.IntegrityError):
+def test_insert_needs_an_existing_dive(log: MissionLog, log_backend: LogBackend) -> None:
+    with pytest.raises(log_backend.integrity_error):
         log.insert_command(42, command_fields())
     assert log.commands() == []
 
@@ -159,7 +183,7 @@ def test_update_of_an_unknown_command_is_a_key_error(log: MissionLog) -> None:
         log.update_command(5, state="failed")
 
 
-def test_json_columns_round_trip(log: MissionLog) -> None:
+def test_json_columns_round_trip(log: MissionLog, log_backend: LogBackend) -> None:
     dive = log.new_dive("sim")
     fields = command_fields()
     fields["requested"] = {"speed": 0.18, "depth": 3, "radius": 5.1, "direction": "cw", "x": None}
@@ -170,8 +194,7 @@ def test_json_columns_round_trip(log: MissionLog) -> None:
     assert rec["params"]["direction"] == "cw"
     ack = {"unicode": "µ ≥ 1°", "nested": {"list": [1, 2.5, None, True]}}
     assert log.update_command(rec["id"], ack=ack)["ack"] == ack
-    with sqlite3.connect(log.path) as raw:  # stored as JSON text
-        text = raw.execute("SELECT params, ack FROM commands").fetchone()
+    (text,) = log_backend.query("SELECT params, ack FROM commands")  # stored as JSON text
     assert json.loads(text[0]) == fields["params"] and json.loads(text[1]) == ack
 
 
@@ -211,13 +234,14 @@ def test_commands_filters_and_ordering(log: MissionLog) -> None:
     assert len(ids()) == 4
 
 
-def test_track_is_written_in_batches_and_flushed_on_read(log: MissionLog, db: Path) -> None:
+def test_track_is_written_in_batches_and_flushed_on_read(
+    log: MissionLog, log_backend: LogBackend
+) -> None:
     dive = log.new_dive("sim")
 
     def stored() -> int:
-        with sqlite3.connect(db) as raw:
-            count: int = raw.execute("SELECT COUNT(*) FROM track").fetchone()[0]
-            return count
+        count: int = log_backend.scalar("SELECT COUNT(*) FROM track")
+        return count
 
     for i in range(9):
         log.add_track(dive, float(i), i * 0.5, -i * 0.25, 2.0, 90.0)
@@ -296,8 +320,8 @@ def test_csv_rows_header_and_values(log: MissionLog) -> None:
     assert list(csv_rows([])) == [CSV_HEADER]
 
 
-def test_persists_across_reopening(db: Path) -> None:
-    first = MissionLog(db)
+def test_persists_across_reopening(log_backend: LogBackend) -> None:
+    first = log_backend.open()
     dive = first.new_dive("sim")
     rec = first.insert_command(dive, command_fields())
     rec = first.update_command(rec["id"], state="acknowledged", ack=ACK, attempts=1)
@@ -305,7 +329,7 @@ def test_persists_across_reopening(db: Path) -> None:
         first.add_track(dive, float(i), float(i), 0.0, 2.0, 45.0)
     first.close()
 
-    second = MissionLog(db)
+    second = log_backend.open()
     try:
         assert second.command(rec["id"]) == rec
         assert [p["t_s"] for p in second.track(dive)] == [0.0, 1.0, 2.0]
@@ -317,18 +341,18 @@ def test_persists_across_reopening(db: Path) -> None:
         second.close()
 
 
-def test_committed_rows_are_visible_to_another_connection(log: MissionLog, db: Path) -> None:
+def test_committed_rows_are_visible_to_another_connection(
+    log: MissionLog, log_backend: LogBackend
+) -> None:
     """Every insert and update is committed at once (autocommit): a reader sees it while the
     log is still open, as after a killed process."""
     dive = log.new_dive("sim")
     rec = log.insert_command(dive, command_fields())
-    with sqlite3.connect(db) as raw:
-        assert raw.execute("SELECT state FROM commands WHERE id = ?", (rec["id"],)).fetchone() == (
-            "queued",
-        )
+    assert log_backend.query("SELECT state FROM commands WHERE id = ?", (rec["id"],)) == [
+        ("queued",)
+    ]
     log.update_command(rec["id"], state="transmitted")
-    with sqlite3.connect(db) as raw:
-        assert raw.execute("SELECT state FROM commands").fetchone() == ("transmitted",)
+    assert log_backend.query("SELECT state FROM commands") == [("transmitted",)]
 
 
 def test_concurrent_writers_are_serialised(log: MissionLog) -> None:
@@ -366,7 +390,7 @@ def test_in_memory_log(tmp_path: Path) -> None:
     assert not (Path.cwd() / ":memory:").exists()
 
 
-def test_a_transaction_writes_all_or_nothing(log: MissionLog, db: Path) -> None:
+def test_a_transaction_writes_all_or_nothing(log: MissionLog, log_backend: LogBackend) -> None:
     dive = log.new_dive("sim")
     old = log.insert_command(dive, command_fields())
     log.update_command(old["id"], state="transmitted")
@@ -380,9 +404,56 @@ def test_a_transaction_writes_all_or_nothing(log: MissionLog, db: Path) -> None:
         new = log.insert_command(dive, command_fields("square", **SQUARE))
         with log.transaction():  # nested: part of the outer one
             log.update_command(old["id"], state="superseded", superseded_by=new["id"])
-    other = MissionLog(db)  # another connection sees both, committed
+    other = log_backend.open()  # another connection sees both, committed
     try:
         assert other.command(old["id"])["superseded_by"] == new["id"]  # type: ignore[index]
         assert other.command(new["id"]) is not None
     finally:
         other.close()
+
+
+def test_a_dropped_connection_fails_that_write_and_the_next_is_written(
+    log: MissionLog, log_backend: LogBackend
+) -> None:
+    """PostgreSQL: the server ends the log's session (a restart, an administrator): the write
+    that finds it gone is a LogWriteError (503 to a send, nothing transmitted), and the next
+    opens a new connection. (SQLite has no session to lose: the write simply goes through.)"""
+    dive = log.new_dive("sim")
+    if log_backend.postgres:
+        log_backend.query(
+            "SELECT pg_terminate_backend(pid) FROM pg_stat_activity "
+            "WHERE application_name = 'nemesys-console' AND datname = current_database()"
+        )
+        with pytest.raises(LogWriteError, match="the mission log cannot be written: "):
+            log.insert_command(dive, command_fields())
+        assert log_backend.scalar("SELECT COUNT(*) FROM commands") == 0
+    rec = log.insert_command(dive, command_fields())
+    assert log.command(rec["id"]) == rec
+    assert log_backend.scalar("SELECT COUNT(*) FROM commands") == 1
+
+
+def test_consoles_opening_a_new_log_together_migrate_it_once(log_backend: LogBackend) -> None:
+    """Several consoles starting at once on one new database: one migrates (the others wait
+    for its transaction: PostgreSQL's advisory lock, SQLite's write lock), all open it."""
+    opened: list[MissionLog] = []
+    errors: list[BaseException] = []
+
+    def open_one() -> None:
+        try:
+            opened.append(log_backend.open())
+        except BaseException as err:  # pragma: no cover - reported below
+            errors.append(err)
+
+    threads = [threading.Thread(target=open_one) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    try:
+        assert errors == [] and len(opened) == 3
+        dives = [log.new_dive("sim") for log in opened]
+        assert sorted(dives) == [1, 2, 3]
+    finally:
+        for log in opened:
+            log.close()
+    assert log_backend.query("SELECT version_num FROM alembic_version") == [(head(),)]

@@ -1,0 +1,136 @@
+"""The link of a console without a transmitter (``NEMESYS_TARGET=relay``): "relay via <the
+console that holds it>".
+
+It transmits nothing (the command service hands this console's commands to the outbox:
+:mod:`backend.relay.shore`) and hears nothing of the vehicle itself; what it knows is what the
+transmitting consoles write into the ``transmitters`` table every second (their target and
+their link's health: :mod:`backend.relay.ship`), read from the shared log at most every
+:data:`READ_EVERY_S`. It is ``connected`` while such a console said so within
+:data:`FRESH_S`, and its capability is that console's (acknowledgements come back to this
+console as the states of the records the other console writes).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Final
+
+from backend.mission_log import outbox
+from backend.mission_log.store import LogWriteError, MissionLog
+from backend.relay.model import RelayView
+from backend.settings import RELAY_TARGET
+from codec import Frame
+from station.link import Capability, Link
+from station.transmit import LinkCheck
+
+logger = logging.getLogger("backend.relay")
+
+#: A transmitting console is taken as there while it said so this recently (s); it says so
+#: every :data:`backend.relay.ship.BEAT_S`.
+FRESH_S: Final = 5.0
+#: The table is read at most this often (s): the link's properties are asked many times for
+#: one health report.
+READ_EVERY_S: Final = 0.5
+#: What :meth:`RelayLink.transmit` answers (it is never asked: the service relays).
+NO_TRANSMITTER: Final = (
+    "this console has no transmitter (target relay): its commands go through the console that "
+    "holds it"
+)
+
+
+class RelayLink(Link):
+    """See the module's doc. :meth:`attach` gives it the log once the console opened it."""
+
+    def __init__(self) -> None:
+        super().__init__(RELAY_TARGET)
+        self._log: MissionLog | None = None
+        self._view = RelayView()
+        self._read_at: float | None = None
+        self._problem: str | None = None
+
+    def attach(self, log: MissionLog) -> None:
+        self._log = log
+
+    def view(self) -> RelayView:
+        """The transmitting console as last read (read again when older than
+        :data:`READ_EVERY_S`)."""
+        now = time.monotonic()
+        if self._log is not None and (self._read_at is None or now - self._read_at > READ_EVERY_S):
+            self._read_at = now
+            try:
+                self._view = view_of(*outbox.transmitters(self._log))
+                self._problem = None
+            except LogWriteError as err:  # the last view, no longer known to be fresh
+                self._view = self._view.model_copy(update={"fresh": False})
+                self._problem = f"the transmitting consoles cannot be read: {err.reason}"
+        return self._view
+
+    @property
+    def connected(self) -> bool:
+        return self.view().fresh
+
+    @property
+    def connection_problem(self) -> str | None:
+        v = self.view()
+        if v.fresh:
+            return None
+        if self._problem is not None:
+            return self._problem
+        if v.via is None:
+            return "no console holding the transmitter is on the mission log"
+        age = v.seen_age_s or 0.0
+        return f"console {v.via!r}, holding the transmitter, last seen {age:.0f} s ago"
+
+    @connection_problem.setter
+    def connection_problem(self, value: str | None) -> None:
+        """The base class sets it at construction; this link's is read from the log."""
+
+    @property
+    def capability(self) -> Capability:
+        v = self.view()
+        return v.capability if v.fresh and v.capability is not None else Capability.UNKNOWN
+
+    @capability.setter
+    def capability(self, value: Capability) -> None:
+        """The base class sets it at construction; this link's is the transmitting
+        console's."""
+
+    async def transmit(self, frame: Frame) -> str | None:
+        return NO_TRANSMITTER
+
+    async def test(self) -> list[LinkCheck]:
+        self._read_at = None  # read now
+        v = self.view()
+        problem = self.connection_problem
+        detail = (
+            f"relay via console {v.via!r} (its target {v.target}, its link "
+            f"{'connected' if v.connected else 'NOT connected'}, {v.level or 'unknown'})"
+            if v.via is not None
+            else "no console holding the transmitter has said so on the mission log"
+        )
+        return [LinkCheck("relay", RELAY_TARGET, problem is None, problem, problem or detail)]
+
+
+def view_of(found: list[outbox.Transmitter], now_s: float) -> RelayView:
+    """The most recently seen transmitting console as shown (``found``: newest first)."""
+    if not found:
+        return RelayView()
+    t = found[0]
+    age = max(0.0, now_s - t.seen_s)
+    h = t.health
+    level, problems, connected = h.get("level"), h.get("problems"), h.get("connected")
+    try:
+        capability = Capability(str(h.get("capability")))
+    except ValueError:
+        capability = None
+    return RelayView(
+        via=t.console,
+        target=t.target,
+        seen_age_s=round(age, 3),
+        fresh=age <= FRESH_S,
+        connected=connected if isinstance(connected, bool) else None,
+        capability=capability,
+        level=level if level in ("green", "amber", "red") else None,
+        problems=[str(p) for p in problems] if isinstance(problems, list) else [],
+    )

@@ -1,0 +1,180 @@
+"""The shore's end of the relay: a checked command written to the shared log's outbox, and the
+answer of the console that holds the transmitter, waited for.
+
+The command service of a console without a transmitter (``NEMESYS_TARGET=relay``) has run
+its own checks, its gate (this console must be in control; Surface from anyone) and its
+watchers when it hands the request here (:class:`RelaySender` is its
+:class:`backend.commands.service.Relay`). :meth:`RelaySender.relay` writes the ``waiting`` row
+(committed: a log that cannot be written refuses the send with 503, nothing written) and waits
+up to ``relay_wait_s`` for the decision, woken by the row's notification (the transmitting
+console's commit) and reading the row again at least every :data:`POLL_S`:
+
+* ``taken``: the record the other console made of it (``origin`` ``relay:<this console>``, the
+  operator who asked), returned as a direct send's is (202); its states reach this console's
+  pages live, as every record of another console does (:mod:`backend.control.sync`);
+* ``refused``: :class:`RelayRefused`, with the other console's status (422 limits, 409 control
+  or an override needed, 429 its rate limit, ...) and its reason and violations;
+* no decision in time: the row is withdrawn (only if it still waits and no console is deciding
+  it: ``FOR UPDATE SKIP LOCKED``) and :class:`RelayNoAnswer` (504) says nothing was sent; a row
+  being decided at that moment is waited for a little longer (:data:`GRACE_S`).
+
+A console killed while it waits leaves the row ``waiting``: the transmitting console sends it
+once when it finds it (unless it waited longer than that console's ``relay_max_age_s``), and
+this console, started again, neither withdraws nor writes it again.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from typing import Any, Final
+
+from backend.commands.checks import SendViolation
+from backend.commands.service import SendRefused, SendRequest
+from backend.mission_log import outbox
+from backend.mission_log.outbox import OutboxRow
+from backend.mission_log.records import CommandRecord, command_record
+from backend.mission_log.store import LogWriteError, MissionLog
+from vehicle_contract.fleet import SINGLE_VEHICLE
+
+logger = logging.getLogger("backend.relay")
+
+#: The row is read again at least this often while waiting (s), notification or not.
+POLL_S: Final = 0.25
+#: How much longer a row another console is deciding at the deadline is waited for (s).
+GRACE_S: Final = 5.0
+
+
+class RelayRefused(SendRefused):
+    """The console holding the transmitter refused the relayed command: its ``status``,
+    reason and violations (nothing was sent)."""
+
+    def __init__(
+        self, status: int, message: str, violations: tuple[SendViolation, ...] = ()
+    ) -> None:
+        super().__init__(message, violations)
+        self.status = status
+
+
+class RelayNoAnswer(SendRefused):
+    """No console holding the transmitter decided within the wait: the row was withdrawn,
+    nothing was sent."""
+
+    status = 504
+
+
+class RelaySender:
+    """This console's relay (see the module's doc): ``console`` and ``operator`` are this
+    console's, ``wait_s`` the settings' ``relay_wait_s``."""
+
+    def __init__(self, log: MissionLog, console: str, operator: str, wait_s: float) -> None:
+        self.log = log
+        self.console = console
+        self.operator = operator
+        self.wait_s = wait_s
+        self._waiting: dict[int, asyncio.Event] = {}
+
+    def notice(self, row_id: int) -> None:
+        """Another console wrote outbox row ``row_id`` (a decision, perhaps on one of ours)."""
+        event = self._waiting.get(row_id)
+        if event is not None:
+            event.set()
+
+    async def relay(self, request: SendRequest) -> CommandRecord:
+        """Write ``request`` to the outbox and wait for the answer (see the module's doc).
+
+        Raises:
+            RelayRefused: the other console's refusal. RelayNoAnswer: none in time (504).
+            LogWriteError: the row cannot be written (nothing sent), or, once written, the
+                log cannot be read for the answer (the row may still be sent: its record
+                then shows in the log).
+        """
+        surface = request.pattern == "surface"
+        row = outbox.put(
+            self.log,
+            console=self.console,
+            operator=self.operator,
+            vehicle=getattr(request, "vehicle", None) or SINGLE_VEHICLE,
+            origin=request.origin,
+            kind="surface" if surface else request.kind,
+            pattern=request.pattern,
+            params=request.params,
+            override=request.override,
+            copies=request.copies,
+            retry_of=request.retry_of,
+        )
+        logger.info("%s relayed as outbox row %d", request.pattern, row.id)
+        event = self._waiting[row.id] = asyncio.Event()
+        try:
+            return await self._answer(row.id, event)
+        except LogWriteError as err:
+            err.outcome = (
+                f"outbox row {row.id} was written: whether it was sent shows in the log once "
+                "it can be read"
+            )
+            raise
+        finally:
+            del self._waiting[row.id]
+
+    async def _answer(self, row_id: int, event: asyncio.Event) -> CommandRecord:
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + self.wait_s
+        grace = deadline + GRACE_S
+        while True:
+            row = outbox.get(self.log, row_id)
+            assert row is not None, f"outbox row {row_id} vanished"
+            if row.state != "waiting":
+                return self._decided(row)
+            now = loop.time()
+            if now >= deadline:
+                why = f"no console holding the transmitter answered within {self.wait_s:g} s"
+                if outbox.withdraw(self.log, row_id, self.console, why):
+                    raise RelayNoAnswer(f"{why}: withdrawn (outbox row {row_id}), nothing was sent")
+                if now >= grace:  # held by a console deciding it all this time
+                    raise RelayNoAnswer(
+                        f"{why}; one is deciding it now (outbox row {row_id}): if it is sent, "
+                        "its record shows in the log"
+                    )
+            wait = min(POLL_S, max(deadline - now, 0.0) or POLL_S)
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(event.wait(), wait)
+            event.clear()
+
+    def _decided(self, row: OutboxRow) -> CommandRecord:
+        if row.state == "taken":
+            assert row.command_id is not None
+            got = self.log.command(row.command_id)
+            assert got is not None, f"outbox row {row.id} names no command {row.command_id}"
+            return command_record(got)
+        if row.state == "withdrawn":
+            raise RelayNoAnswer(f"withdrawn (outbox row {row.id}): {row.reason}; nothing was sent")
+        message, violations = refusal_of(row.detail, row.reason or "refused")
+        raise RelayRefused(
+            row.status or 422,
+            f"console {row.decided_by!r} (holding the transmitter) refused it: {message}",
+            violations,
+        )
+
+
+def refusal_of(detail: Any, reason: str) -> tuple[str, tuple[SendViolation, ...]]:
+    """A refusal's words and violations from the row's ``detail`` (the refusal's JSON:
+    :func:`backend.commands.service.refusal_detail`), else its ``reason``."""
+    if not isinstance(detail, dict) or not isinstance(detail.get("violations"), list):
+        return reason, ()
+    violations = tuple(
+        SendViolation(
+            check=v["check"],
+            param=v["param"],
+            kind=v["kind"],
+            message=v["message"],
+            value=v["value"],
+            limit=v["limit"],
+            unit=v["unit"],
+            allowed=v["allowed"],
+            step=v.get("step"),
+        )
+        for v in detail["violations"]
+        if isinstance(v, dict)
+    )
+    return str(detail.get("message", reason)), violations

@@ -1,0 +1,61 @@
+"""The page of a console without a transmitter (issue 24, item 4; frontend/link.js): its
+header's vehicle-link indicator says "relay via <the console holding it>", the status panel's
+link row names that console's link; when that console stops, the row says it is not seen
+and the indicator turns red. In Chromium, on a relay console and a training console (the
+ship) sharing one PostgreSQL database."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import expect
+
+from bench._server import ConsoleProcess, start_console
+from tests.backend.conftest import pg_server
+from tests.frontend.conftest import TOKEN, Console, Watched
+from tests.frontend.pagekit import open_sized
+from tests.pg_server import PgServer
+
+__all__ = ["pg_server"]
+
+
+@pytest.fixture
+def shared_url(pg_server: PgServer) -> Iterator[str]:
+    name = pg_server.new_database()
+    yield pg_server.url(name)
+    pg_server.drop_database(name)
+
+
+@pytest.fixture
+def ship(tmp_path: Path, shared_url: str) -> Iterator[ConsoleProcess]:
+    env = {"NEMESYS_DATABASE_URL": shared_url, "NEMESYS_CONSOLE_NAME": "ship"}
+    db = str(tmp_path / "ship.sqlite3")
+    with start_console(tmp_path / "ship.log", TOKEN, "--db", db, env=env) as server:
+        yield server
+
+
+@pytest.fixture
+def console_env(ship: ConsoleProcess, shared_url: str) -> dict[str, str]:
+    """The console under test: the shore, a relay (after the ship: it is there to be seen)."""
+    return {
+        "NEMESYS_DATABASE_URL": shared_url,
+        "NEMESYS_CONSOLE_NAME": "shore",
+        "NEMESYS_TARGET": "relay",
+    }
+
+
+def test_the_header_says_relay_via_the_console_holding_the_transmitter(
+    ship: ConsoleProcess, console: Console, watched: Watched
+) -> None:
+    page = open_sized(watched, console)
+    indicator = page.get_by_test_id("link-text")
+    expect(indicator).to_contain_text("relay via ship")
+    row = page.get_by_test_id("status-link")
+    expect(row).to_contain_text("relay via ship (its link: sim, connected")
+    ship.stop()
+    expect(row).to_contain_text("ship NOT SEEN", timeout=20_000)
+    expect(page.get_by_test_id("link-indicator")).to_have_class("link-indicator level-red")
+    problem = page.get_by_test_id("link-problem").first
+    expect(problem).to_contain_text("console 'ship', holding the transmitter, last seen")
