@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from typing import Any, Final, NamedTuple
 
 from backend.bag.msgdefs import type_name
-from codec import DICTIONARY, Frame
+from codec import ADDRESSED_FRAME_BITS, DICTIONARY, AddressedFrame, Frame
 from vehicle_contract.contract import POSE_FRAME_ID
 from vehicle_contract.frames import NedPose, ned_to_enu
 from vehicle_contract.messages import number, quaternion_from_roll_yaw
@@ -243,9 +243,12 @@ def command_record(record: Mapping[str, Any], t_s: float) -> Msg:
 
 
 def frame(hex_text: str) -> Msg:
-    """``std_msgs/UInt8MultiArray`` of a frame (25 hex digits): its 13 bytes, MSB first, the
-    last 4 bits zero, as a station publishes it (no layout)."""
-    data = Frame(int(hex_text, 16)).to_bytes()
+    """``std_msgs/UInt8MultiArray`` of a frame (25 hex digits; a fleet's addressed frame 27):
+    its 13 (14) bytes, MSB first, the last 4 bits zero, as a station publishes it (no
+    layout)."""
+    value = int(hex_text, 16)
+    addressed = len(hex_text) == ADDRESSED_FRAME_BITS // 4
+    data = (AddressedFrame(value) if addressed else Frame(value)).to_bytes()
     return {"layout": {"dim": [], "data_offset": 0}, "data": list(data)}
 
 

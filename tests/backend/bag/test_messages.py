@@ -60,3 +60,9 @@ def test_what_the_log_does_not_hold_is_unknown_in_ros_terms() -> None:
 def test_the_altitude_of_a_fix_is_minus_the_depth() -> None:
     fix = m.nav_sat_fix(row(), 43.0, 5.0)
     assert fix["altitude"] == -3.0 and fix["position_covariance_type"] == 0
+
+
+def test_a_fleets_addressed_frame_is_its_14_bytes() -> None:
+    frame = encode_frame("surface", {}, address=0).frame
+    assert m.frame(frame.hex)["data"] == frame_msg(frame)["data"]
+    assert len(m.frame(frame.hex)["data"]) == 14
