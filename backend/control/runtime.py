@@ -20,7 +20,7 @@ from backend.control.desk import ControlDesk
 from backend.control.gate import ControlGate
 from backend.control.identity import console_name
 from backend.control.sync import LogSync
-from backend.messages import LinkMessage
+from backend.fleet.views import link_news
 from backend.mission_log.store import LogWriteError
 
 if TYPE_CHECKING:
@@ -86,7 +86,8 @@ def start_control(rt: Console) -> ControlRuntime:
 
     def push_link() -> None:
         if rt.link is not None and rt.commands is not None:
-            rt.hub.publish(LinkMessage(link=rt.link_health()))
+            for news in link_news(rt):  # each vehicle's, named in a fleet
+                rt.hub.publish(news)
 
     sync = LogSync(s.database_url, rt.log, rt.hub, desk, rt.commands, on_reach=push_link)
     runtime = ControlRuntime(desk, sync)
