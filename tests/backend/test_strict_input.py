@@ -70,6 +70,7 @@ BASES: dict[str, dict[str, Any]] = {
     "ReplayAtIn": {"dive": 1, "t_s": 0.0},
     "SurveyIn": {"area": SURVEY_AREA, "vehicles": [SURVEY_VEHICLE]},
     "ControlIn": {"action": "request", "vehicle": "nemesys", "takeover_allowed": False},
+    "SurfaceIn": {"vehicle": "nemesys"},  # issue 23: a fleet's Surface names its vehicle
 }
 #: A value for every path parameter of the API.
 PATH_VALUES = {"command_id": "1", "dive": "1", "z": "0", "x": "0", "y": "0", "name": "wreck"}
@@ -202,7 +203,8 @@ def refused(http: httpx.Client, ep: Endpoint, body: str, path: Loc) -> dict[str,
 def test_the_openapi_has_the_json_endpoints_expected() -> None:
     """The walk finds every JSON endpoint and its fields (a smaller set would test less)."""
     urls = {str(ep) for ep in ENDPOINTS}
-    assert len(urls) == 17 and {"PUT /api/datum", "POST /api/survey/preview"} <= urls
+    assert len(urls) == 18 and {"PUT /api/datum", "POST /api/survey/preview"} <= urls
+    assert "POST /api/surface" in urls  # issue 23: its body names the vehicle
     assert "POST /api/control" in urls
     assert sum(len(ep.slots) for ep in ENDPOINTS) > 60
     by_url = {str(ep): ep.slots for ep in ENDPOINTS}
