@@ -234,10 +234,10 @@ async function main() {
     open: () => {
       setConsoleReachable(true);
       setBeliefReachable(true);
+      fleetNews("open", {});
       if (opened) {
         loadCommands();
         loadVehicle();
-        fleetNews("open", {});
         if (!session) loadSession().then((again) => again && loadTraining(again.mode));
       }
       opened = true;
@@ -246,6 +246,7 @@ async function main() {
     close: () => {
       setConsoleReachable(false);
       setBeliefReachable(false);
+      fleetNews("close", {});
     },
   });
   startVehicleFallback();

@@ -39,15 +39,18 @@ export function initFleetRows() {
 }
 
 /** The news of /ws (app.js passes it all): a vehicle's telemetry, link or belief; a command
- *  (the transmitter's budget changed); the page's connection opened again (all reloaded). */
+ *  (the transmitter's budget changed); the page's connection lost ("close": the rows say they
+ *  are old news) or opened again ("open": all reloaded). */
 export function fleetNews(type, m) {
   if (!fleetOn() || !m) return;
   if (type === "command") {
     transmitterChanged();
     return;
   }
-  if (type === "open") {
-    reload();
+  if (type === "open" || type === "close") {
+    $("fleet-stale").hidden = type === "open";
+    $("fleet-rows").classList.toggle("stale", type === "close");
+    if (type === "open") reload();
     return;
   }
   const name = type === "belief" ? m.belief && m.belief.vehicle : m.vehicle;
@@ -92,6 +95,8 @@ async function reload() {
 
 function build(list) {
   const rows = $("fleet-rows");
+  rows.before(el("p", { id: "fleet-stale", class: "warn", testid: "fleet-stale", role: "alert", hidden: true },
+    "Console unreachable: the rows are what the page last heard."));
   rows.replaceChildren(...fleetNames().map((name) => {
     const nodes = rowNodes(name);
     vehicles.set(name, { pose: null, status: null, link: null, belief: null, beliefAt: 0, pending: null, nodes });

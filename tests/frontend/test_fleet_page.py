@@ -86,13 +86,20 @@ def reporting_fleet() -> FleetLink:
 
 @dataclass
 class FleetConsole:
-    """The console of five in-memory vehicles (``base``: its URL) and its runtime."""
+    """The console of five in-memory vehicles (``base``: its URL), its runtime and link."""
 
     base: str
     runtime: Runtime
+    link: FleetLink
 
     def get(self, path: str) -> Any:
         r = httpx.get(self.base + path, timeout=10.0, trust_env=False)
+        r.raise_for_status()
+        return r.json()
+
+    def post(self, path: str, doc: Any) -> Any:
+        """POST with the operator token."""
+        r = httpx.post(self.base + path, json=doc, headers=AUTH, timeout=10.0, trust_env=False)
         r.raise_for_status()
         return r.json()
 
@@ -109,9 +116,10 @@ def fleet_console(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[F
         datum_lat_deg=29.5316,
         datum_lon_deg=-82.3031,
     )
-    app = create_app(settings, viewer=True, link=reporting_fleet())
+    link = reporting_fleet()
+    app = create_app(settings, viewer=True, link=link)
     with serve(app) as base:
-        console = FleetConsole(base, app.state.console)
+        console = FleetConsole(base, app.state.console, link)
         wait_until(lambda: all(v["pose"] for v in console.get("/api/vehicles")), what="poses")
         yield console
 
@@ -318,4 +326,40 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
         )
         no_overlaps(page, row_parts("auv2"), "the row of auv2 after its Surface")
         page.evaluate("() => window.scrollTo(0, 0)")
+        w.assert_clean()
+
+
+def test_the_airtime_budget_and_a_repeating_surface_are_shown_as_the_console_says(
+    fleet_console: FleetConsole, browser: Browser
+) -> None:
+    """auv5 out of earshot (its acknowledgements lost): a circle of 4 copies to it leaves a
+    copy a second, the page says how long until they are out as /api/transmitter does; a
+    Surface to it repeats until acknowledged, and the page says so."""
+    console = fleet_console
+    auv5 = console.link.vehicles["auv5"]
+    assert isinstance(auv5, AgentLink)
+    auv5.answer = False
+    with sized_page(browser, 1280, 800) as w:
+        page = open_fleet_page(w, console)
+        budget = page.get_by_test_id("airtime-budget")
+        expect(budget).to_have_text("Transmitter: no copies queued")
+        circle = {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"}
+        doc = {"pattern": "circle", "params": circle, "vehicle": "auv5", "copies": 4}
+        console.post("/api/commands", doc)
+        said = console.get("/api/transmitter")["airtime_budget_s"]
+        assert 0.0 < said <= 3.1, said
+        expect(budget).to_have_text(re.compile(r"^Transmitter: copies out in [0-3](\.\d)? s$"))
+        shown = float(re.findall(r"in ([\d.]+) s", budget.text_content() or "")[0])
+        assert shown <= said + 0.5, (shown, said)  # asked about when we asked: it counts down
+        expect(budget).to_have_text("Transmitter: no copies queued", timeout=10_000)
+        page.get_by_test_id("fleet-surface-auv5").click()
+        expect(budget).to_contain_text("Surface repeating until acknowledged: auv5")
+        expect(page.get_by_test_id("fleet-surface-state-auv5")).to_have_text(
+            "surfacing... repeating until acknowledged"
+        )
+        auv5.answer = True  # back in earshot: the next repeat is acknowledged
+        expect(page.get_by_test_id("fleet-surface-state-auv5")).to_have_text(
+            "surface acknowledged", timeout=15_000
+        )
+        expect(budget).to_have_text("Transmitter: no copies queued")
         w.assert_clean()
