@@ -26,8 +26,9 @@ __all__ = ["FLEET_RGB", "LABEL_UP_M", "MARKER_M", "fleet_drawing", "fleet_label"
 FLEET_RGB: Final[Rgb] = (90, 200, 255)
 #: The marker's size (m): a point that reads at a few tens of metres.
 MARKER_M: Final = 0.5
-#: The label, above the marker (m, view frame): clear of the marker and of the hull model.
-LABEL_UP_M: Final = 0.9
+#: The label, above the marker (m, view frame): clear of the marker, and of the hull model's
+#: own label (a fleet's first vehicle has the model too).
+LABEL_UP_M: Final = 1.2
 
 #: Where the position comes from, in the label's words.
 _BASIS: Final = {"telemetry": "fix", "dead_reckoning": "dead-reckoned", "assumed": "assumed"}
@@ -57,18 +58,24 @@ def fleet_label(
     source: str,
     sigma_m: float | None,
 ) -> str:
-    """``auv2 (address 2): circle p 99.99 % | x 0.0 m N, y 20.0 m E, depth 2.0 m (fix)``:
+    """Three short lines (vehicles a few tens of metres apart keep their labels apart)::
+
+        auv2 (address 2)
+        circle p 99.99 %
+        x 0.0 y 20.0 m, depth 2.0 m (fix)
+
     the vehicle, what it is believed to run (``command``: the belief's kind, pattern and p)
-    and where it is believed to be (NED m, the position's source and uncertainty)."""
+    and where it is believed to be (NED m: north, east, depth; the position's source and
+    uncertainty)."""
     kind, pattern, p = command
     what = "unknown" if kind == "unknown" else pattern or "holding"
     basis = _BASIS.get(source, source)
     if source != "telemetry" and sigma_m is not None:
         basis += f" +-{sigma_m:.1f} m"
     x, y, z = position
-    where = f"x {x:.1f} m N, y {y:.1f} m E, depth {z:.1f} m"
+    where = f"x {x:.1f} y {y:.1f} m, depth {z:.1f} m"
     named = name if address is None else f"{name} (address {address})"
-    return f"{named}: {what} p {_p_text(p)} | {where} ({basis})"
+    return f"{named}\n{what} p {_p_text(p)}\n{where} ({basis})"
 
 
 def fleet_drawing(

@@ -271,7 +271,7 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
         expect(page.get_by_test_id("chart-fleet-auv3")).to_contain_text("circle")
         labels = wait_until(lambda: len(fleet_labels(console)) == 5 and fleet_labels(console))
         assert sorted(labels) == NAMES
-        wait_until(lambda: ": circle p 100 %" in fleet_labels(console)["auv3"])
+        wait_until(lambda: "\ncircle p 100 %\n" in fleet_labels(console)["auv3"])
 
         # the layout: in sight at 1280x800 and nothing overlaps
         page.evaluate("() => window.scrollTo(0, 0)")  # the script's buttons are below the fold

@@ -31,12 +31,12 @@ def test_the_label_names_the_vehicle_its_address_its_command_and_where_it_is() -
     text = fleet_label(
         "auv2", 2, ("command", "circle", 0.99994), (1.25, 20.0, 2.0), "telemetry", None
     )
-    assert text == "auv2 (address 2): circle p 99.99 % | x 1.2 m N, y 20.0 m E, depth 2.0 m (fix)"
+    assert text == "auv2 (address 2)\ncircle p 99.99 %\nx 1.2 y 20.0 m, depth 2.0 m (fix)"
     reckoned = fleet_label("auv3", 3, ("last_known", None, 1.0), (0, 40, 0), "dead_reckoning", 3.5)
     assert reckoned.endswith("(dead-reckoned +-3.5 m)")
     assert "holding p 100 %" in reckoned
     unknown = fleet_label("auv4", 4, ("unknown", None, 0.0), (0, 0, 0), "assumed", None)
-    assert "auv4 (address 4): unknown p 0 %" in unknown and unknown.endswith("(assumed)")
+    assert unknown.startswith("auv4 (address 4)\nunknown p 0 %\n") and unknown.endswith("(assumed)")
     # a p below 1 never reads 100 %
     nearly = fleet_label("a", 1, ("command", "x", 0.999999), (0, 0, 0), "assumed", None)
     assert "p 99.9999 %" in nearly
@@ -101,8 +101,8 @@ def test_a_fleet_console_draws_every_vehicle_where_it_is_believed_to_be(tmp_path
         drawn = wait_until(lambda: len(fleet_labels(v)) == 5 and fleet_labels(v))
         assert sorted(drawn) == names
         for i, f in enumerate(fleet):
-            assert drawn[f.name].startswith(f"{f.name} (address {f.address}): holding p 100 %")
-            assert f"y {20.0 * i:.1f} m E, depth 2.0 m (fix)" in drawn[f.name]
+            assert drawn[f.name].startswith(f"{f.name} (address {f.address})\nholding p 100 %\n")
+            assert drawn[f.name].endswith(f"x 0.0 y {20.0 * i:.1f} m, depth 2.0 m (fix)")
             at = cloud(v, f"/fleet/{f.name}/marker").points[0]
             np.testing.assert_allclose(at, ned_to_view(0.0, 20.0 * i, 2.0), atol=1e-5)
         assert v.node_names("/belief") == []  # a fleet's beliefs are drawn per vehicle
@@ -112,6 +112,6 @@ def test_a_fleet_console_draws_every_vehicle_where_it_is_believed_to_be(tmp_path
             headers={"Authorization": f"Bearer {TOKEN}"},
         )
         assert r.status_code == 202, r.text
-        wait_until(lambda: "auv3 (address 3): circle p 100 %" in fleet_labels(v)["auv3"])
+        wait_until(lambda: "auv3 (address 3)\ncircle p 100 %\n" in fleet_labels(v)["auv3"])
         others = fleet_labels(v)
-        assert all(": holding" in others[n] for n in names if n != "auv3"), others
+        assert all("\nholding p" in others[n] for n in names if n != "auv3"), others
