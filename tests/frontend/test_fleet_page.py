@@ -334,7 +334,8 @@ def test_the_airtime_budget_and_a_repeating_surface_are_shown_as_the_console_say
 ) -> None:
     """auv5 out of earshot (its acknowledgements lost): a circle of 4 copies to it leaves a
     copy a second, the page says how long until they are out as /api/transmitter does; a
-    Surface to it repeats until acknowledged, and the page says so."""
+    Surface to it repeats until acknowledged, and the page says so. Back in earshot, the timed
+    out circle's Retry goes to auv5, named in the dialog and the request."""
     console = fleet_console
     auv5 = console.link.vehicles["auv5"]
     assert isinstance(auv5, AgentLink)
@@ -345,7 +346,7 @@ def test_the_airtime_budget_and_a_repeating_surface_are_shown_as_the_console_say
         expect(budget).to_have_text("Transmitter: no copies queued")
         circle = {"speed": 0.18, "depth": 3, "radius": 5, "direction": "cw"}
         doc = {"pattern": "circle", "params": circle, "vehicle": "auv5", "copies": 4}
-        console.post("/api/commands", doc)
+        circle_id = console.post("/api/commands", doc)["id"]
         said = console.get("/api/transmitter")["airtime_budget_s"]
         assert 0.0 < said <= 3.1, said
         expect(budget).to_have_text(re.compile(r"^Transmitter: copies out in [0-3](\.\d)? s$"))
@@ -362,4 +363,18 @@ def test_the_airtime_budget_and_a_repeating_surface_are_shown_as_the_console_say
             "surface acknowledged", timeout=15_000
         )
         expect(budget).to_have_text("Transmitter: no copies queued")
+        # the circle, never acknowledged, timed out: its Retry goes to its own vehicle
+        expect(page.get_by_test_id(f"state-{circle_id}")).to_have_text("timed_out", timeout=15_000)
+        page.get_by_test_id(f"retry-{circle_id}").click()
+        expect(page.locator("#confirm-title")).to_have_text(
+            f"Retry command {circle_id} (circle) to auv5 as a new command?"
+        )
+        with page.expect_request(posted(f"/api/commands/{circle_id}/retry")) as retry:
+            page.get_by_test_id("confirm-send").click()
+        assert body(retry.value) == {"override": False, "vehicle": "auv5"}
+        retried = wait_until(
+            lambda: [r for r in console.get("/api/commands") if r["retry_of"] == circle_id],
+            what="the retry's record",
+        )
+        assert [r["vehicle"] for r in retried] == ["auv5"]
         w.assert_clean()
