@@ -4,7 +4,8 @@
 // link's health, depth and battery where the vehicle said them, and its own Surface button
 // with that Surface's state (its belief's, as the header's banner reads it for one vehicle).
 // Surface all (the header's button and its key) writes one record per vehicle: each row shows
-// its own, and the banner counts them. Nothing here is worked out: every word is the console's.
+// its own, and the banner counts those records by their state (the records' own, as the
+// console announces them). Nothing here is worked out: every word is the console's.
 
 import { api } from "./api.js";
 import { candidateText } from "./belief.js";
@@ -21,6 +22,8 @@ const ALL_SHOWN_S = 60; // the banner's sum, after every record of Surface all e
 const vehicles = new Map(); // name -> {pose, status, link, belief, beliefAt, pending, nodes}
 let renderTimer = null;
 let all = null; // Surface all: {ids: Map(name -> record id) | null (not answered yet), endedAt}
+const surfaces = new Map(); // a Surface record's id -> the newest of it (the POST's answer, /ws news)
+const KEPT_SURFACES = 100;
 
 const known = (v) => (typeof v === "number" && Number.isFinite(v) ? v : null);
 
@@ -44,7 +47,9 @@ export function initFleetRows() {
 export function fleetNews(type, m) {
   if (!fleetOn() || !m) return;
   if (type === "command") {
+    keepSurface(m.command);
     transmitterChanged();
+    schedule();
     return;
   }
   if (type === "open" || type === "close") {
@@ -148,11 +153,21 @@ async function surfaceOne(name) {
   schedule();
 }
 
+/** A Surface record, kept unless an older copy of it (the log's order: updated_at). */
+function keepSurface(r) {
+  if (!r || r.kind !== "surface" || r.id === undefined) return;
+  const old = surfaces.get(r.id);
+  if (old && old.updated_at && r.updated_at && r.updated_at < old.updated_at) return;
+  surfaces.set(r.id, r);
+  while (surfaces.size > KEPT_SURFACES) surfaces.delete(surfaces.keys().next().value);
+}
+
 function onSurfaceAll({ phase, records }) {
   if (phase === "pressed") {
     all = { ids: null, endedAt: null };
     for (const v of vehicles.values()) v.pending = { id: null };
   } else if (phase === "answered") {
+    for (const r of records) keepSurface(r);
     all = { ids: new Map(records.map((r) => [r.vehicle, r.id])), endedAt: null };
     for (const [name, v] of vehicles) v.pending = { id: all.ids.get(name) ?? -1 };
     transmitterChanged();
@@ -178,7 +193,8 @@ function surfaceOf(v) {
   return said.kind === "pending" || age < said.shownS ? said : null;
 }
 
-/** The banner: Surface all's records, counted by their state (from each vehicle's belief). */
+/** The banner: Surface all's records, counted by their own state (a record not heard of: on
+ *  its way, as the console answered it). */
 function renderAll() {
   if (!all) return;
   if (!all.ids) {
@@ -187,9 +203,9 @@ function renderAll() {
   }
   const counts = new Map();
   let pending = 0;
-  for (const [name, id] of all.ids) {
-    const s = vehicles.get(name)?.belief?.surface;
-    const word = !s || s.id === null || s.id < id || s.in_progress ? "surfacing..." : s.id === id ? s.state : "superseded";
+  for (const id of all.ids.values()) {
+    const state = surfaces.get(id)?.state;
+    const word = !state || state === "queued" || state === "transmitted" ? "surfacing..." : state;
     if (word === "surfacing...") pending++;
     counts.set(word, (counts.get(word) || 0) + 1);
   }

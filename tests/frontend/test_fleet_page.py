@@ -325,6 +325,10 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
             re.compile(r"surfacing|surface acknowledged")
         )
         no_overlaps(page, row_parts("auv2"), "the row of auv2 after its Surface")
+        # Surface all's records are as they were: a newer Surface to one changes none of them
+        expect(page.get_by_test_id("surface-state")).to_have_text(
+            "SURFACE ALL (5 vehicles): 5 acknowledged"
+        )
         page.evaluate("() => window.scrollTo(0, 0)")
         w.assert_clean()
 
