@@ -3,8 +3,11 @@
 import { api, adoptUrlToken, setToken, hasToken } from "./api.js";
 import { initAssumptions, setAssumptionsMode } from "./assumptions.js";
 import { initAuthoring, current } from "./authoring.js";
-import { renderBelief, setBeliefReachable } from "./belief.js";
+import { forgetBelief, renderBelief, setBeliefReachable } from "./belief.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
+import { fleetOn, forSelected, loadFleet, vehiclePath } from "./fleet.js";
+import { initFleetChart } from "./fleet-chart.js";
+import { fleetNews, fleetVehicle, initFleetRows } from "./fleet-rows.js";
 import { setDictionary } from "./form.js";
 import { initLinkTest, renderControl, renderLink, renderLogEvent, setConsoleReachable, setSessionLink } from "./link.js";
 import { connectLive } from "./live.js";
@@ -18,7 +21,7 @@ import { initShortcuts } from "./shortcuts.js";
 import { renderDatum, renderTelemetry, startAgeTicker } from "./status.js";
 import { initTheme } from "./theme.js";
 import { initTraining, loadTraining } from "./training.js";
-import { $, notify, notifyError, resolved, applyAuth, debounce, emit } from "./ui.js";
+import { $, notify, notifyError, resolved, applyAuth, debounce, emit, on } from "./ui.js";
 import { initView, viewerSrc } from "./view.js"; // this page's own 3D view
 
 const RETRY_MS = 3000;
@@ -124,8 +127,11 @@ function initToken() {
 
 async function loadVehicle() {
   try {
-    const v = await api("/api/vehicle");
+    const path = vehiclePath(); // a fleet: the selected vehicle's
+    const v = await api(path);
+    if (path !== vehiclePath()) return; // another vehicle was selected meanwhile
     resolved("vehicle state");
+    if (fleetOn()) fleetVehicle(v);
     renderTelemetry(v);
     emit("telemetry", { msg: v });
     renderEcho(v);
@@ -170,13 +176,22 @@ async function main() {
   initTheme();
   initView();
   initShortcuts();
+  // a fleet's rows and chart markers, and the panels that follow the selected vehicle
+  initFleetRows();
+  initFleetChart();
+  on("vehicle_selected", () => {
+    forgetBelief();
+    loadVehicle();
+  });
   // the chart, the prediction and the plots listen to the page events from here on
   initChart().catch((err) => notifyError("chart", err));
   initPrediction();
   initPlots().catch((err) => notifyError("plots", err));
   adoptUrlToken();
   initToken();
-  initCommands({ wsSurface: () => Boolean(live && live.send({ type: "surface" })) });
+  // a fleet: the Surface key and button surface every vehicle
+  const surfaceMsg = () => (fleetOn() ? { type: "surface", vehicle: "all" } : { type: "surface" });
+  initCommands({ wsSurface: () => Boolean(live && live.send(surfaceMsg())) });
   initTraining();
   initAssumptions();
   initLinkTest();
@@ -185,32 +200,45 @@ async function main() {
 
   let opened = false;
   const refreshLog = debounce(loadLog, 2000);
+  // with a fleet every vehicle's news updates its row; the single-vehicle panels take the
+  // selected vehicle's only (forSelected: all of it without a fleet)
   live = connectLive({
     telemetry: (m) => {
+      fleetNews("telemetry", m);
+      if (!forSelected(m)) return;
       renderTelemetry(m);
       emit("telemetry", { msg: m });
     },
     command: (m) => {
       upsertCommand(m.command);
       refreshLog();
+      fleetNews("command", m);
     },
     vehicle: (m) => {
+      if (!forSelected(m)) return;
       renderEcho(m);
       emit("vehicle", { msg: m });
     },
-    link: (m) => renderLink(m.link),
+    link: (m) => {
+      fleetNews("link", m);
+      if (forSelected(m)) renderLink(m.link);
+    },
     control: (m) => renderControl(m.control), // who is in control (consoles sharing a log)
     event: (m) => { // a mission log event (script.js: a run stopped; a relayed command refused)
       emit("log_event", m.event);
       renderLogEvent(m.event);
     },
-    belief: (m) => renderBelief(m.belief),
+    belief: (m) => {
+      fleetNews("belief", m);
+      if (forSelected(m)) renderBelief(m.belief);
+    },
     auth_ok: tokenAccepted,
     auth_refused: tokenRefused,
-    active_path: (m) => emit("active_path", { path: m.active_path }),
+    active_path: (m) => forSelected(m) && emit("active_path", { path: m.active_path }),
     open: () => {
       setConsoleReachable(true);
       setBeliefReachable(true);
+      fleetNews("open", {});
       if (opened) {
         loadCommands();
         loadVehicle();
@@ -222,18 +250,21 @@ async function main() {
     close: () => {
       setConsoleReachable(false);
       setBeliefReachable(false);
+      fleetNews("close", {});
     },
   });
   startVehicleFallback();
 
   const s = await loadSession();
   loadTraining(s ? s.mode : null);
+  const fleetReady = loadFleet(); // with a fleet: the selector, the rows, Surface all
   loadVehicle();
   const dictionaryReady = loadDictionary();
   // the command list does not need the dictionary (only its units): do not wait long for it
   await Promise.race([dictionaryReady, new Promise((resolve) => setTimeout(resolve, 2000))]);
   loadCommands();
   await dictionaryReady;
+  await fleetReady; // a fleet: every preview names its vehicle from the first
   loadVehicle(); // again, now that the units are known
   initAuthoring({ onSent: upsertCommand });
   $("script-add").addEventListener("click", () => addStep(current()));

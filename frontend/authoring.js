@@ -1,11 +1,14 @@
 // Authoring: pattern picker, parameter form, live preview (bits, hex, airtime, estimates,
 // checks; the backend draws the 3D preview in the viewer) and the confirmed send: of the form's
 // command, or a retry of a logged one (the same dialog, checked from where the vehicle is now).
+// With a fleet every preview, prediction, send and retry names its vehicle (fleet.js): the
+// selected one, or the retried record's; switching vehicles previews again from the new one.
 
 import { api, ApiError } from "./api.js";
 import { initCopies, readCopies, copiesLine } from "./copies.js";
+import { withVehicle } from "./fleet.js";
 import { dictionary, fillPatternSelect, paramForm, defaultParams, unitOf } from "./form.js";
-import { $, el, num, withUnit, delta, notify, notifyError, resolved, slug, canWrite, emit, latLon } from "./ui.js";
+import { $, el, num, withUnit, delta, notify, notifyError, resolved, slug, canWrite, emit, latLon, on } from "./ui.js";
 import { confirmChecks, isHard, kindText, skippedTitle, withinLimits } from "./checks.js";
 import { confirmEstimates, renderEstimates } from "./estimates.js";
 
@@ -20,13 +23,14 @@ const state = {
   lastKey: "", // the command last previewed (JSON), to skip an edit's change event
   errorTimer: null,
   onSent: () => {},
-  // what the open confirm dialog sends: {pattern, params, retryOf} (retryOf: null, or the
-  // id of the logged command a retry repeats as a new command)
+  // what the open confirm dialog sends: {pattern, params, retryOf, vehicle?} (retryOf: null,
+  // or the id of the logged command a retry repeats as a new command; vehicle: a fleet's)
   pending: null,
 };
 
+/** The form's command, naming the selected vehicle with a fleet. */
 export function current() {
-  return { pattern: state.pattern, params: state.form ? state.form.read() : {} };
+  return withVehicle({ pattern: state.pattern, params: state.form ? state.form.read() : {} });
 }
 
 // An edit previews at once: the preview is a millisecond's work on the console, and the 150 ms
@@ -57,6 +61,7 @@ export function initAuthoring({ onSent }) {
   $("confirm-send").addEventListener("click", confirmSend);
   $("confirm-override").addEventListener("change", updateConfirmButton);
   initCopies();
+  on("vehicle_selected", () => state.pattern && runPreview()); // from that vehicle's believed position
   if (select.value) choosePattern(select.value);
 }
 
@@ -235,11 +240,12 @@ async function openConfirm() {
  *  its preview stay as the operator left them. */
 export async function openRetry(record) {
   if (!canWrite()) return;
-  const command = { pattern: record.pattern, params: record.params || {}, retryOf: record.id };
+  // a fleet: to the record's own vehicle, named (none named: the console says which it needs)
+  const command = withVehicle({ pattern: record.pattern, params: record.params || {}, retryOf: record.id }, record.vehicle ?? null);
   let preview = null;
   let error = null;
   try {
-    preview = await api("/api/preview", { method: "POST", body: { pattern: command.pattern, params: command.params } });
+    preview = await api("/api/preview", { method: "POST", body: withVehicle({ pattern: command.pattern, params: command.params }, command.vehicle ?? null) });
   } catch (err) {
     error = err;
   }
@@ -301,8 +307,10 @@ function renderConfirm(preview, command, error) {
     body.dataset.hard = violations.some(isHard) ? "1" : "0";
   }
   parts.push(copiesLine(preview));
-  $("confirm-title").textContent = command.retryOf == null ? `Send ${command.pattern}?`
-    : `Retry command ${command.retryOf} (${command.pattern}) as a new command?`;
+  const to = command.vehicle ? ` to ${command.vehicle}` : "";
+  $("confirm-title").textContent = command.retryOf == null ? `Send ${command.pattern}${to}?`
+    : `Retry command ${command.retryOf} (${command.pattern})${to} as a new command?`;
+  $("confirm-send").textContent = `Confirm and send${to}`;
   body.replaceChildren(...parts);
   updateConfirmButton();
 }
@@ -341,8 +349,8 @@ async function confirmSend() {
     return;
   }
   button.disabled = true;
-  const body = retry ? { override: $("confirm-override").checked }
-    : { pattern: command.pattern, params: command.params, override: $("confirm-override").checked };
+  const override = $("confirm-override").checked;
+  const body = withVehicle(retry ? { override } : { pattern: command.pattern, params: command.params, override }, command.vehicle ?? null);
   if (copies !== null) body.copies = copies;
   const path = retry ? `/api/commands/${encodeURIComponent(command.retryOf)}/retry` : "/api/commands";
   try {
@@ -350,7 +358,8 @@ async function confirmSend() {
     $("confirm-dialog").close();
     const id = record && record.id !== undefined ? ` (command ${record.id})` : "";
     resolved("send");
-    notify(retry ? `retry of command ${command.retryOf} (${command.pattern}) queued${id}` : `${command.pattern} queued${id}`);
+    const to = command.vehicle ? ` to ${command.vehicle}` : "";
+    notify(retry ? `retry of command ${command.retryOf} (${command.pattern})${to} queued${id}` : `${command.pattern}${to} queued${id}`);
     state.onSent(record);
   } catch (err) {
     const box = $("confirm-error");

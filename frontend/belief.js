@@ -37,8 +37,13 @@ export function setBeliefReachable(ok) {
   render();
 }
 
+/** Another vehicle of a fleet was selected: its belief replaces this one, whatever its seq. */
+export function forgetBelief() {
+  current = null;
+}
+
 /** "unknown (no telemetry)", "nothing (idle)", "circle: speed 0.18 m/s, ...". */
-function candidateText(c, twoWay) {
+export function candidateText(c, twoWay) {
   if (!c) return "–";
   if (c.kind === "unknown") return twoWay ? "unknown (nothing heard yet)" : "unknown (no telemetry)";
   if (!c.pattern) return "nothing (idle, as the vehicle reports)";

@@ -8,8 +8,9 @@ import { api } from "./api.js";
 import { beliefLayers } from "./belief.js";
 import { buttonsControl, legendControl } from "./chart-controls.js";
 import { watchOperator } from "./chart-operator.js";
+import { vehicleQuery } from "./fleet.js";
 import { drawGraticule } from "./graticule.js";
-import { $, el, on, num } from "./ui.js";
+import { $, el, emit, on, num } from "./ui.js";
 
 const LEAFLET_JS = "/vendor/leaflet/leaflet-src.esm.js";
 const LEAFLET_CSS = "/vendor/leaflet/leaflet.css";
@@ -289,12 +290,13 @@ async function loadChart() {
 async function loadTrack(dive) {
   if (!Number.isInteger(dive)) return;
   let doc;
+  const query = vehicleQuery(); // a fleet: the selected vehicle's
   try {
-    doc = await api(`/api/dives/${dive}`);
+    doc = await api(`/api/dives/${dive}${query}`);
   } catch {
     return; // telemetry still draws the track from now on
   }
-  if (dive !== state.dive || !doc || !Array.isArray(doc.track)) return;
+  if (dive !== state.dive || query !== vehicleQuery() || !doc || !Array.isArray(doc.track)) return;
   const old = doc.track
     .filter((p) => Number.isFinite(p.lat_deg) && Number.isFinite(p.lon_deg))
     .map((p) => [p.lat_deg, p.lon_deg]);
@@ -355,6 +357,17 @@ export async function initChart() {
     state.belief = belief;
     if (map) drawBelief();
   });
+  on("vehicle_selected", () => { // a fleet: this chart's own vehicle layers follow the selection
+    resetTrack();
+    Object.assign(state, { pose: null, heading: null, lastT: null, active: null, activePath: null, belief: null });
+    if (layers.vehicle) layers.vehicle.remove();
+    layers.vehicle = null;
+    if (map) {
+      drawActive();
+      drawBelief();
+    }
+    loadTrack(state.dive);
+  });
   on("session", ({ session }) => {
     if (!session || session.dive === state.dive) return;
     if (state.dive !== null) resetTrack();
@@ -373,6 +386,7 @@ export async function initChart() {
   }
   addCss(LEAFLET_CSS);
   createMap();
+  emit("chart_ready", { leaflet: L, map }); // a fleet's markers (fleet-chart.js)
   $("chart-panel").classList.add("chart-ready");
   await loadChart();
   drawPreview();

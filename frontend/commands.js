@@ -4,6 +4,7 @@
 import { api } from "./api.js";
 import { openRetry } from "./authoring.js";
 import { RETRYABLE, copiesText, stateText } from "./delivery.js";
+import { fleetOn } from "./fleet.js";
 import { commandText } from "./form.js";
 import { initSurface } from "./surface.js";
 import { $, el, num, clock, notify, notifyError, applyAuth } from "./ui.js";
@@ -100,6 +101,7 @@ function renderRow(r) {
       el("span", { class: "cmd-time", title: r.created_at || "" }, clock(r.created_at)),
       el("strong", { class: "cmd-pattern" }, r.kind === "surface" ? "SURFACE" : r.pattern || "?"),
       el("span", { class: `state-badge st-${r.state}`, testid: `state-${id}` }, r.state || "?"),
+      r.vehicle ? el("span", { class: "cmd-vehicle", testid: `command-vehicle-${id}`, title: `for ${r.vehicle} (a fleet's vehicle)` }, `to ${r.vehicle}`) : null,
       copiesBadge(r, id)),
     el("div", { class: "cmd-params muted" }, commandText({ pattern: r.pattern, params: r.params }), r.kind === "script" ? " [script]" : ""),
   ];
@@ -120,8 +122,10 @@ async function retry(id) {
     await openRetry(old);
     return;
   }
+  // a fleet: to the record's own vehicle, named
+  const body = fleetOn() ? { vehicle: old.vehicle ?? null } : undefined;
   try {
-    const r = await api(`/api/commands/${encodeURIComponent(id)}/retry`, { method: "POST" });
+    const r = await api(`/api/commands/${encodeURIComponent(id)}/retry`, { method: "POST", body });
     upsertCommand(r && r.id !== undefined ? r : { id, state: "queued" });
   } catch (err) {
     notifyError(`retry of command ${id}`, err);

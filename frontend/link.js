@@ -15,7 +15,7 @@ const CAPABILITY = {
   unknown: "unknown",
 };
 // colour is never the only cue: a glyph in the dot and a word in the text too
-const LEVEL = {
+export const LEVEL = {
   green: { glyph: "✓", word: "" },
   amber: { glyph: "!", word: "degraded" },
   red: { glyph: "✕", word: "failing" },

@@ -12,7 +12,7 @@ import { runStepText, timelineText } from "./script_text.js";
 /** localStorage key of the script being authored. */
 export const STORE_KEY = "nemesys.script";
 
-let steps = []; // [{pattern, params, trigger: {kind, t_s}}]
+let steps = []; // [{pattern, params, trigger: {kind, t_s}, vehicle?}] (vehicle: a fleet's, named by every step)
 let pollTimer = null;
 
 /** Keep the script in localStorage (best effort: a full or disabled storage only warns once). */
@@ -66,11 +66,13 @@ export function scriptDocument() {
       pattern: s.pattern,
       params: { ...s.params },
       trigger: { kind: s.trigger.kind, t_s: s.trigger.kind === "at" ? s.trigger.t_s : null },
+      ...(s.vehicle ? { vehicle: s.vehicle } : {}),
     })),
   };
 }
 
-/** Add a step from the authoring form ({pattern, params}). */
+/** Add a step from the authoring form ({pattern, params, vehicle?}: with a fleet, the
+ *  selected vehicle, which the step names; a run drives one vehicle, as the console checks). */
 export function addStep(command) {
   if (!command || !command.pattern) return;
   const prev = steps[steps.length - 1];
@@ -80,11 +82,12 @@ export function addStep(command) {
     pattern: command.pattern,
     params: { ...command.params },
     trigger: !prev ? { kind: "at", t_s: 0 } : afterRepeating ? { kind: "operator", t_s: null } : { kind: "after_previous", t_s: null },
+    ...(command.vehicle ? { vehicle: command.vehicle } : {}),
   });
   renderSteps();
   notify(afterRepeating
     ? `step ${steps.length} added: ${command.pattern}, on the operator's go (step ${steps.length - 1}, a ${prev.pattern}, repeats until retasked: it never completes)`
-    : `step ${steps.length} added: ${command.pattern}`);
+    : `step ${steps.length} added: ${command.pattern}${command.vehicle ? ` to ${command.vehicle}` : ""}`);
 }
 
 function move(i, by) {
@@ -160,6 +163,7 @@ function stepRow(step, i) {
   return el("li", { class: "script-step", id: `script-step-${i}`, testid: `script-step-${i}` },
     el("div", { class: "step-head" },
       el("strong", {}, `${i + 1}.`), patternSelect, trigger, time, unit,
+      step.vehicle ? el("span", { class: "cmd-vehicle", testid: `${prefix}vehicle`, title: "the vehicle this step is sent to" }, `to ${step.vehicle}`) : null,
       el("span", { class: "step-buttons" },
         el("button", { type: "button", class: "small up", testid: `${prefix}up`, disabled: i === 0, "aria-label": `move step ${i + 1} up`, onclick: () => move(i, -1) }, "↑"),
         el("button", { type: "button", class: "small down", testid: `${prefix}down`, disabled: i === steps.length - 1, "aria-label": `move step ${i + 1} down`, onclick: () => move(i, 1) }, "↓"),

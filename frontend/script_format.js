@@ -44,7 +44,9 @@ export function parseScript(text) {
     const kind = s.trigger && s.trigger.kind;
     if (!TRIGGERS.some(([k]) => k === kind)) throw new Error(`step ${i + 1}: unknown trigger ${kind}`);
     if (s.params != null && (typeof s.params !== "object" || Array.isArray(s.params))) throw new Error(`step ${i + 1}: params must be an object`);
-    return { pattern: s.pattern, params: { ...(s.params || {}) }, trigger: { kind, t_s: kind === "at" ? Number(s.trigger.t_s) || 0 : null } };
+    const step = { pattern: s.pattern, params: { ...(s.params || {}) }, trigger: { kind, t_s: kind === "at" ? Number(s.trigger.t_s) || 0 : null } };
+    if (s.vehicle !== undefined && s.vehicle !== null) step.vehicle = String(s.vehicle); // a fleet's: the console checks it
+    return step;
   });
   return { name: String(doc.name || "mission").slice(0, 80), steps: out };
 }

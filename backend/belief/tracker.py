@@ -300,13 +300,18 @@ class BeliefTracker:
         self._pushed, self._pushed_at = belief, clock
         if self.rt.hub.client_count:
             self.rt.hub.publish(BeliefMessage(belief=belief))
-        self._show(belief.position)
+        self._show(belief)
         return belief
 
-    def _show(self, p: BelievedPosition) -> None:
-        """The 3D view: the believed position and its ring unless it is the fresh fix."""
+    def _show(self, belief: Belief) -> None:
+        """The 3D view: the believed position and its ring unless it is the fresh fix; a
+        fleet's vehicle: its own marker and label (:mod:`backend.viewer.fleet`)."""
         viewer = self.rt.viewer
         if viewer is None:
+            return
+        p = belief.position
+        if self.rt.fleet.configured:
+            self._show_in_fleet(viewer, belief)
             return
         from backend.viewer.belief import belief_drawing, clear_belief  # viser: with the view
 
@@ -319,6 +324,18 @@ class BeliefTracker:
         label = f"believed ({p.source.replace('_', ' ')}{spread})"
         viewer.draw_shared(belief_drawing(p.x_m, p.y_m, p.z_m, p.sigma_m, label))
         self._drawn = True
+
+    def _show_in_fleet(self, viewer: Viewer, belief: Belief) -> None:
+        """This vehicle of the fleet: where it is believed to be, named, with its address
+        and the command it is believed to run."""
+        from backend.viewer.fleet import fleet_drawing, fleet_label  # viser: with the view
+
+        p, c = belief.position, belief.command
+        address = self.rt.fleet.get(self.vehicle).address
+        sigma = None if p.source == "telemetry" else p.sigma_m
+        where = (p.x_m, p.y_m, p.z_m)
+        label = fleet_label(self.vehicle, address, (c.kind, c.pattern, c.p), where, p.source, sigma)
+        viewer.draw_shared(fleet_drawing(self.vehicle, label, *where, sigma))
 
     async def run(self) -> None:
         """Push on every change until cancelled."""

@@ -222,6 +222,11 @@ class Viewer:
             if self._pose_ned is not None:
                 p = ned_to_view(*self._pose_ned)
                 out["/vehicle/info"] = (float(p[0]), float(p[1]), p[2] + VEHICLE_LABEL_UP_M)
+            for name in self._shared.node_names("/fleet/"):  # a fleet's vehicles' labels
+                node = self._shared.nodes[name]
+                if isinstance(node, viser.LabelHandle):
+                    x, y, z = (float(v) for v in node.position)
+                    out[name] = (x, y, z)
             return out
 
     def _reserved_labels(self) -> list[tuple[float, float, float]]:
