@@ -83,9 +83,7 @@ class CpuMeter:
 
 
 @contextlib.contextmanager
-def console_server(
-    workdir: Path, env: dict[str, str] | None = None
-) -> Iterator[ConsoleProcess]:
+def console_server(workdir: Path, env: dict[str, str] | None = None) -> Iterator[ConsoleProcess]:
     """``nemesys console`` on a free loopback port, training mode; stopped on exit. ``env``:
     more of its environment (a fleet: ``NEMESYS_VEHICLES``)."""
     token = secrets.token_urlsafe(24)
