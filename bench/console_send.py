@@ -106,21 +106,31 @@ class SendRun:
 
 
 class Sender:
-    """Sends circles of radius 4 m and 5 m in turn (never a duplicate of the active one)."""
+    """Sends circles of radius 4 m and 5 m in turn (never a duplicate of the active one); to
+    a fleet's ``vehicles`` in turn, each vehicle's radius in turn."""
 
     def __init__(
-        self, http: httpx.AsyncClient, watcher: AckWatcher, circle: dict[str, Any], airtime_s: float
+        self,
+        http: httpx.AsyncClient,
+        watcher: AckWatcher,
+        circle: dict[str, Any],
+        airtime_s: float,
+        vehicles: Sequence[str] = (),
     ) -> None:
         self.http = http
         self.watcher = watcher
         self.circle = circle
         self.airtime_s = airtime_s
+        self.vehicles = list(vehicles)
         self.count = 0
 
     async def send(self, run: SendRun) -> None:
-        radius = 4.0 if self.count % 2 == 0 else 5.0
+        n = max(1, len(self.vehicles))
+        radius = 4.0 if (self.count // n) % 2 == 0 else 5.0
+        body: dict[str, Any] = {"pattern": "circle", "params": {**self.circle, "radius": radius}}
+        if self.vehicles:
+            body["vehicle"] = self.vehicles[self.count % n]
         self.count += 1
-        body = {"pattern": "circle", "params": {**self.circle, "radius": radius}}
         t0 = time.perf_counter()
         r = await self.http.post("/api/commands", json=body)
         t_post = time.perf_counter()

@@ -83,14 +83,15 @@ class CpuMeter:
 
 
 @contextlib.contextmanager
-def console_server(workdir: Path) -> Iterator[ConsoleProcess]:
-    """``nemesys console`` on a free loopback port, training mode; stopped on exit."""
+def console_server(workdir: Path, env: dict[str, str] | None = None) -> Iterator[ConsoleProcess]:
+    """``nemesys console`` on a free loopback port, training mode; stopped on exit. ``env``:
+    more of its environment (a fleet: ``NEMESYS_VEHICLES``)."""
     token = secrets.token_urlsafe(24)
     with start_console(
         workdir / "console.log",
         token,
         *("--target", "sim", "--db", str(workdir / "missions.sqlite3")),
-        env={"NEMESYS_MAX_SENDS_PER_MINUTE": str(SENDS_PER_MINUTE)},
+        env={"NEMESYS_MAX_SENDS_PER_MINUTE": str(SENDS_PER_MINUTE), **(env or {})},
         timeout_s=START_TIMEOUT_S,
     ) as server:
         if server.token != token:

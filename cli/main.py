@@ -193,6 +193,7 @@ BENCHMARKS = (
     "export",
     "control_sync",
     "relay",
+    "fleet_cost",
 )
 
 

@@ -1,5 +1,5 @@
-"""The telemetry fan-out: one serialisation of a telemetry message for every page, and an age
-that stays true for a page that joins later."""
+"""The telemetry fan-out: one serialisation of a telemetry message for every page (a fleet's:
+one per vehicle, and one per event), and an age that stays true for a page that joins later."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from backend.messages import message_json
+from backend.messages import ActivePathMessage, for_vehicle, message_json
 from backend.telemetry import TelemetryHub
 from vehicle_contract.messages import POSE_KEYS
 
@@ -62,6 +62,60 @@ def test_one_serialisation_for_every_page(monkeypatch: pytest.MonkeyPatch) -> No
     # 20 pages, one change of the pose: serialised once, or again only when a period went by
     # between two pages (a loaded machine), never once a page.
     assert 1 <= len(calls) < len(pages) // 2
+
+
+def test_a_fleet_of_ten_serialised_once_for_twenty_pages(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Ten vehicles' hubs fed to the console's hub (as :class:`backend.fleet.state.Fleet`
+    wires them), 20 pages: each vehicle's telemetry and each event is encoded once and the
+    same text fanned out, not once a page (the fleet's cost must not grow with the pages)."""
+    calls: list[Any] = []
+    real = message_json
+
+    def counting(message: Any) -> str:
+        calls.append(message)
+        return real(message)
+
+    monkeypatch.setattr("backend.telemetry.message_json", counting)
+    names = [f"auv{i}" for i in range(1, 11)]
+    hub = TelemetryHub(rate_hz=2.0)
+    hub.feeds = [TelemetryHub(rate_hz=2.0, vehicle=name) for name in names]
+    for i, feed in enumerate(hub.feeds):
+        feed.set_pose({**POSE, "x_m": float(i)})
+    pages = [Page() for _ in range(20)]
+
+    def got(page: Page) -> tuple[set[str], int]:
+        docs = [json.loads(t) for t in page.texts]
+        telemetry = {d["vehicle"] for d in docs if d["type"] == "telemetry"}
+        return telemetry, sum(d["type"] == "active_path" for d in docs)
+
+    async def run() -> None:
+        tasks = [asyncio.create_task(hub.serve(p)) for p in pages]
+        async with asyncio.timeout(30):  # every page connected before the event
+            while hub.client_count < len(pages):
+                await asyncio.sleep(0.001)
+        hub.publish(for_vehicle(ActivePathMessage(active_path=None), "auv3"))
+        async with asyncio.timeout(30):  # a page that never gets them fails, not hangs
+            while not all(got(p) == (set(names), 1) for p in pages):
+                assert not any(t.done() for t in tasks), [t.exception() for t in tasks]
+                await asyncio.sleep(0.001)
+        for t in tasks:
+            t.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+
+    asyncio.run(run())
+    # every page got each vehicle's own telemetry (its pose, not another's)
+    for i, name in enumerate(names):
+        docs = [json.loads(t) for p in pages for t in p.texts]
+        mine = [d for d in docs if d["type"] == "telemetry" and d["vehicle"] == name]
+        assert {d["pose"]["x_m"] for d in mine} == {float(i)}
+    events = [c for c in calls if isinstance(c, ActivePathMessage)]
+    assert len(events) == 1  # the event: once, for 20 pages
+    for name in names:
+        encoded = [c for c in calls if getattr(c, "vehicle", None) == name and c not in events]
+        # once per vehicle, or again only when a period went by between two pages (a loaded
+        # machine), never once a page
+        assert 1 <= len(encoded) < len(pages) // 2, (name, len(encoded))
+    assert not [c for c in calls if c not in events and getattr(c, "vehicle", None) is None]
 
 
 def test_a_page_joining_later_gets_a_fresh_age(monkeypatch: pytest.MonkeyPatch) -> None:
