@@ -116,10 +116,13 @@ def _console(sim: Simulation, worker: TwinWorker) -> Any:
     """What :func:`predict` reads of a training console, made of ``sim``."""
     state = reported_state(sim)
     active = sim.agent.active
+    hub = SimpleNamespace(status=sim.status())
     return SimpleNamespace(
-        vehicle_state=lambda: state,
-        commands=SimpleNamespace(mirror=active),
-        hub=SimpleNamespace(status=sim.status()),
+        vehicle_state=lambda vehicle=None: state,
+        commands=SimpleNamespace(
+            addressee=lambda vehicle=None: SimpleNamespace(mirror=SimpleNamespace(plan=active))
+        ),
+        fleet=SimpleNamespace(get=lambda vehicle=None: SimpleNamespace(hub=hub)),
         sim=sim,
         twin_worker=worker,
         datum=None,

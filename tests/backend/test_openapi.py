@@ -324,6 +324,10 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     c.call("GET", "/api/log.json")
     c.call("GET", "/api/log.csv")
     c.call("GET", "/api/vehicle")
+    # the fleet's views, here of the single vehicle (a fleet of one: "nemesys")
+    assert [v["name"] for v in c.call("GET", "/api/vehicles").json()] == ["nemesys"]
+    c.call("GET", "/api/vehicles/nemesys")
+    c.call("GET", "/api/transmitter")
     c.call("POST", f"/api/commands/{interrupted_record(client)}/retry", json={}, headers=AUTH)
     surface = c.call("POST", "/api/surface", headers=AUTH).json()
     wait_state(client, surface["id"])

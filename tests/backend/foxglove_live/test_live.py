@@ -183,6 +183,9 @@ def test_poses_on_the_dives_clock_in_the_scene_frame(
         await session.until(
             lambda s: any(r.log_time > 0 for r in s.on("/vehicle/pose")), what="the moved pose"
         )
+        await session.until(
+            lambda s: any(r.log_time > 0 for r in s.on("/vehicle/fix")), what="the moved fix"
+        )
         await session.until(lambda s: bool(s.on("/vehicle/track")), what="the track")
         # the server's time: the same clock
         await session.until(lambda s: to_ns(1.5) in s.times, what="the server's time")
