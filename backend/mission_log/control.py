@@ -194,18 +194,7 @@ def decide(
     owner = f"console {r.console!r} (operator {r.operator!r})"
     who = f"console {me!r} (operator {by.operator!r})"
     allowed = r.takeover_allowed if takeover_allowed is None else takeover_allowed
-    mine = replace(
-        r,
-        console=me,
-        operator=by.operator,
-        epoch=r.epoch + 1,
-        since_s=now,
-        heartbeat_s=now,
-        takeover_allowed=bool(takeover_allowed),
-        request_console=None,
-        request_operator=None,
-        request_s=None,
-    )
+    mine = _handed(r, me, by.operator, now, takeover_allowed=bool(takeover_allowed))
     if action in ("request", "takeover") and r.console is None:
         return _Decided(
             action, "granted", by, r, mine, f"{who} took control of {v} (nobody had it)"
@@ -232,18 +221,7 @@ def decide(
             f"only the console in control can {action}: {holder} in control of {v}"
         )
     if action == "release":
-        after = replace(
-            r,
-            console=None,
-            operator=None,
-            epoch=r.epoch + 1,
-            since_s=now,
-            heartbeat_s=None,
-            takeover_allowed=False,
-            request_console=None,
-            request_operator=None,
-            request_s=None,
-        )
+        after = _handed(r, None, None, now)
         return _Decided(action, "released", by, r, after, f"{who} released control of {v}")
     if r.request_console is None:
         raise ControlRefused(f"no request for control of {v} is waiting for an answer")
@@ -251,34 +229,36 @@ def decide(
     if action == "refuse":
         after = replace(r, request_console=None, request_operator=None, request_s=None)
         return _Decided(action, "refused", by, r, after, f"{who} refused {asker} control of {v}")
-    after = replace(
-        r,
-        console=r.request_console,
-        operator=r.request_operator,
-        epoch=r.epoch + 1,
-        since_s=now,
-        heartbeat_s=now,
-        takeover_allowed=False,
-        request_console=None,
-        request_operator=None,
-        request_s=None,
-    )
+    after = _handed(r, r.request_console, r.request_operator, now)
     return _Decided(action, "granted", by, r, after, f"{who} granted {asker} control of {v}")
 
 
-def _timed_out(r: ControlRow, now: float, timeout_s: float) -> _Decided:
-    after = replace(
+def _handed(
+    r: ControlRow,
+    console: str | None,
+    operator: str | None,
+    now: float,
+    *,
+    takeover_allowed: bool = False,
+) -> ControlRow:
+    """``r`` handed to ``console`` (None: to nobody) at ``now`` (database clock, s): the next
+    epoch, a first heartbeat when someone holds it, and any waiting request answered."""
+    return replace(
         r,
-        console=None,
-        operator=None,
+        console=console,
+        operator=operator,
         epoch=r.epoch + 1,
         since_s=now,
-        heartbeat_s=None,
-        takeover_allowed=False,
+        heartbeat_s=None if console is None else now,
+        takeover_allowed=takeover_allowed,
         request_console=None,
         request_operator=None,
         request_s=None,
     )
+
+
+def _timed_out(r: ControlRow, now: float, timeout_s: float) -> _Decided:
+    after = _handed(r, None, None, now)
     age = "never" if r.heartbeat_s is None else f"{now - r.heartbeat_s:.1f} s ago"
     detail = (
         f"control of {r.vehicle} released: console {r.console!r} (operator {r.operator!r}) "
