@@ -162,6 +162,18 @@ class TelemetryMessage(Message):
     vehicle: str | None = _vehicle_field()
 
 
+class FleetTelemetryMessage(Message):
+    """A fleet's telemetry (``NEMESYS_VEHICLES``): every vehicle whose pose or status changed
+    since this page last got it, in one message (at most ``telemetry_hz`` a second), each as
+    a ``telemetry`` message naming its vehicle. One message a period, not one per vehicle,
+    so the pages' cost does not grow with the fleet."""
+
+    type: Literal["fleet_telemetry"] = "fleet_telemetry"
+    telemetry: list[TelemetryMessage] = Field(
+        description="each changed vehicle's latest telemetry, in the fleet's order"
+    )
+
+
 class CommandMessage(Message):
     """A command's record, on every change of its state (in order)."""
 
@@ -224,6 +236,7 @@ class ControlMessage(Message):
 #: What the hub publishes to every page.
 News = Annotated[
     TelemetryMessage
+    | FleetTelemetryMessage
     | CommandMessage
     | VehicleMessage
     | ActivePathMessage
@@ -242,6 +255,7 @@ __all__ = [
     "CommandMessage",
     "ControlMessage",
     "EventMessage",
+    "FleetTelemetryMessage",
     "LastSent",
     "LinkMessage",
     "Message",

@@ -7,8 +7,10 @@ disconnected rather than allowed to grow memory.
 
 A fleet (``NEMESYS_VEHICLES``) has a hub per vehicle holding its pose and status (``vehicle``:
 its name, in its telemetry), and the console's hub serves every page: their telemetry as
-:attr:`TelemetryHub.feeds` (each serialised once per change, latest value wins, each vehicle's
-in turn) and the events, which are published on it alone.
+:attr:`TelemetryHub.feeds` (each serialised once per change, latest value wins) and the events,
+which are published on it alone. A page gets its changed vehicles' telemetry in one
+``fleet_telemetry`` message a period, not one message per vehicle: the texts already
+serialised, joined (the whole fleet's, the common case, joined once for every page).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import asyncio
 import contextlib
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from typing import Any, Protocol
 
 from backend.messages import News, TelemetryMessage, message_json
@@ -83,6 +85,9 @@ class TelemetryHub:
         #: The telemetry message of :attr:`_version`, serialised once for every page, and the
         #: monotonic time it was (its ``age_s`` is as of then).
         self._telemetry_json: tuple[int, float, str] | None = None
+        #: The whole fleet's ``fleet_telemetry`` text, the feeds' versions it holds and the
+        #: monotonic time it was joined (the pages that want every vehicle share it).
+        self._fleet_json: tuple[tuple[int, ...], float, str] | None = None
         self._clients: set[_Client] = set()
         #: Called with every event published, before the pages get it (the belief listens).
         self.observers: list[Callable[[News], None]] = []
@@ -191,10 +196,37 @@ class TelemetryHub:
             self._clients.discard(client)
 
     async def _send_feeds(self, client: _Client) -> None:
-        """Each fleet vehicle's telemetry that changed since this client last got it."""
+        """The fleet vehicles' telemetry that changed since this client last got it, in one
+        ``fleet_telemetry`` message (none when nothing changed)."""
         sent = client.feed_versions
         sent.extend([-1] * (len(self.feeds) - len(sent)))
-        for i, feed in enumerate(self.feeds):
-            if sent[i] != feed._version:
-                sent[i] = feed._version
-                await client.sender.send_text(feed.telemetry_json())
+        versions = [feed._version for feed in self.feeds]
+        changed = [i for i, v in enumerate(versions) if sent[i] != v]
+        if not changed:
+            return
+        client.feed_versions = versions
+        if len(changed) == len(self.feeds):
+            text = self.fleet_json(tuple(versions))
+        else:
+            text = _fleet_text(self.feeds[i].telemetry_json() for i in changed)
+        await client.sender.send_text(text)
+
+    def fleet_json(self, versions: tuple[int, ...]) -> str:
+        """Every fleet vehicle's telemetry at ``versions`` in one ``fleet_telemetry`` text,
+        joined once for all the pages that want it (again after a period: fresh ages)."""
+        now = time.monotonic()
+        cached = self._fleet_json
+        if cached is None or cached[0] != versions or now - cached[1] > self.period_s:
+            text = _fleet_text(feed.telemetry_json() for feed in self.feeds)
+            cached = self._fleet_json = (versions, now, text)
+        return cached[2]
+
+
+#: A ``fleet_telemetry`` message around its vehicles' ``telemetry`` texts
+#: (:class:`backend.messages.FleetTelemetryMessage`; a test checks the two agree).
+_FLEET_HEAD = '{"type":"fleet_telemetry","telemetry":['
+_FLEET_TAIL = "]}"
+
+
+def _fleet_text(parts: Iterable[str]) -> str:
+    return _FLEET_HEAD + ",".join(parts) + _FLEET_TAIL

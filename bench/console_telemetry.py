@@ -75,8 +75,10 @@ class TelemetryClient:
                 now = time.perf_counter()
                 doc = json.loads(message)
                 kind = doc.get("type")
-                if kind == "telemetry" and self.counting:
-                    self.messages += 1
+                # a fleet's vehicles come in one message a period: each vehicle's counts
+                vehicles = len(doc["telemetry"]) if kind == "fleet_telemetry" else 1
+                if kind in ("telemetry", "fleet_telemetry") and self.counting:
+                    self.messages += vehicles
                     if self._last is not None:
                         self.max_gap_s = max(self.max_gap_s, now - self._last)
                     self._last = now

@@ -202,12 +202,23 @@ async function main() {
   const refreshLog = debounce(loadLog, 2000);
   // with a fleet every vehicle's news updates its row; the single-vehicle panels take the
   // selected vehicle's only (forSelected: all of it without a fleet)
+  const onTelemetry = (m) => {
+    fleetNews("telemetry", m);
+    if (!forSelected(m)) return;
+    renderTelemetry(m);
+    emit("telemetry", { msg: m });
+  };
   live = connectLive({
-    telemetry: (m) => {
-      fleetNews("telemetry", m);
-      if (!forSelected(m)) return;
-      renderTelemetry(m);
-      emit("telemetry", { msg: m });
+    telemetry: onTelemetry,
+    // a fleet's changed vehicles in one message a period: each vehicle's telemetry in turn
+    fleet_telemetry: (m) => {
+      for (const t of m.telemetry || []) {
+        try {
+          onTelemetry(t);
+        } catch (err) {
+          console.warn(`telemetry of ${t && t.vehicle} failed`, err); // the others still shown
+        }
+      }
     },
     command: (m) => {
       upsertCommand(m.command);

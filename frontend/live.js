@@ -8,7 +8,8 @@ import { $, notify } from "./ui.js";
 const MIN_DELAY_MS = 500;
 const MAX_DELAY_MS = 10000;
 
-/** handlers: {telemetry, command, vehicle, link, open, close}: each gets the parsed message. */
+/** handlers: {telemetry, fleet_telemetry, command, vehicle, link, ..., open, close}: each gets the
+ *  parsed message of its type. */
 export function connectLive(handlers) {
   let socket = null;
   let delay = MIN_DELAY_MS;

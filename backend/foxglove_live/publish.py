@@ -57,6 +57,7 @@ from backend.messages import (
     BeliefMessage,
     CommandMessage,
     EventMessage,
+    FleetTelemetryMessage,
     LinkMessage,
     News,
     TelemetryMessage,
@@ -143,6 +144,9 @@ class Publisher:
         """One ``/ws`` message, as the pages get it."""
         if isinstance(item, TelemetryMessage):
             self.telemetry(item)
+        elif isinstance(item, FleetTelemetryMessage):  # a fleet's: each vehicle's in turn
+            for telemetry in item.telemetry:
+                self.news(telemetry)
         elif isinstance(item, CommandMessage):
             record = item.command
             ns = self.clock.now()

@@ -9,8 +9,14 @@ from typing import Any
 
 import pytest
 
-from backend.messages import ActivePathMessage, for_vehicle, message_json
-from backend.telemetry import TelemetryHub
+from backend.messages import (
+    ActivePathMessage,
+    FleetTelemetryMessage,
+    TelemetryMessage,
+    for_vehicle,
+    message_json,
+)
+from backend.telemetry import TelemetryHub, _Client
 from vehicle_contract.messages import POSE_KEYS
 
 #: A whole pose: every number the contract names, known.
@@ -29,6 +35,23 @@ class Page:
 
     async def send_text(self, data: str) -> None:
         self.texts.append(data)
+
+    def telemetry(self) -> list[dict[str, Any]]:
+        """Each vehicle's telemetry it got, out of its ``fleet_telemetry`` messages (each
+        checked against the message's model)."""
+        out = []
+        for text in self.texts:
+            if json.loads(text)["type"] == "fleet_telemetry":
+                batch = FleetTelemetryMessage.model_validate_json(text)
+                out += [json.loads(message_json(t)) for t in batch.telemetry]
+        return out
+
+    def telemetry_models(self) -> list[TelemetryMessage]:
+        return [
+            t
+            for text in self.texts
+            for t in FleetTelemetryMessage.model_validate_json(text).telemetry
+        ]
 
 
 def test_one_serialisation_for_every_page(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -85,7 +108,8 @@ def test_a_fleet_of_ten_serialised_once_for_twenty_pages(monkeypatch: pytest.Mon
 
     def got(page: Page) -> tuple[set[str], int]:
         docs = [json.loads(t) for t in page.texts]
-        telemetry = {d["vehicle"] for d in docs if d["type"] == "telemetry"}
+        assert not [d for d in docs if d["type"] == "telemetry"], "a fleet's come batched"
+        telemetry = {d["vehicle"] for d in page.telemetry()}
         return telemetry, sum(d["type"] == "active_path" for d in docs)
 
     async def run() -> None:
@@ -105,8 +129,7 @@ def test_a_fleet_of_ten_serialised_once_for_twenty_pages(monkeypatch: pytest.Mon
     asyncio.run(run())
     # every page got each vehicle's own telemetry (its pose, not another's)
     for i, name in enumerate(names):
-        docs = [json.loads(t) for p in pages for t in p.texts]
-        mine = [d for d in docs if d["type"] == "telemetry" and d["vehicle"] == name]
+        mine = [d for p in pages for d in p.telemetry() if d["vehicle"] == name]
         assert {d["pose"]["x_m"] for d in mine} == {float(i)}
     events = [c for c in calls if isinstance(c, ActivePathMessage)]
     assert len(events) == 1  # the event: once, for 20 pages
@@ -128,3 +151,46 @@ def test_a_page_joining_later_gets_a_fresh_age(monkeypatch: pytest.MonkeyPatch) 
     later = json.loads(hub.telemetry_json())
     assert first["age_s"] == pytest.approx(0.0)
     assert later["age_s"] == pytest.approx(60.0)
+
+
+def test_a_fleets_telemetry_is_one_message_a_period_of_what_changed(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A page gets its fleet's telemetry in one ``fleet_telemetry`` message a period: at
+    first every vehicle's, then only the vehicles whose pose or status changed since (latest
+    value wins), and nothing while none did."""
+    monkeypatch.setattr("backend.telemetry.time.monotonic", lambda: 100.0)  # one period
+    names = [f"auv{i}" for i in range(1, 6)]
+    hub = TelemetryHub(rate_hz=20.0)
+    hub.feeds = [TelemetryHub(rate_hz=20.0, vehicle=name) for name in names]
+    for i, feed in enumerate(hub.feeds):
+        feed.set_pose({**POSE, "x_m": float(i)})
+    page = Page()
+    client = _Client(page, max_events=10)
+
+    def period() -> list[dict[str, Any]]:
+        """What one period's turn sends the page (its texts, parsed)."""
+        before = len(page.texts)
+        asyncio.run(hub._send_feeds(client))
+        return [json.loads(t) for t in page.texts[before:]]
+
+    (first,) = period()
+    assert first["type"] == "fleet_telemetry"
+    assert [t["vehicle"] for t in first["telemetry"]] == names
+    assert [t["pose"]["x_m"] for t in first["telemetry"]] == [0.0, 1.0, 2.0, 3.0, 4.0]
+    assert period() == []  # nothing changed: nothing sent
+    hub.feeds[3].set_pose({**POSE, "x_m": 30.0})
+    hub.feeds[3].set_pose({**POSE, "x_m": 31.0})  # the newer one wins
+    hub.feeds[1].set_status({"mode": "hover"})
+    (second,) = period()
+    assert [t["vehicle"] for t in second["telemetry"]] == ["auv2", "auv4"]
+    assert second["telemetry"][1]["pose"]["x_m"] == 31.0
+    assert second["telemetry"][0]["status"]["mode"] == "hover"
+    assert period() == []
+    # the pages that want every vehicle share one text, joined once
+    other = Page()
+    asyncio.run(hub._send_feeds(_Client(other, max_events=10)))
+    again = Page()
+    asyncio.run(hub._send_feeds(_Client(again, max_events=10)))
+    assert other.texts[0] is again.texts[0]
+    assert [t.vehicle for t in other.telemetry_models()] == names

@@ -1,9 +1,10 @@
 """Every message of the live websocket ``/ws``, as models: ``docs/live.md`` is written from
 them (``scripts/gen_live_doc.py``).
 
-Server -> client: the news every page gets (:mod:`backend.messages`: ``telemetry``,
-``command``, ``vehicle``, ``active_path``, ``link``, ``event``, ``belief``) and the answers
-to a page's own control messages (``auth_ok``, ``auth_refused``, ``queued``, ``error``).
+Server -> client: the news every page gets (:mod:`backend.messages`: ``telemetry`` (a fleet's
+vehicles' in one ``fleet_telemetry``), ``command``, ``vehicle``, ``active_path``, ``link``,
+``event``, ``belief``, ``control``) and the answers to a page's own control messages
+(``auth_ok``, ``auth_refused``, ``queued``, ``error``).
 Client -> server: ``auth``, then ``surface`` or ``send``. Each message is a JSON object whose
 ``type`` names it: the unions below are discriminated by it.
 """
@@ -22,6 +23,7 @@ from backend.messages import (
     CommandMessage,
     ControlMessage,
     EventMessage,
+    FleetTelemetryMessage,
     LinkMessage,
     Message,
     TelemetryMessage,
@@ -108,6 +110,7 @@ class SendMessage(SendIn):
 _Client = AuthMessage | SurfaceMessage | SendMessage
 _Server = (
     TelemetryMessage
+    | FleetTelemetryMessage
     | CommandMessage
     | VehicleMessage
     | ActivePathMessage

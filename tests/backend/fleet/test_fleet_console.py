@@ -30,6 +30,7 @@ from tests.backend.conftest import (
     wait_state,
     wait_until,
 )
+from tests.backend.test_live_messages import validator
 from vehicle_contract.fleet import parse_vehicles
 
 FLEET = parse_vehicles("3")
@@ -197,6 +198,7 @@ def test_the_log_filters_and_exports_by_vehicle(fleet: TestClient) -> None:
 def test_live_news_name_their_vehicle_and_surface_all_answers_every_record(
     fleet: TestClient,
 ) -> None:
+    documented = validator()
     with fleet.websocket_connect("/ws") as ws:
         ws.send_json({"type": "auth", "token": AUTH["Authorization"].split()[1]})
         telemetry: set[str] = set()
@@ -204,8 +206,10 @@ def test_live_news_name_their_vehicle_and_surface_all_answers_every_record(
         ws.send_json({"type": "surface"})  # no vehicle: refused, naming them
         while queued is None or len(telemetry) < 3:
             msg = ws.receive_json()
-            if msg["type"] == "telemetry":
-                telemetry.add(msg["vehicle"])
+            assert msg["type"] != "telemetry", "a fleet's telemetry comes in fleet_telemetry"
+            if msg["type"] == "fleet_telemetry":  # as docs/live.md says
+                assert not [e.message for e in documented.iter_errors(msg)]
+                telemetry.update(t["vehicle"] for t in msg["telemetry"])
             elif msg["type"] == "error":
                 assert msg["field"] == "vehicle" and msg["status"] == 422
                 assert all(n in msg["detail"] for n in NAMES)
