@@ -96,6 +96,12 @@ def test_a_console_that_loses_its_database_refuses_sends_until_it_is_back(
         assert surface.status_code == 503 and "nothing was transmitted" in surface.json()["detail"]
         assert health(ship)["frames"]["dive"]["frames"] == frames
         assert link.frames == []
+        # what reads the log says it cannot, never a 500
+        for path in ("/api/commands", "/api/dives", f"/api/commands/{before.json()['id']}"):
+            r = ship.get(path)
+            assert r.status_code == 503, (path, r.status_code, r.text)
+            assert r.json()["detail"].startswith("the mission log cannot be read right now (")
+            assert r.headers["Retry-After"]
 
         # meanwhile another console writes: this one reads it when the database is back
         own_server.resume()
