@@ -5,7 +5,9 @@ The command line does not know where the vehicle is: the checks plan the command
 surface at the NED origin (said in the output), with the limits and the vehicle profile of the
 settings (``NEMESYS_*``, as the console reads them); a rosbridge vehicle's topics are under the
 settings' ``vehicle_namespace``. A hard violation is refused; a soft one
-needs ``--override``; either way nothing is transmitted unless the policy allows it.
+needs ``--override``; either way nothing is transmitted unless the policy allows it. A station
+whose consoles share a mission log (``NEMESYS_DATABASE_URL``) refuses: there a command goes
+through a console, which checks who is in control of the vehicle and logs it.
 """
 
 from __future__ import annotations
@@ -104,7 +106,15 @@ def cmd_send(args: argparse.Namespace, out: TextIO) -> int:
     from backend.settings import Settings
     from station.transmit import open_transmitter
 
-    namespace = Settings().vehicle_namespace  # the vehicle's topics: /<it>/nemesys/...
+    settings = Settings()
+    if settings.database_url:  # consoles share a log: control of the vehicle is theirs to check
+        raise UsageError(
+            "NEMESYS_DATABASE_URL is set: this station shares its mission log with other "
+            "consoles, and a command goes through a console, where who is in control of the "
+            "vehicle is checked and the command is logged (its page, or POST /api/commands); "
+            "nothing was transmitted"
+        )
+    namespace = settings.vehicle_namespace  # the vehicle's topics: /<it>/nemesys/...
     try:
         transmitter = open_transmitter(args.to, bitrate_bps=args.bitrate, namespace=namespace)
     except ValueError as err:

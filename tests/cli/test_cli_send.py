@@ -351,3 +351,15 @@ def wait_for(probe: Any, timeout_s: float = 10.0) -> None:
     while not probe():
         assert time.monotonic() < deadline, "timed out"
         time.sleep(0.01)
+
+
+def test_send_refuses_where_consoles_share_a_mission_log(
+    capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """With a shared log only a console may send (it checks who is in control, and logs)."""
+    monkeypatch.setenv("NEMESYS_DATABASE_URL", "postgresql://nemesys@127.0.0.1:1/missions")
+    status, out, err = run(["send", *CIRCLE, "--to", "loop://"], capsys)
+    assert status == EXIT_USAGE and out == ""
+    line = one_line(err)
+    assert "NEMESYS_DATABASE_URL is set" in line and "POST /api/commands" in line
+    assert line.endswith("nothing was transmitted")
