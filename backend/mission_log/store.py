@@ -38,17 +38,8 @@ from backend.mission_log.database import LogDatabase, open_database
 from backend.mission_log.errors import LogWriteError
 from backend.mission_log.migrating import migrate
 from backend.mission_log.read_only import ReadOnlyDatabase, read_only_of
-from backend.mission_log.track import (
-    TRACK_BATCH,
-    TRACK_BUFFER_MAX,
-    TRACK_COLUMNS,
-    TRACK_FLUSH_S,
-    TRACK_WRITE_COLUMNS,
-    TrackBuffer,
-    TrackPoint,
-    track_point,
-)
-from vehicle_contract.messages import number
+from backend.mission_log.track import TRACK_BATCH, TRACK_BUFFER_MAX, TRACK_FLUSH_S, TrackBuffer
+from backend.mission_log.track_store import TrackStore
 
 __all__ = [
     "BUSY_TIMEOUT_S",
@@ -76,8 +67,9 @@ def now_iso() -> str:
     return CONSOLE_UTC.now().isoformat(timespec="milliseconds")
 
 
-class MissionLog:
-    """The mission log, in a SQLite file or on PostgreSQL. Thread-safe.
+class MissionLog(TrackStore):
+    """The mission log, in a SQLite file or on PostgreSQL. Thread-safe (its track: the
+    :class:`backend.mission_log.track_store.TrackStore` it is).
 
     ``where``: the SQLite file (or ``":memory:"``), or a ``postgresql://`` URL. Opening
     brings the tables to the newest migration. ``now``: the stamps the log writes (ISO UTC);
@@ -397,71 +389,4 @@ class MissionLog:
             event["data"] = None if event["data"] is None else json.loads(event["data"])
             if event.get("vehicle", "") is None:
                 del event["vehicle"]
-        return out
-
-    # --- track ---------------------------------------------------------------------------
-
-    def add_track(
-        self,
-        dive: int,
-        t_s: float,
-        x_m: float,
-        y_m: float,
-        z_m: float,
-        heading_deg: float,
-        status: Mapping[str, Any] | None = None,
-        vehicle: str | None = None,
-    ) -> None:
-        """Buffer one track point (of a fleet's ``vehicle``) with what ``status`` says then
-        (``track_point``); written
-        (one commit) within :data:`TRACK_FLUSH_S` of the first point buffered, at
-        :data:`TRACK_BATCH` points, on a read and on close. A write that fails is logged and
-        tried again by the timer (never raised)."""
-        position = (t_s, x_m, y_m, z_m, heading_deg)
-        self._track.add(track_point(dive, position, status or {}, self._now(), vehicle))
-
-    def add_status_point(
-        self, dive: int, t_s: float, status: Mapping[str, Any], vehicle: str | None = None
-    ) -> None:
-        """Buffer one track point without a position: what ``status`` says at ``t_s`` when the
-        vehicle sends no pose (its navigation not valid; the heading is the status's, null in
-        the contract's nav fault). Written as :meth:`add_track`'s points are."""
-        position = (t_s, None, None, None, number(status.get("heading_deg")))
-        self._track.add(track_point(dive, position, status, self._now(), vehicle))
-
-    def _write_track(self, points: list[TrackPoint]) -> None:
-        """Commit ``points`` together (the track buffer's write)."""
-        cols = ", ".join(TRACK_WRITE_COLUMNS)
-        marks = ", ".join("?" * len(TRACK_WRITE_COLUMNS))
-        with self.transaction(), self._db.writing():
-            self._db.executemany(f"INSERT INTO track ({cols}) VALUES ({marks})", points)
-
-    def track(self, dive: int, vehicle: str | None = None) -> list[dict[str, float]]:
-        """The dive's positions in time order: ``t_s, x_m, y_m, z_m, heading_deg`` (its points
-        without a position left out; of a fleet's ``vehicle`` only)."""
-        keys = ("t_s", "x_m", "y_m", "z_m", "heading_deg")
-        return [{k: row[k] for k in keys} for row in self.track_rows(dive, vehicle=vehicle)]
-
-    def track_rows(
-        self, dive: int, *, positioned: bool = True, vehicle: str | None = None
-    ) -> list[dict[str, Any]]:
-        """The dive's track points in time order with every column (``active`` parsed,
-        ``nav_valid`` a boolean; an older log's points have null status columns). Only the
-        points with a position unless ``positioned`` is false (the status series); only a
-        fleet's ``vehicle``'s when given."""
-        where = " AND x_m IS NOT NULL" if positioned else ""
-        args: tuple[Any, ...] = (dive,)
-        if vehicle is not None:
-            where, args = where + " AND vehicle = ?", (dive, vehicle)
-        with self._lock:
-            self._track.flush()
-            rows = self._db.execute(
-                f"SELECT {', '.join(TRACK_COLUMNS[1:])} FROM track WHERE dive = ?{where} "
-                "ORDER BY t_s",
-                args,
-            ).fetchall()
-        out = [dict(r) for r in rows]
-        for row in out:
-            row["active"] = None if row["active"] is None else json.loads(row["active"])
-            row["nav_valid"] = None if row["nav_valid"] is None else bool(row["nav_valid"])
         return out
