@@ -1,17 +1,16 @@
 // Who is in control of each vehicle (issue 24): consoles sharing one mission log (PostgreSQL)
 // hand control of a vehicle to one another by explicit actions, and only the console in control
-// sends to it (others get 409 naming who is). The header's "control" fact says who is, in a
-// word; the Control panel shows, per vehicle, the console and operator in control, since when,
-// the epoch and whether the owner allows a takeover, and offers exactly the actions that make
-// sense for this console: Request control (another console, or nobody, has it), Release and
-// "allow takeover" (this console has it), Grant / Refuse (a request waits for this console's
-// answer), Take over (the owner allows it). Each is POST /api/control with the operator token;
-// its answer, or the refusal's own words, is shown under the rows. Every word of the rows is
-// the console's (GET /api/control, then the /ws "control" messages; the last logged change of
-// each vehicle from the /ws "event" messages); the page learns which console it is from
-// /api/session (console.name). On a SQLite log (one console, always in control: no send is
-// ever refused for control) only the header says so and the panel stays hidden. Surface is
-// never gated here: any console's Surface is accepted.
+// sends to it (others get 409 naming who is). The Control panel shows, per vehicle, the console
+// and operator in control, since when, the epoch and whether the owner allows a takeover, and
+// offers exactly the actions that make sense for this console: Request control (another
+// console, or nobody, has it), Release and "allow takeover" (this console has it), Grant /
+// Refuse (a request waits for this console's answer), Take over (the owner allows it). Each is
+// POST /api/control with the operator token; its answer, or the refusal's own words, is shown
+// under the rows. Every word of the rows is the console's (GET /api/control, then the /ws
+// "control" messages; the last logged change of each vehicle from the /ws "event" messages);
+// the page learns which console it is from /api/session (console.name). On a SQLite log (one
+// console, always in control: no send is ever refused for control) the panel is one line that
+// says so, without buttons. Surface is never gated here: any console's Surface is accepted.
 
 import { api } from "./api.js";
 import { currentLink, onLinkChange } from "./link.js";
@@ -106,50 +105,20 @@ function askedOfMe(c) {
   return c.request && mine(c) && c.request.console !== me.name ? c.request : null;
 }
 
-// ---- the header's word ----
-
-function renderFact() {
-  const box = $("control-fact");
-  const node = $("control-state");
-  if (!box || !node) return;
-  if (me && !me.shared_log) {
-    box.hidden = false;
-    node.textContent = "this console (the only one)";
-    node.title = `this console (${me.name}) keeps its mission log in a SQLite file that no other ` +
-      "console shares: it is always in control of its vehicles, and no send is refused for control";
-    node.className = "";
-    return;
-  }
-  if (!me || !views.size) {
-    box.hidden = true;
-    return;
-  }
-  box.hidden = false;
-  const all = [...views.values()];
-  const asked = all.filter(askedOfMe).length;
-  let text;
-  if (all.length === 1) {
-    const c = all[0];
-    text = mine(c) ? "this console" : owner(c) ? `console ${owner(c)}` : "nobody";
-  } else {
-    text = `this console: ${all.filter(mine).length} of ${all.length} vehicles`;
-  }
-  if (asked) text += ` · ${asked} request${asked === 1 ? "" : "s"} waiting`;
-  if (!reachable || !logReached) text += " (as last read)";
-  node.textContent = text;
-  node.title = "who is in control (the Control panel: request, grant, refuse, release, take over)";
-  node.className = asked ? "warn-text" : "";
-}
-
 // ---- the panel ----
 
 function render() {
-  renderFact();
   const panel = $("control-panel");
   if (!panel) return;
-  const shared = Boolean(me && me.shared_log);
-  panel.hidden = !shared;
-  if (!shared) return;
+  const solo = Boolean(me && !me.shared_log);
+  panel.hidden = !me; // not known yet: nothing claimed
+  panel.classList.toggle("solo", solo);
+  $("control-title").hidden = solo;
+  $("control-solo").hidden = !solo;
+  if (solo) {
+    renderSolo();
+    return;
+  }
   const stale = $("control-stale");
   const when = readAt ? ` (read at ${clock(readAt.toISOString())})` : "";
   const why = !reachable
@@ -161,6 +130,17 @@ function render() {
   const rows = [...views.values()].map(row);
   $("control-rows").replaceChildren(...rows);
   applyAuth(canWrite(), $("control-rows"));
+}
+
+/** A SQLite log: one line, no buttons (the actions would change nothing a send depends on). */
+function renderSolo() {
+  const node = $("control-solo");
+  node.replaceChildren(el("strong", {}, "Control: "), "this console, the only one on its mission log (SQLite)");
+  node.title = `this console (${me.name}) keeps its mission log in a SQLite file that no other ` +
+    "console shares: it is always in control of its vehicles, and no send is refused for control";
+  $("control-stale").hidden = true;
+  $("control-rows").replaceChildren();
+  $("control-result").hidden = true;
 }
 
 function row(c) {

@@ -1,14 +1,14 @@
-"""The Control panel and the header's "control" word (issue 24, item 3; frontend/control.js):
-in Chromium, a ship's console (training, holding the transmitter, in control from its start)
-and a shore's (a relay) sharing one real PostgreSQL database, each with its page at 1280x800.
+"""The Control panel (issue 24, item 3; frontend/control.js): in Chromium, a ship's console
+(training, holding the transmitter, in control from its start) and a shore's (a relay)
+sharing one real PostgreSQL database, each with its page at 1280x800.
 
 The shore clicks Request control; the ship's page shows the waiting request with Grant and
 Refuse and clicks Grant; both pages then show the shore in control; the ship's Send is refused
 with the console's 409 naming the shore, shown in the confirm dialog; the shore clicks
 Release, and both show nobody. Then the refuse path (the ship takes control at once, the shore
 asks, the ship refuses: the shore's page shows the logged refusal and offers Request again) and
-a takeover the owner allowed. On a SQLite log (one console) the header says plainly that this
-console is the only one and the panel stays hidden. Every wait is on a condition."""
+a takeover the owner allowed. On a SQLite log (one console) the panel is one line saying
+plainly that this console is the only one, without buttons. Every wait is on a condition."""
 
 from __future__ import annotations
 
@@ -81,19 +81,16 @@ def shore(tmp_path: Path, shared_url: str, ship: Console) -> Iterator[Console]:
 
 def expect_owner(ship_page: Page, shore_page: Page, owner: str | None) -> None:
     """Both pages name ``owner`` ("ship", "shore" or None: nobody) in control, each from its
-    own side, in the panel and in the header."""
+    own side."""
     names = {"ship": "alice", "shore": "bob"}
     for page, here in ((ship_page, "ship"), (shore_page, "shore")):
-        row, header = page.get_by_test_id(f"control-who-{V}"), page.get_by_test_id("control-state")
+        row = page.get_by_test_id(f"control-who-{V}")
         if owner is None:
             expect(row).to_have_text("nobody")
-            expect(header).to_have_text("nobody")
         elif owner == here:
             expect(row).to_have_text(f"this console, {owner} (operator {names[owner]})")
-            expect(header).to_have_text("this console")
         else:
             expect(row).to_have_text(f"console {owner} (operator {names[owner]})")
-            expect(header).to_have_text(f"console {owner}")
 
 
 def expect_buttons(page: Page, *wanted: str) -> None:
@@ -141,9 +138,6 @@ def test_request_grant_send_refused_release_refuse_and_takeover_across_two_pages
         expect_buttons(shore_page)  # asked: nothing to do but wait
         asked = ship_page.get_by_test_id(f"control-asked-{V}")
         expect(asked).to_contain_text("console shore (operator bob) asks for control")
-        expect(ship_page.get_by_test_id("control-state")).to_have_text(
-            "this console · 1 request waiting"
-        )
         expect_buttons(ship_page, "grant", "refuse", "release", "takeover-allowed")
 
         ship_page.get_by_test_id(f"control-grant-{V}").click()
@@ -237,12 +231,15 @@ def test_a_single_console_on_sqlite_says_plainly_it_is_in_control(
     console: Console, watched: Watched
 ) -> None:
     page = open_sized(watched, console)
-    state = page.get_by_test_id("control-state")
-    expect(state).to_have_text("this console (the only one)")
+    solo = page.get_by_test_id("control-solo")
+    expect(solo).to_have_text("Control: this console, the only one on its mission log (SQLite)")
     name = console.get("/api/session")["console"]["name"]
-    title = state.get_attribute("title") or ""
-    assert f"this console ({name})" in title and "SQLite" in title, title
+    title = solo.get_attribute("title") or ""
+    assert f"this console ({name})" in title and "always in control" in title, title
     assert "no send is refused for control" in title, title
-    expect(page.get_by_test_id("control-panel")).to_be_hidden()
-    expect(page.get_by_test_id("control-fact")).to_be_visible()
+    panel = page.get_by_test_id("control-panel")
+    expect(panel).to_be_visible()
+    expect(panel.locator("button, input")).to_have_count(0)  # nothing to do: no clutter
+    box = panel.bounding_box()
+    assert box is not None and box["height"] < 60, f"one line, not a panel of rows: {box}"
     watched.assert_clean()
