@@ -44,12 +44,12 @@ export function initControl() {
 export async function loadControl() {
   try {
     const list = await api("/api/control");
-    resolved("control");
+    resolved("control state"); // not "control": link.js's message row line of a change
     views.clear();
     for (const c of Array.isArray(list) ? list : []) if (c && c.vehicle) views.set(c.vehicle, c);
     readAt = new Date();
   } catch (err) {
-    notifyError("control", err);
+    notifyError("control state", err);
   }
   render();
 }
@@ -93,7 +93,7 @@ function mine(c) {
   return Boolean(me && owner(c) === me.name);
 }
 
-/** "this console (operator alice)", "console shore (operator bob)" or "nobody". */
+/** "this console, ship (operator alice)", "console shore (operator bob)" or "nobody". */
 function whoText(console, operator) {
   if (!console) return "nobody";
   const op = operator ? ` (operator ${operator})` : "";
