@@ -5,6 +5,7 @@ import { initAssumptions, setAssumptionsMode } from "./assumptions.js";
 import { initAuthoring, current } from "./authoring.js";
 import { forgetBelief, renderBelief, setBeliefReachable } from "./belief.js";
 import { initCommands, loadCommands, upsertCommand, renderEcho } from "./commands.js";
+import { controlEvent, controlNews, initControl, loadControl, setControlReachable } from "./control.js";
 import { fleetOn, forSelected, loadFleet, vehiclePath } from "./fleet.js";
 import { initFleetChart } from "./fleet-chart.js";
 import { fleetNews, fleetVehicle, initFleetRows } from "./fleet-rows.js";
@@ -195,6 +196,7 @@ async function main() {
   initTraining();
   initAssumptions();
   initLinkTest();
+  initControl(); // who is in control of each vehicle: the header's word and the Control panel
   startAgeTicker();
   renderSession(null);
 
@@ -234,10 +236,14 @@ async function main() {
       fleetNews("link", m);
       if (forSelected(m)) renderLink(m.link);
     },
-    control: (m) => renderControl(m.control), // who is in control (consoles sharing a log)
+    control: (m) => { // who is in control (consoles sharing a log): the message row, the panel
+      renderControl(m.control);
+      controlNews(m.control);
+    },
     event: (m) => { // a mission log event (script.js: a run stopped; a relayed command refused)
       emit("log_event", m.event);
       renderLogEvent(m.event);
+      controlEvent(m.event);
     },
     belief: (m) => {
       fleetNews("belief", m);
@@ -249,10 +255,12 @@ async function main() {
     open: () => {
       setConsoleReachable(true);
       setBeliefReachable(true);
+      setControlReachable(true);
       fleetNews("open", {});
       if (opened) {
         loadCommands();
         loadVehicle();
+        loadControl();
         if (!session) loadSession().then((again) => again && loadTraining(again.mode));
       }
       opened = true;
@@ -261,6 +269,7 @@ async function main() {
     close: () => {
       setConsoleReachable(false);
       setBeliefReachable(false);
+      setControlReachable(false);
       fleetNews("close", {});
     },
   });

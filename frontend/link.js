@@ -138,13 +138,14 @@ export function renderLogEvent(e) {
 }
 
 /** Who is in control of a vehicle changed (consoles sharing one mission log: a websocket
- *  "control" message), said in the message row, with a request waiting for the owner. */
+ *  "control" message), said in the message row, with a request waiting for the owner (its
+ *  Grant and Refuse buttons are in the Control panel: control.js). */
 export function renderControl(c) {
   if (!c || typeof c !== "object" || c.implicit) return;
   const who = c.console ? `console ${c.console} (operator ${c.operator})` : "nobody";
   let text = `control of ${c.vehicle}: ${who}`;
   const r = c.request;
-  if (r) text += `; console ${r.console} (operator ${r.operator}) asks for it: grant or refuse (POST /api/control)`;
+  if (r) text += `; console ${r.console} (operator ${r.operator}) asks for it: grant or refuse`;
   notify(text, r ? "warn" : "info", "control");
 }
 

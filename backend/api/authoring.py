@@ -20,7 +20,12 @@ from backend.api.schemas import (
     ValidationErrorResponse,
     errors,
 )
-from backend.api.schemas.authoring import LinkCapability, SessionLimits, VehicleProfileDoc
+from backend.api.schemas.authoring import (
+    LinkCapability,
+    SessionConsole,
+    SessionLimits,
+    VehicleProfileDoc,
+)
 from backend.api.schemas.chart import DatumDoc
 from backend.api.view import ViewHeader
 from backend.authoring import operations
@@ -57,6 +62,16 @@ def session(request: Request, console: ConsoleDep) -> Session:
         link=_link_capability(console),
         profile=VehicleProfileDoc.model_validate(asdict(console.profile)),
         datum=None if d is None else DatumDoc(lat_deg=d.lat_deg, lon_deg=d.lon_deg),
+        console=_console(console),
+    )
+
+
+def _console(console: ConsoleDep) -> SessionConsole | None:
+    if console.control is None:
+        return None
+    desk = console.control.desk
+    return SessionConsole(
+        name=desk.console, shared_log=desk.shared, control_timeout_s=desk.timeout_s
     )
 
 

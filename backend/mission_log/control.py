@@ -201,7 +201,12 @@ def decide(
         )
     if action in ("request", "takeover") and r.console == me:
         after = replace(r, takeover_allowed=allowed)
-        return _Decided(action, "unchanged", by, r, after, f"{who} already has control of {v}")
+        detail = f"{who} already has control of {v}"
+        if allowed != r.takeover_allowed:  # the owner's choice changed: said as such
+            detail = (
+                f"{who}, in control of {v}, {'now' if allowed else 'no longer'} allows a takeover"
+            )
+        return _Decided(action, "unchanged", by, r, after, detail)
     if action == "request":
         after = replace(r, request_console=me, request_operator=by.operator, request_s=now)
         detail = f"{who} asks {owner} for control of {v}"

@@ -51,6 +51,25 @@ class VehicleProfileDoc(BaseModel):
     )
 
 
+class SessionConsole(BaseModel):
+    """This console among those that may share its mission log (who is in control of each
+    vehicle: ``/api/control``)."""
+
+    name: str = Field(
+        description="this console's name (NEMESYS_CONSOLE_NAME, else the one kept beside its log)"
+    )
+    shared_log: bool = Field(
+        description="true: the mission log is a PostgreSQL database other consoles may share; "
+        "control of each vehicle is explicit (request, grant, refuse, release, takeover) and "
+        "only the console in control sends. false: a SQLite file, this console alone, always "
+        "in control (no send is refused for control)"
+    )
+    control_timeout_s: float = Field(
+        description="a control is released this long after its console's last heartbeat (s; "
+        "a shared log only)"
+    )
+
+
 class Session(BaseModel):
     """Mode, target, where the 3D view is, and whether the caller holds the operator token."""
 
@@ -70,6 +89,9 @@ class Session(BaseModel):
     profile: VehicleProfileDoc
     datum: DatumDoc | None = Field(
         description="the NED origin's lat/lon (deg, WGS84); null: none yet (metres only)"
+    )
+    console: SessionConsole | None = Field(
+        description="this console and its mission log; null: it is starting"
     )
 
 

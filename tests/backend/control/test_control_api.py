@@ -36,6 +36,33 @@ def test_on_sqlite_the_one_console_is_in_control_and_its_actions_are_logged(
     assert sum("control" in e["text"] for e in events) == 2, events
 
 
+def test_the_session_names_this_console_and_its_log(client: TestClient) -> None:
+    """What a page needs to offer only the actions that make sense here: its console's name
+    (the control views name consoles) and whether the log is shared at all."""
+    s = client.get("/api/session").json()["console"]
+    (view,) = client.get("/api/control").json()
+    assert s["name"] == view["console"] and s["shared_log"] is False
+    assert s["control_timeout_s"] > 0
+
+
+def test_the_owner_changes_whether_a_takeover_is_allowed_and_it_is_logged(
+    client: TestClient,
+) -> None:
+    assert act(client, "request").json()["control"]["takeover_allowed"] is False
+    allowed = act(client, "request", takeover_allowed=True)
+    assert allowed.json()["outcome"] == "unchanged", allowed.text
+    assert allowed.json()["control"]["takeover_allowed"] is True
+    assert act(client, "request").json()["control"]["takeover_allowed"] is True  # kept
+    assert (
+        act(client, "request", takeover_allowed=False).json()["control"]["takeover_allowed"]
+        is False
+    )
+    details = [e["text"] for e in client.get("/api/dives/1/timeline").json()["events"]]
+    said = [d for d in details if "allows a takeover" in d]
+    assert len(said) == 2 and "now allows" in said[0] and "no longer allows" in said[1], details
+    assert sum("already has control" in d for d in details) == 1, details
+
+
 def test_control_actions_are_checked(client: TestClient) -> None:
     r = client.post("/api/control", json={"action": "request"})
     assert r.status_code == 401

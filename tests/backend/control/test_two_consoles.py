@@ -83,6 +83,8 @@ def test_the_shore_asks_the_ship_grants_and_each_sees_the_other_live(
     ship, shore = consoles(shared_url, tmp_path, make_client, make_light_client, link)
     assert owner(ship) == ("ship", "alice")  # the first console took control at start
     assert owner(shore) == ("ship", "alice")
+    session = shore.get("/api/session").json()["console"]
+    assert session == {"name": "shore", "shared_log": True, "control_timeout_s": TIMEOUT_S}
     ship_page, shore_page = Page(ship), Page(shore)
     try:
         # not in control: 409 naming who is, nothing written or sent
