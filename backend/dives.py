@@ -88,6 +88,16 @@ class Dives:
         self._started()
         return self.current
 
+    def follow(self, dive: int) -> None:
+        """Another console's dive becomes this one's current dive, nothing written: a console
+        without a transmitter follows the dive the console that hears the vehicle records its
+        track into (:mod:`backend.relay.telemetry`)."""
+        self.current = dive
+        self._last_track.clear()
+        self.start_t_s = None
+        logger.info("dive %d followed (another console records the vehicle into it)", dive)
+        self._started()
+
     def _started(self) -> None:
         for hub in [*([] if self.hub is None else [self.hub]), *self.vehicle_hubs]:
             hub.dive = self.current

@@ -159,6 +159,12 @@ class TelemetryMessage(Message):
         description="the dive the console records them in (null: none yet); a page's plots "
         "start again when it changes",
     )
+    relayed_via: str | None = Field(
+        default=None,
+        description="a console without a transmitter (target relay): the console whose track "
+        "points in the shared mission log these were read from (at most one a second; "
+        "``age_s`` since that console heard them); absent: heard over this console's own link",
+    )
     vehicle: str | None = _vehicle_field()
 
 

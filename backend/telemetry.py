@@ -77,6 +77,10 @@ class TelemetryHub:
         #: the last 30 s), kept apart from :attr:`status`.
         self.recent_acks: list[Any] = []
         self.last_message_s: float | None = None  # monotonic arrival time
+        #: The console whose track points in the shared mission log the pose and status were
+        #: read from (a console without a transmitter: :mod:`backend.relay.telemetry`), named
+        #: in every telemetry; None: heard over this console's own link.
+        self.relayed_via: str | None = None
         #: Telemetry numbers that came unknown (null / NaN / missing) since the dive began,
         #: and the arrival times of the recent ones.
         self.unknown_values = 0
@@ -120,6 +124,24 @@ class TelemetryHub:
         self._count_unknown(unknown)
         self._touch()
 
+    def set_relayed(
+        self, pose: Pose | None, status: dict[str, Any], age_s: float, via: str
+    ) -> None:
+        """A pose (None: the point held no position) and status that console ``via`` heard
+        ``age_s`` ago and wrote into the shared mission log: kept with arrival times that long
+        ago, so the telemetry's age, its staleness and the belief's fixes are the vehicle's
+        true ones, never the time this console read them. Unknown numbers are not counted:
+        the track does not keep every number a status holds (nor a pose's roll)."""
+        at = time.monotonic() - max(age_s, 0.0)
+        self.relayed_via = via
+        if pose is not None:
+            self.pose = pose
+            if position_known(pose):
+                self.known_pose, self.known_pose_s = pose, at
+        self.status, self.status_s = status, at
+        self.last_message_s = at
+        self._version += 1
+
     def reset(self) -> None:
         """A new dive: no pose, no counts."""
         self.pose = self.known_pose = self.known_pose_s = None
@@ -142,7 +164,9 @@ class TelemetryHub:
         self._version += 1
 
     def telemetry(self) -> TelemetryMessage:
-        named = {} if self.vehicle is None else {"vehicle": self.vehicle}
+        named: dict[str, Any] = {} if self.vehicle is None else {"vehicle": self.vehicle}
+        if self.relayed_via is not None:
+            named["relayed_via"] = self.relayed_via
         return TelemetryMessage.model_validate(
             {
                 "pose": self.pose,

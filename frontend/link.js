@@ -234,7 +234,10 @@ function renderRow() {
     const recent = framesText(l.frames && l.frames.recent);
     if (recent) facts.push(`recent frames: ${recent}`);
     if (l.acknowledges && l.last_ack_age_s !== undefined) facts.push(`last ack ${age(later(l.last_ack_age_s))}`);
-    if (l.telemetry && l.last_telemetry_age_s !== undefined) facts.push(`telemetry ${age(later(l.last_telemetry_age_s))}`);
+    if (l.telemetry && l.last_telemetry_age_s !== undefined) {
+      const via = l.relay && l.relay.telemetry_via ? ` via ${l.relay.telemetry_via}'s log` : "";
+      facts.push(`telemetry${via} ${age(later(l.last_telemetry_age_s))}`);
+    }
     if (l.ber != null) facts.push(`BER ${berText(l.ber)}${berSourceText(l)}`);
     if (Number.isFinite(l.copies)) facts.push(`${l.copies} cop${l.copies === 1 ? "y" : "ies"} per command`);
     if (l.unknown_values) facts.push(`${l.unknown_values} unknown telemetry values`);

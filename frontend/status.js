@@ -52,7 +52,9 @@ export function renderTelemetry(msg) {
     setRadio(s.link);
   }
   if (msg.link && typeof msg.link === "object") renderLink(msg.link);
-  if (msg.age_s !== undefined && msg.age_s !== null) ageAt = { age: Number(msg.age_s) || 0, received: performance.now() };
+  // a console without a transmitter (target relay): read from that console's track in the log
+  const via = msg.relayed_via || (msg.link && msg.link.relay && msg.link.relay.telemetry_via) || null;
+  if (msg.age_s !== undefined && msg.age_s !== null) ageAt = { age: Number(msg.age_s) || 0, received: performance.now(), via };
   tickAge();
 }
 
@@ -74,9 +76,10 @@ export function tickAge() {
   }
   const age = ageAt.age + (performance.now() - ageAt.received) / 1000;
   const old = age > STALE_S;
-  set("status-age", `${age.toFixed(1)} s ago`, old ? "warn-text" : "");
+  const via = ageAt.via ? ` (telemetry via ${ageAt.via}'s log)` : "";
+  set("status-age", `${age.toFixed(1)} s ago${via}`, old ? "warn-text" : "");
   stale.hidden = !old;
-  if (old) stale.textContent = `Stale: no vehicle message for ${num(age, 0)} s (last known values shown).`;
+  if (old) stale.textContent = `Stale: no vehicle message${via} for ${num(age, 0)} s (last known values shown).`;
 }
 
 export function startAgeTicker() {

@@ -212,6 +212,9 @@ def link_health_of(
         unknown_recent=hub.unknown_recent(UNKNOWN_VALUES_RECENT_S),
         datum_problem=datum_problem,
     )
+    if relay is not None:  # this console hears nothing itself: its telemetry is the log's
+        source = f"no telemetry via {relay.telemetry_via or relay.via or 'the shared'}'s log"
+        problems = [p.replace("no telemetry", source, 1) for p in problems]
     if relay is not None and relay.fresh and relay.problems:
         named = [f"{relay.via}: {p}" for p in relay.problems]
         worst: Level = "red" if "red" in (level, relay.level) else "amber"

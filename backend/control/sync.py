@@ -6,8 +6,10 @@ another console committed (a command written, an event added, a vehicle's contro
 :class:`LogSync` re-reads the row over the log's own connection and publishes it on the hub,
 the messages a page already knows: ``command`` (the record, every state change), ``event``,
 ``control``; a row of the relay's outbox written or decided goes to :attr:`LogSync.on_outbox`
-(:mod:`backend.relay`). A command of another console that is on its way supersedes this console's
-commands still going out (the one rule, across consoles: a Surface from the ship stops the
+(:mod:`backend.relay`), and a batch of track points (its dive) to :attr:`LogSync.on_track`
+(a console without a transmitter shows the vehicle from them: :mod:`backend.relay.telemetry`).
+A command of another console that is on its way supersedes this console's commands still
+going out (the one rule, across consoles: a Surface from the ship stops the
 shore's repeated copies). The delay is the commit's notification and one read: well under a
 second on one network (``bench control-sync``).
 
@@ -73,6 +75,10 @@ class LogSync:
         #: Called with the id of an outbox row another console wrote or decided (the relay's
         #: worker or sender: :mod:`backend.relay.runtime` sets it).
         self.on_outbox: Callable[[int], None] = lambda _row_id: None
+        #: Called with the dive of track points another console committed and the console
+        #: that wrote them (None: not named), or ``(None, None)`` when the database is back
+        #: (read the newest again): :mod:`backend.relay.runtime` sets it on a relay console.
+        self.on_track: Callable[[int | None, str | None], None] = lambda _dive, _by: None
         self.listener = Listener(
             url, desk.console, on_notice=self.notice, on_lost=self.lost, on_back=self.back
         )
@@ -111,6 +117,8 @@ class LogSync:
                 self.desk.told(n.key)
             elif n.table == "outbox" and isinstance(n.key, int):
                 self.on_outbox(n.key)
+            elif n.table == "track" and isinstance(n.key, int):
+                self.on_track(n.key, n.console)
         except LogWriteError as err:  # the listener finds the loss itself, if it is one
             logger.warning("%s %s not read again: %s", n.table, n.key, err)
 
@@ -190,6 +198,7 @@ class LogSync:
         self._events(after=self._last_event)
         for vehicle in self.desk.vehicles:
             self.desk.told(vehicle)
+        self.on_track(None, None)
 
     def _newest_event(self) -> int:
         with self.log.connection() as db, db.writing():

@@ -1,9 +1,10 @@
 """Other consoles' writes, as PostgreSQL tells them: a dedicated connection that ``LISTEN``\\ s.
 
 Migration 0007's triggers ``pg_notify`` the key of every command written, event added and
-control changed, from inside the writing transaction: the notification is delivered only if
-it commits, in commit order. Its payload is the key alone (``{"table": "commands", "id": 12,
-"console": "ship"}``); the listening console re-reads the row over its own log connection.
+control changed (0008's an outbox row, 0010's a batch of track points: its dive), from inside
+the writing transaction: the notification is delivered only if it commits, in commit order.
+Its payload is the key alone (``{"table": "commands", "id": 12, "console": "ship"}``); the
+listening console re-reads the row over its own log connection.
 
 psycopg 3 delivers notifications on an autocommit connection, and waiting for them blocks
 that connection's other statements (psycopg #340): so :class:`Listener` has a connection of

@@ -96,8 +96,37 @@ class TrackStore:
                 "ORDER BY t_s",
                 args,
             ).fetchall()
-        out = [dict(r) for r in rows]
-        for row in out:
-            row["active"] = None if row["active"] is None else json.loads(row["active"])
-            row["nav_valid"] = None if row["nav_valid"] is None else bool(row["nav_valid"])
-        return out
+        return [_parsed(dict(r)) for r in rows]
+
+    def newest_track_point(self, dive: int | None = None) -> tuple[dict[str, Any] | None, float]:
+        """The newest point of ``dive`` by the vehicle's clock (None: of the newest dive with a
+        track), with every column as :meth:`track_rows` gives them and its ``dive`` and
+        ``vehicle`` (None: no point), and the database's clock (s since 1970): what a console
+        without a transmitter shows of the vehicle another console hears
+        (:mod:`backend.relay.telemetry`). Read on the index ``(dive, t_s)``: one row, not
+        the dive's.
+
+        Raises:
+            LogWriteError: the log cannot be read (a database out of reach).
+        """
+        with self._lock, self._db.writing():
+            db = self._db
+            now_s = float(db.execute(f"SELECT {db.now_s_sql} AS now_s").fetchone()["now_s"])
+            if dive is None:
+                got = db.execute("SELECT MAX(dive) AS dive FROM track").fetchone()
+                if got["dive"] is None:
+                    return None, now_s
+                dive = int(got["dive"])
+            row = db.execute(
+                f"SELECT {', '.join(TRACK_WRITE_COLUMNS)} FROM track WHERE dive = ? "
+                "ORDER BY t_s DESC LIMIT 1",
+                (dive,),
+            ).fetchone()
+        return (None if row is None else _parsed(dict(row))), now_s
+
+
+def _parsed(row: dict[str, Any]) -> dict[str, Any]:
+    """A track row with ``active`` parsed and ``nav_valid`` a boolean (null: not said)."""
+    row["active"] = None if row["active"] is None else json.loads(row["active"])
+    row["nav_valid"] = None if row["nav_valid"] is None else bool(row["nav_valid"])
+    return row

@@ -124,6 +124,7 @@ def view_of(found: list[outbox.Transmitter], now_s: float) -> RelayView:
         capability = Capability(str(h.get("capability")))
     except ValueError:
         capability = None
+    datum = datum_of(h.get("datum"))
     return RelayView(
         via=t.console,
         target=t.target,
@@ -133,4 +134,16 @@ def view_of(found: list[outbox.Transmitter], now_s: float) -> RelayView:
         capability=capability,
         level=level if level in ("green", "amber", "red") else None,
         problems=[str(p) for p in problems] if isinstance(problems, list) else [],
+        datum_lat_deg=None if datum is None else datum[0],
+        datum_lon_deg=None if datum is None else datum[1],
     )
+
+
+def datum_of(doc: object) -> tuple[float, float] | None:
+    """(lat, lon) of the datum a transmitting console's health carries (None: none said)."""
+    if not isinstance(doc, dict):
+        return None
+    lat, lon = doc.get("lat_deg"), doc.get("lon_deg")
+    if not all(isinstance(v, int | float) and not isinstance(v, bool) for v in (lat, lon)):
+        return None
+    return float(lat or 0.0), float(lon or 0.0)

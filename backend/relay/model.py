@@ -35,3 +35,16 @@ class RelayView(BaseModel):
         default=None, description="its link's health level"
     )
     problems: list[str] = Field(default_factory=list, description="its link's problems")
+    datum_lat_deg: float | None = Field(
+        default=None,
+        description="its datum's latitude (deg): the origin of the positions it writes into the "
+        "track (null: it has none)",
+    )
+    datum_lon_deg: float | None = Field(default=None, description="its datum's longitude (deg)")
+    telemetry_via: str | None = Field(
+        default=None,
+        description="the console whose track points in the shared mission log this console's "
+        "pose and status are read from (at most one a second; ``last_telemetry_age_s`` since "
+        "that console heard the vehicle); null: none read yet. This console never hears the "
+        "vehicle itself",
+    )

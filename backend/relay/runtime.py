@@ -5,7 +5,8 @@ is made, and stops before the control.
 * a console without a transmitter (``NEMESYS_TARGET=relay``, always on PostgreSQL: the
   settings refuse it otherwise): its :class:`RelayLink` reads the transmitting consoles from
   the log, its :class:`RelaySender` is the command service's relay, woken by the outbox rows'
-  notifications;
+  notifications, and its :class:`RelayedTelemetry` shows the vehicle from the track points
+  the transmitting console writes, woken by their notifications;
 * a console with a transmitter on a shared log: its :class:`RelayWorker` takes the outbox
   through the command service, woken by the notifications, sweeping every second;
 * on a SQLite log (one console): nothing.
@@ -23,6 +24,7 @@ from backend.relay.link import RelayLink
 from backend.relay.model import RelayView
 from backend.relay.ship import RelayWorker
 from backend.relay.shore import RelaySender
+from backend.relay.telemetry import RelayedTelemetry
 
 if TYPE_CHECKING:
     from backend.console import Console
@@ -37,6 +39,7 @@ class RelayRuntime:
         self._rt = rt
         self.sender: RelaySender | None = None
         self.worker: RelayWorker | None = None
+        self.telemetry: RelayedTelemetry | None = None
         self._task: asyncio.Task[None] | None = None
         control, log = rt.control, rt.log
         assert control is not None and log is not None
@@ -46,6 +49,7 @@ class RelayRuntime:
             self.sender = RelaySender(
                 log, control.console, rt.settings.operator, rt.settings.relay_wait_s
             )
+            self.telemetry = RelayedTelemetry(rt, self.link.view)
 
     @property
     def shared(self) -> bool:
@@ -60,6 +64,9 @@ class RelayRuntime:
         if self.sender is not None:
             sync.on_outbox = self.sender.notice
             logger.info("no transmitter here: commands relayed through the shared log")
+            if self.telemetry is not None:
+                sync.on_track = self.telemetry.notice
+                self.telemetry.notice(None, None)  # where the vehicle last was, if known
             return
         assert rt.log is not None and rt.commands is not None and rt.dives is not None
         self.worker = RelayWorker(
@@ -80,11 +87,16 @@ class RelayRuntime:
     def _health(self) -> dict[str, Any]:
         h = self._rt.link_health()
         keys = ("connected", "capability", "acknowledges", "level", "problems")
-        return h.model_dump(include=set(keys), mode="json")
+        d = self._rt.datum  # the origin of the track's positions, for the relaying consoles
+        datum = None if d is None else {"lat_deg": d.lat_deg, "lon_deg": d.lon_deg}
+        return {**h.model_dump(include=set(keys), mode="json"), "datum": datum}
 
     def view(self) -> RelayView | None:
         """What the page shows of the relay (None: this console holds a transmitter)."""
-        return None if self.link is None else self.link.view()
+        if self.link is None:
+            return None
+        via = None if self.telemetry is None else self.telemetry.via
+        return self.link.view().model_copy(update={"telemetry_via": via})
 
     async def stop(self) -> None:
         if self._task is not None:

@@ -1,0 +1,124 @@
+"""What a console without a transmitter (``NEMESYS_TARGET=relay``: the shore) shows of the
+vehicle: the track points the console that hears it (the ship) writes into the shared log.
+
+The shore hears nothing of the vehicle itself. The ship keeps a track point a second, each
+with the vehicle's status then and stamped ``at`` on its arrival (:mod:`backend.dives`,
+:mod:`backend.mission_log.track`), and commits them in batches within half a second;
+migration 0010 tells every other console of a batch, naming its dive. :class:`RelayedTelemetry`
+then reads the dive's newest point (:meth:`backend.mission_log.store.MissionLog.
+newest_track_point`) and hands it to this console's hub as the pose and status
+(:meth:`backend.telemetry.TelemetryHub.set_relayed`): the page's chart, 3D view, plots,
+vehicle panel and the belief show it as they show a vehicle heard directly, with these
+differences, said and never hidden:
+
+* its age is the point's true age: the database's clock now less the ship's arrival stamp
+  (the ship's and the database's clocks are taken to agree: NTP, or one machine), and from
+  then on it grows on this console's clock; when the ship stops writing, the age grows and
+  the usual staleness rules apply (``no telemetry for N s``, amber then red);
+* every telemetry names the console it came through (``relayed_via``) and the link's health
+  says so (``link.relay.telemetry_via``; the page: "telemetry via ship's log, N s old");
+* at most a point a second (the track's interval), and of the status only what the track
+  keeps (depth, heading, speed, battery, mode, the active command, the navigation's
+  validity and age); a point without a position (navigation not valid) changes the status
+  only, as on the ship.
+
+Read when a batch is told, once at start (the newest dive's newest point: a shore started
+mid-mission shows where the vehicle last was, with its age) and when the database is back.
+The dive the points are in becomes this console's current dive (:meth:`backend.dives.Dives.
+follow`): its pages' plots follow it, and what this console records (a change of control)
+goes into it. The ship's datum (in its beat: :mod:`backend.relay.ship`) is taken when this
+console has none, so that the positions have a latitude and longitude.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from datetime import datetime
+from typing import TYPE_CHECKING, Any
+
+from backend.chart.geo import Datum
+from backend.chart.reach import with_lat_lon
+from backend.mission_log.store import LogWriteError
+from backend.relay.model import RelayView
+from vehicle_contract.messages import STATUS_NUMBERS
+
+if TYPE_CHECKING:
+    from backend.console import Console
+
+logger = logging.getLogger("backend.relay")
+
+#: The status keys a track point keeps besides the numbers, taken when it says them.
+STATUS_EXTRAS = ("mode", "active", "nav_valid", "nav_age_s")
+
+
+class RelayedTelemetry:
+    """The vehicle as console ``rt`` (a relay) reads it from the shared log (the module's
+    doc); ``view``: the relay as last read (the transmitting console's name and datum)."""
+
+    def __init__(self, rt: Console, view: Callable[[], RelayView]) -> None:
+        self._rt = rt
+        self._view = view
+        #: The console the last point came through (None: none read yet).
+        self.via: str | None = None
+        #: The last point fed: (dive, its arrival stamp, its time on the vehicle's clock).
+        self._last: tuple[int, str, float] | None = None
+        #: Points fed to the hub (for the tests).
+        self.fed = 0
+
+    def notice(self, dive: int | None, by: str | None) -> None:
+        """Track points of ``dive`` were committed by console ``by`` (None, None: read the
+        newest dive's again): feed the newest point if it is newer than the last fed. A log
+        that cannot be read is said and left (the next batch, or the database back, reads
+        again)."""
+        log = self._rt.log
+        if log is None:
+            return
+        try:
+            row, now_s = log.newest_track_point(dive)
+        except LogWriteError as err:
+            logger.warning("the relayed track not read: %s", err)
+            return
+        if row is None:
+            return
+        key = (int(row["dive"]), str(row["at"]), float(row["t_s"]))
+        if self._last is not None and key[0] == self._last[0] and key[1:] <= self._last[1:]:
+            return
+        view = self._view()
+        self.via = by or self.via or view.via or "another console"
+        self._follow(key[0], view)
+        self._last = key
+        self._feed(row, max(0.0, now_s - datetime.fromisoformat(key[1]).timestamp()))
+
+    def _follow(self, dive: int, view: RelayView) -> None:
+        """The ship's dive becomes this console's (a new one: the hub and 3D view start
+        again); its datum is taken when this console has none."""
+        rt = self._rt
+        if rt.datum is None and view.datum_lat_deg is not None and view.datum_lon_deg is not None:
+            rt.datum = Datum(view.datum_lat_deg, view.datum_lon_deg)
+            logger.info("the datum of console %r taken: %s", view.via, rt.datum)
+        if rt.dives is None or rt.dives.current == dive:
+            return
+        rt.dives.follow(dive)
+        rt.hub.reset()
+        if rt.viewer is not None:
+            rt.viewer.reset_track()
+        logger.info("following dive %d, as console %r writes it", dive, self.via)
+
+    def _feed(self, row: dict[str, Any], age_s: float) -> None:
+        rt = self._rt
+        status: dict[str, Any] = {key: row[key] for key in STATUS_NUMBERS}
+        status.update({k: row[k] for k in STATUS_EXTRAS if row[k] is not None})
+        pose = None
+        x, y, z, heading = row["x_m"], row["y_m"], row["z_m"], row["heading_deg"]
+        if x is not None:
+            pose = with_lat_lon(
+                {"t_s": row["t_s"], "x_m": x, "y_m": y, "z_m": z, "heading_deg": heading},
+                rt.datum,
+            )
+            pose["roll_deg"] = None  # not in the track
+        assert self.via is not None
+        rt.hub.set_relayed(pose, status, age_s, self.via)
+        self.fed += 1
+        if rt.viewer is not None and pose is not None and None not in (y, z, heading):
+            rt.viewer.update_pose(row["t_s"], x, y, z, 0.0, heading)
