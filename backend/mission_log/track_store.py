@@ -110,6 +110,7 @@ class TrackStore:
             LogWriteError: the log cannot be read (a database out of reach).
         """
         with self._lock, self._db.writing():
+            self._track.flush()  # this console's own points too, as any read of the track
             db = self._db
             now_s = float(db.execute(f"SELECT {db.now_s_sql} AS now_s").fetchone()["now_s"])
             if dive is None:
