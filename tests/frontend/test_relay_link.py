@@ -15,8 +15,7 @@ import pytest
 from playwright.sync_api import expect
 
 from bench._server import ConsoleProcess, start_console
-from tests.backend.conftest import pg_server
-from tests.backend.conftest import wait_until
+from tests.backend.conftest import pg_server, wait_until
 from tests.frontend.conftest import TOKEN, Console, Watched
 from tests.frontend.pagekit import POLL_MS, open_sized
 from tests.pg_server import PgServer
