@@ -1,15 +1,17 @@
-"""Shared dependencies: the running console, the operator token check, and the bounds of
-integers that reach the mission log (SQLite's INTEGER is signed 64-bit)."""
+"""Shared dependencies: the running console, the operator token check, the vehicle a read
+names, and the bounds of integers that reach the mission log (SQLite's INTEGER is signed
+64-bit)."""
 
 from __future__ import annotations
 
 import secrets
 from typing import Annotated
 
-from fastapi import Depends, HTTPException, Path, Request, status
+from fastapi import Depends, HTTPException, Path, Query, Request, status
+from fastapi.exceptions import RequestValidationError
 from pydantic import Field
 
-from backend.commands.service import CommandService
+from backend.commands.service import CommandService, VehicleRefused
 from backend.console import Console
 
 
@@ -30,6 +32,32 @@ async def get_service(console: ConsoleDep) -> CommandService:
 
 
 ServiceDep = Annotated[CommandService, Depends(get_service)]
+
+
+async def get_query_vehicle(
+    console: ConsoleDep,
+    vehicle: Annotated[
+        str | None,
+        Query(
+            max_length=32,
+            description="with a fleet: the vehicle it is of (required: one of the fleet's "
+            "names); without one: absent, or the single vehicle's name, nemesys",
+        ),
+    ] = None,
+) -> str | None:
+    """The vehicle a read's ``vehicle`` query names, checked as every request's vehicle is
+    (:meth:`backend.console.Console.checked_vehicle`): a fleet's name, None without a fleet.
+    A fleet's read that names none, or a name the console has not, is a 422 at
+    ``["query", "vehicle"]`` naming the vehicles (a fleet's reads never mix vehicles)."""
+    try:
+        return console.checked_vehicle(vehicle)
+    except VehicleRefused as err:
+        where = {"type": "vehicle", "loc": ("query", "vehicle"), "msg": err.message}
+        raise RequestValidationError([{**where, "input": vehicle}]) from None
+
+
+#: A read of one vehicle's: its name, checked (None: the single vehicle).
+QueryVehicleDep = Annotated[str | None, Depends(get_query_vehicle)]
 
 #: The largest integer SQLite stores (signed 64-bit); beyond it a query would raise
 #: ``OverflowError`` (a 500): every integer that reaches the log is bounded to 422 first.

@@ -10,7 +10,7 @@ from typing import Annotated, Any, Final
 from fastapi import APIRouter, HTTPException, Query
 from fastapi.responses import StreamingResponse
 
-from backend.api.deps import SQLITE_INT_MAX, ConsoleDep, IdPath
+from backend.api.deps import SQLITE_INT_MAX, ConsoleDep, IdPath, QueryVehicleDep
 from backend.api.schemas import errors
 from backend.api.schemas.dives import DiveSeries, DiveTimeline
 from backend.bag.export import stream_mcap
@@ -33,26 +33,38 @@ DiveQ = Annotated[
 LimitQ = Annotated[int, Query(ge=2, le=86_400, description="most samples returned (2 to 86400)")]
 
 
-@router.get("/series", response_model=DiveSeries, responses=errors((404, 422)))
+@router.get(
+    "/series",
+    response_model=DiveSeries,
+    response_model_exclude_unset=True,
+    responses=errors((404, 422)),
+)
 def series(
-    console: ConsoleDep, dive: DiveQ = None, limit: LimitQ = DEFAULT_MAX_POINTS
+    console: ConsoleDep,
+    vehicle: QueryVehicleDep,
+    dive: DiveQ = None,
+    limit: LimitQ = DEFAULT_MAX_POINTS,
 ) -> DiveSeries:
     """The dive's status series (depth, commanded depth, battery, speed, heading, mode,
     navigation validity) a sample a second of the vehicle's clock, from its start: the plots
     load it, then append the live telemetry. Without ``dive``, the current dive (``dive: null``
-    and no samples before one starts)."""
+    and no samples before one starts). With a fleet, of the ``vehicle`` named (required: 422
+    naming the fleet's vehicles without it or for a name it has not); its ``vehicle`` says
+    which."""
     log = console.log
     assert log is not None
     chosen = console.dive if dive is None else dive
     if chosen is None:
-        return DiveSeries.model_validate(
-            {"dive": None, "started_at": None, **dive_series([], limit)}
-        )
-    row = log.dive(chosen)
-    if row is None:
-        raise HTTPException(404, f"no dive {chosen}")
-    doc = dive_series(log.track_rows(chosen, positioned=False), limit)
-    return DiveSeries.model_validate({"dive": chosen, "started_at": row["started_at"], **doc})
+        doc = {"dive": None, "started_at": None, **dive_series([], limit)}
+    else:
+        row = log.dive(chosen)
+        if row is None:
+            raise HTTPException(404, f"no dive {chosen}")
+        rows = log.track_rows(chosen, positioned=False, vehicle=vehicle)
+        doc = {"dive": chosen, "started_at": row["started_at"], **dive_series(rows, limit)}
+    if vehicle is not None:  # a fleet's (the single vehicle's answer is as it always was)
+        doc["vehicle"] = vehicle
+    return DiveSeries.model_validate(doc)
 
 
 def timeline_of(console: Console, dive: int) -> dict[str, Any]:

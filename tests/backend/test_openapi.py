@@ -366,6 +366,26 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     assert ok == {(m, normal(p)) for m, p, _ in c.operations()}
 
 
+@pytest.mark.training
+def test_a_fleets_answers_validate(make_client: MakeClient) -> None:
+    """Training with a fleet of three: the answers that are then each vehicle's validate,
+    and the reads of one vehicle name it."""
+    client = make_client(vehicles="3")
+    c = contract(client)
+    wait_until(lambda: all(v["pose"] for v in c.call("GET", "/api/vehicles").json()))
+    training = c.call("GET", "/api/training").json()
+    assert [v["vehicle"] for v in training["vehicle_channel_stats"]] == ["auv1", "auv2", "auv3"]
+    c.call("GET", "/api/vehicles/auv2")
+    c.call("GET", "/api/vehicle")
+    series = c.call("GET", "/api/series?vehicle=auv2").json()
+    assert series["vehicle"] == "auv2" and series["dive"] == 1
+    missing = c.call("GET", "/api/series")
+    assert missing.status_code == 422
+    assert missing.json()["detail"][0]["loc"] == ["query", "vehicle"]
+    c.call("GET", "/api/dives/1?vehicle=auv3")
+    c.call("GET", "/api/transmitter")
+
+
 def test_a_real_vehicles_answers_validate(make_client: MakeClient) -> None:
     """A vehicle console (no simulator): nothing known of the vehicle yet, no training."""
     c = contract(make_client(target="loop://"))
@@ -625,6 +645,7 @@ def test_the_models_drop_nothing_the_handlers_return(client: TestClient) -> None
     same_keys(on["channel"], asdict(sim.channel.config), "channel")
     same_keys(on["current"], asdict(sim.current.config), "current")
     same_keys(on["channel_stats"], asdict(sim.channel.stats), "channel_stats")
+    assert "vehicle_channel_stats" not in on  # a fleet's only
     vehicle = c.call("GET", "/api/vehicle").json()
     same_keys(vehicle["pose"], console.hub.pose, "pose")
     same_keys(vehicle["status"], console.hub.status, "status")

@@ -382,3 +382,68 @@ def test_the_airtime_budget_and_a_repeating_surface_are_shown_as_the_console_say
         )
         assert [r["vehicle"] for r in retried] == ["auv5"]
         w.assert_clean()
+
+
+def plots_shown(page: Page) -> dict[str, Any]:
+    """What the plots hold (``t0``, ``t``: s since the dive's start, ``depth``), their titles,
+    and the vehicle they say they are of."""
+    got: dict[str, Any] = page.evaluate(
+        """() => {
+            const box = document.getElementById('plots');
+            const titles = [...box.querySelectorAll('.u-title')].map((n) => n.textContent);
+            return { ...box.samplesShown(), titles, vehicle: box.dataset.vehicle ?? null };
+        }"""
+    )
+    return got
+
+
+def test_the_plots_are_the_selected_vehicles_named_in_their_titles(
+    fleet_console: FleetConsole, browser: Browser
+) -> None:
+    """auv3 goes to 6, 7 and 8 m (a second of its clock apart) while the others hold at 2 m:
+    the plots of auv1 (selected first) hold auv1's series alone; selecting auv3 loads its
+    series (``GET /api/series?vehicle=auv3``), and the plots hold it, titled "Depth: auv3".
+    Every series the page asked for named its vehicle."""
+    console = fleet_console
+    auv3 = console.link.vehicles["auv3"]
+    assert isinstance(auv3, AgentLink)
+
+    def logged() -> int:
+        return len(console.get("/api/series?vehicle=auv3")["t_s"])
+
+    for k in (1, 2, 3):  # each reported within REPORT_S and logged as a track point
+        auv3.state = VehicleState(0.0, 40.0, 5.0 + k, 0.0, 0.0, 100.0 + k)
+        wait_until(lambda: logged() == 1 + k, what=f"auv3's track point at {100 + k} s")  # noqa: B023
+    own = {n: console.get(f"/api/series?vehicle={n}") for n in ("auv1", "auv3")}
+    # (a point keeps the status heard before its pose: the depth said a second earlier)
+    assert own["auv3"]["depth_m"] == [2.0, 2.0, 6.0, 7.0] and own["auv3"]["t_s"] == [0, 1, 2, 3]
+    with sized_page(browser, 1280, 800) as w:
+        page = open_fleet_page(w, console)
+        page.wait_for_function(
+            "() => document.querySelector('#plots.plots-ready') !== null"
+            " && document.getElementById('plots').dataset.vehicle === 'auv1'"
+            " && Number(document.getElementById('plots').dataset.logged) >= 1",
+            polling=POLL_MS,
+        )
+        shown = plots_shown(page)
+        assert shown["titles"] == ["Depth: auv1", "Battery: auv1", "Speed: auv1"]
+        assert shown["depth"] == own["auv1"]["depth_m"] == [2.0]  # none of auv3's depths
+        assert shown["t0"] == own["auv1"]["start_t_s"]
+
+        with page.expect_response(
+            lambda r: "/api/series?" in r.url and "vehicle=auv3" in r.url
+        ) as answer:
+            page.get_by_test_id("vehicle-select").select_option("auv3")
+        assert answer.value.status == 200
+        page.wait_for_function(
+            "() => Number(document.getElementById('plots').dataset.logged) === 4",
+            polling=POLL_MS,
+        )
+        shown = plots_shown(page)
+        assert shown["titles"] == ["Depth: auv3", "Battery: auv3", "Speed: auv3"]
+        assert shown["vehicle"] == "auv3"
+        assert shown["t0"] == own["auv3"]["start_t_s"]
+        assert (shown["t"], shown["depth"]) == ([0, 1, 2, 3], [2.0, 2.0, 6.0, 7.0])
+        asked = [url for method, url in w.requests if "/api/series" in url]
+        assert asked and all(re.search(r"[?&]vehicle=auv\d", url) for url in asked), asked
+        w.assert_clean()

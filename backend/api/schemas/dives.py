@@ -11,9 +11,15 @@ from pydantic import BaseModel, Field
 class DiveSeries(BaseModel):
     """The current (or a chosen) dive's telemetry as the log keeps it: a sample a second of
     the vehicle's clock, on the dive's own clock (s since its start), oldest first. Columns
-    of equal length; a value the vehicle did not report is null."""
+    of equal length; a value the vehicle did not report is null. With a fleet, one
+    vehicle's (``vehicle``)."""
 
     dive: int | None = Field(description="the dive; null: none has started yet (no samples)")
+    vehicle: str | None = Field(
+        None,
+        description="the fleet's vehicle whose series it is (absent without a fleet: the one "
+        "vehicle's)",
+    )
     started_at: str | None = Field(description="when the dive started (station clock, ISO 8601)")
     start_t_s: float | None = Field(
         description="the vehicle's clock at the dive's start, its first sample (s); "
