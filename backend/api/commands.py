@@ -10,7 +10,14 @@ from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
-from backend.api.deps import ConsoleDep, IdField, IdPath, OperatorDep, ServiceDep
+from backend.api.deps import (
+    ConsoleDep,
+    IdField,
+    IdPath,
+    OperatorDep,
+    ServiceDep,
+    filter_vehicle,
+)
 from backend.api.models import LinkIn, RetryIn, SendIn, SurfaceIn
 from backend.api.schemas import (
     OPERATOR,
@@ -157,7 +164,8 @@ FilterQ = Annotated[LogFilter, Query()]
 def _rows(console: ConsoleDep, filters: LogFilter, limit: int) -> list[dict[str, Any]]:
     """The log's rows as written (the exports hand them on as they are)."""
     assert console.log is not None
-    return console.log.commands(**filters.model_dump(), limit=limit)
+    vehicle = filter_vehicle(console, filters.vehicle, ("query", "vehicle"))
+    return console.log.commands(**{**filters.model_dump(), "vehicle": vehicle}, limit=limit)
 
 
 @router.get(
@@ -265,7 +273,7 @@ def dive(
 ) -> DiveDetail:
     """A dive's track (1 Hz) and its commands, for replay (of a fleet's ``vehicle``: its
     track points and records only)."""
-    return _dive(console, dive, vehicle)
+    return _dive(console, dive, filter_vehicle(console, vehicle, ("query", "vehicle")))
 
 
 @router.post(

@@ -59,6 +59,22 @@ async def get_query_vehicle(
 #: A read of one vehicle's: its name, checked (None: the single vehicle).
 QueryVehicleDep = Annotated[str | None, Depends(get_query_vehicle)]
 
+
+def filter_vehicle(console: Console, vehicle: str | None, where: tuple[str, ...]) -> str | None:
+    """A log filter's ``vehicle`` (at ``where`` in the request), checked: absent is every
+    vehicle's rows (None); a name must be one of the console's vehicles (422 at ``where``
+    naming them, never an empty answer for a misspelt name). Without a fleet the single
+    vehicle's name stands for all rows (None)."""
+    if vehicle is None:
+        return None
+    try:
+        return console.checked_vehicle(vehicle)
+    except VehicleRefused as err:
+        raise RequestValidationError(
+            [{"type": "vehicle", "loc": where, "msg": err.message, "input": vehicle}]
+        ) from None
+
+
 #: The largest integer SQLite stores (signed 64-bit); beyond it a query would raise
 #: ``OverflowError`` (a 500): every integer that reaches the log is bounded to 422 first.
 SQLITE_INT_MAX = (1 << 63) - 1

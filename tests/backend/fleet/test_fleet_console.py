@@ -193,6 +193,13 @@ def test_the_log_filters_and_exports_by_vehicle(fleet: TestClient) -> None:
     console.log.flush_track()
     points = console.log.track_rows(dive, vehicle="auv2")
     assert points and all(p["y_m"] == 20.0 for p in points)
+    # a name the fleet has not is a 422 naming its vehicles, never an empty answer
+    for path in ("/api/commands", "/api/log.csv", "/api/log.json", f"/api/dives/{dive}"):
+        r = fleet.get(path, params={"vehicle": "auv9"})
+        assert r.status_code == 422, (path, r.text)
+        (problem,) = r.json()["detail"]
+        assert problem["loc"] == ["query", "vehicle"]
+        assert all(name in problem["msg"] for name in NAMES), problem["msg"]
 
 
 def test_live_news_name_their_vehicle_and_surface_all_answers_every_record(
