@@ -61,7 +61,7 @@ from backend.foxglove_live.vehicles import (
     MAX_TRACK_POSES,
     Trail,
     ViewedVehicle,
-    fleet_label,
+    belief_label,
     frame_of,
 )
 from backend.messages import (
@@ -269,7 +269,7 @@ class Publisher:
             self.ch.typed[v.topic(BELIEF_FIX)].log(fix, log_time=ns)
         entity = v.entity("believed")
         if v.name is not None:  # a fleet's: always, named, with its address and command
-            label = fleet_label(v.name, v.address, belief)
+            label = belief_label(v.name, v.address, belief)
             sigma = None if p.source == "telemetry" else p.sigma_m
         elif p.source == "telemetry":  # the fresh fix is the pose itself: no ring
             if v.belief_drawn:

@@ -4,7 +4,7 @@ one, unnamed, on the channels and entity ids the view has always used (``/vehicl
 ``active``). With a fleet (``NEMESYS_VEHICLES``) each vehicle's own channels are under
 ``/<name>`` (:func:`backend.foxglove_live.channels.vehicle_topic`), its entities on the shared
 scene channels are ``<name>/...``, its frame is ``<name>`` (:func:`frame_of`) and its believed
-position is labelled with what the console's own 3D view says of it (:func:`fleet_label`).
+position is labelled with what the console's own 3D view says of it (:func:`belief_label`).
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ from typing import Final
 from foxglove.messages import FrameTransform, FrameTransforms, Pose
 from pydantic import BaseModel
 
+from backend.belief.label import fleet_label
 from backend.belief.model import Belief
 from backend.dives import TRACK_INTERVAL_S
 from backend.foxglove_live.channels import Spec, vehicle_topic
@@ -25,7 +26,6 @@ from backend.foxglove_live.frames import FRAME, attitude, stamp, vector
 MAX_TRACK_POSES: Final = 3600
 
 #: Where a believed position comes from, in the label's words (the console's 3D view's).
-_BASIS: Final = {"telemetry": "fix", "dead_reckoning": "dead-reckoned", "assumed": "assumed"}
 
 
 class Trail:
@@ -100,33 +100,12 @@ def frame_of(
     return FrameTransforms(transforms=[transform])
 
 
-def _p_text(p: float) -> str:
-    """A probability as the page says it: never 100 % unless it is 1."""
-    if p >= 1.0:
-        return "100 %"
-    for digits in range(2, 7):
-        text = f"{100.0 * p:.{digits}f}"
-        if float(text) < 100.0:
-            return f"{text.rstrip('0').rstrip('.')} %"
-    return "> 99.9999 %"
-
-
-def fleet_label(name: str, address: int | None, belief: Belief) -> str:
-    """Three short lines, as the console's 3D view labels a fleet's vehicle
-    (``backend.viewer.fleet.fleet_label``; not imported: it loads viser)::
-
-        auv2 (address 2)
-        circle p 99.99 %
-        x 0.0 y 20.0 m, depth 2.0 m (fix)
-    """
+def belief_label(name: str, address: int | None, belief: Belief) -> str:
+    """The label the console's 3D view gives a fleet's vehicle
+    (:func:`backend.belief.label.fleet_label`), from its belief."""
     c, p = belief.command, belief.position
-    what = "unknown" if c.kind == "unknown" else c.pattern or "holding"
-    basis = _BASIS.get(p.source, p.source)
-    if p.source != "telemetry" and p.sigma_m is not None:
-        basis += f" +-{p.sigma_m:.1f} m"
-    where = f"x {p.x_m:.1f} y {p.y_m:.1f} m, depth {p.z_m:.1f} m"
-    named = name if address is None else f"{name} (address {address})"
-    return f"{named}\n{what} p {_p_text(c.p)}\n{where} ({basis})"
+    where = (p.x_m, p.y_m, p.z_m)
+    return fleet_label(name, address, (c.kind, c.pattern, c.p), where, p.source, p.sigma_m)
 
 
-__all__ = ["MAX_TRACK_POSES", "Trail", "ViewedVehicle", "fleet_label", "frame_of"]
+__all__ = ["MAX_TRACK_POSES", "Trail", "ViewedVehicle", "belief_label", "frame_of"]
