@@ -259,6 +259,8 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
         expect(shown).to_have_attribute("data-command", re.compile(r'"vehicle":"auv3"'))
         expect(send).to_contain_text("Send to auv3")
         expect(page.locator("#status-title")).to_have_text("Vehicle status: auv3")
+        # the frame shown is auv3's addressed one
+        expect(page.get_by_test_id("frame-size")).to_have_text("(108 bits, to address 3)")
         wait_preview(page, "circle")
         expect(page.get_by_test_id("confirm-dialog")).to_be_hidden()
         # auv3 holds 40 m east of the origin: the preview starts there
