@@ -127,7 +127,15 @@ class RetryIn(Strict):
 
 
 class DecodeIn(Strict):
-    frame: Annotated[str, Field(min_length=1, max_length=200, description="100 bits or 25 hex")]
+    frame: Annotated[
+        str,
+        Field(
+            min_length=1,
+            max_length=200,
+            description="100 bits or 25 hex digits; a fleet's addressed frame: 108 bits or 27 "
+            "hex digits",
+        ),
+    ]
 
 
 class ChannelIn(Strict):

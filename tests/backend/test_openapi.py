@@ -30,7 +30,7 @@ from starlette.requests import Request
 from backend.api import authoring, commands, scripts, training
 from backend.api.commands import LogFilter
 from backend.mission_log.store import LogWriteError
-from codec import describe_dictionary
+from codec import describe_dictionary, encode_frame
 from tests.backend.api.test_survey import SURVEY
 from tests.backend.chart.test_tiles import tile_dir
 from tests.backend.conftest import (
@@ -314,6 +314,9 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     c.call("POST", "/api/survey/preview", json=SURVEY)
     frame = c.call("POST", "/api/encode", json=body).json()["hex"]
     c.call("POST", "/api/decode", json={"frame": frame})
+    # a fleet's addressed frame: with its address (no vehicle of this console has it)
+    addressed = encode_frame("circle", CIRCLE, address=2).frame.hex
+    assert c.call("POST", "/api/decode", json={"frame": addressed}).json()["address"] == 2
     sent = c.call("POST", "/api/commands", json=body, headers=AUTH).json()
     wait_state(client, sent["id"], ("acknowledged",))
     # a preview against the active pattern: with its diff

@@ -26,6 +26,7 @@ import httpx
 import pytest
 import viser
 from playwright.sync_api import Browser, Page, Request, expect
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from backend.app import create_app
 from backend.console import Console as Runtime
@@ -155,6 +156,48 @@ def posted(path: str, vehicle: str | None = None) -> Any:
     return match
 
 
+#: The vehicles' markers (their dots) and labels not wholly inside the chart's box, as
+#: ``"auv1 label"``; ``null`` until every vehicle has its marker.
+FLEET_OUTSIDE_CHART = """
+(count) => {
+  const chart = document.getElementById('chart').getBoundingClientRect();
+  const markers = [...document.querySelectorAll('#chart .chart-fleet')];
+  if (markers.length !== count) return null;
+  const out = [];
+  for (const m of markers) {
+    for (const [what, node] of [['marker', m], ['label', m.querySelector('.chart-fleet-label')]]) {
+      const r = node.getBoundingClientRect();
+      if (r.width === 0 || r.left < chart.left - 0.5 || r.right > chart.right + 0.5
+          || r.top < chart.top - 0.5 || r.bottom > chart.bottom + 0.5) {
+        out.push(`${m.dataset.vehicle} ${what}`);
+      }
+    }
+  }
+  return out;
+}
+"""
+
+
+def fleet_outside_chart(page: Page) -> list[str] | None:
+    """What of the fleet's markers and labels the chart's box does not hold (None: not every
+    vehicle is on the chart yet)."""
+    out: list[str] | None = page.evaluate(FLEET_OUTSIDE_CHART, len(NAMES))
+    return out
+
+
+def assert_fleet_inside_chart(page: Page, what: str) -> None:
+    """Every vehicle's marker and label lies wholly inside the chart's box (waits for the
+    chart to settle: a fit's moves end, then the labels are placed)."""
+    with contextlib.suppress(PlaywrightTimeout):  # the assertion below says what is outside
+        page.wait_for_function(
+            f"(n) => {{ const out = ({FLEET_OUTSIDE_CHART})(n); return out && !out.length; }}",
+            arg=len(NAMES),
+            polling=POLL_MS,
+            timeout=10_000,
+        )
+    assert fleet_outside_chart(page) == [], f"outside the chart's box ({what})"
+
+
 def no_overlaps(page: Page, testids: list[str], what: str) -> None:
     boxes = {t: place(page, t) for t in testids}
     for i, one in enumerate(testids):
@@ -216,6 +259,8 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
         expect(shown).to_have_attribute("data-command", re.compile(r'"vehicle":"auv3"'))
         expect(send).to_contain_text("Send to auv3")
         expect(page.locator("#status-title")).to_have_text("Vehicle status: auv3")
+        # the frame shown is auv3's addressed one
+        expect(page.get_by_test_id("frame-size")).to_have_text("(108 bits, to address 3)")
         wait_preview(page, "circle")
         expect(page.get_by_test_id("confirm-dialog")).to_be_hidden()
         # auv3 holds 40 m east of the origin: the preview starts there
@@ -269,6 +314,8 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
             expect(marker).to_contain_text(f"{v.name} · {v.address}")
             expect(marker).to_contain_text(re.compile(r"(holding|circle) p 100 %"))
         expect(page.get_by_test_id("chart-fleet-auv3")).to_contain_text("circle")
+        # the preview's fit holds every vehicle, and no label is cut by the chart's edge
+        assert_fleet_inside_chart(page, "the preview's fit, auv3 selected")
         labels = wait_until(lambda: len(fleet_labels(console)) == 5 and fleet_labels(console))
         assert sorted(labels) == NAMES
         wait_until(lambda: "\ncircle p 100 %\n" in fleet_labels(console)["auv3"])
