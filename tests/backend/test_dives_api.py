@@ -276,22 +276,17 @@ def test_a_fleets_replay_is_the_named_vehicles_alone(make_light_client: MakeLigh
     assert at["vehicle"] == "auv3" and at["position"]["y_m"] == 40.0, at
     r = client.post(f"/api/dives/{dive}/replay", params={"vehicle": "auv2"}, headers=AUTH)
     assert r.json() == {"dive": dive, "vehicle": "auv2", "track_points": len(rows), "commands": 1}
-    for where, call in (
-        (["query", "vehicle"], lambda v: client.get(f"/api/dives/{dive}/timeline", params=v)),
-        (
-            ["body", "vehicle"],
-            lambda v: client.put("/api/replay/at", json={"dive": dive, "t_s": 0.0, **v}),
-        ),
-        (
-            ["query", "vehicle"],
-            lambda v: client.post(f"/api/dives/{dive}/replay", params=v, headers=AUTH),
-        ),
-    ):
-        for named in ({}, {"vehicle": "auv9"}, {"vehicle": "all"}):
-            r = call(named)
+    for named in ({}, {"vehicle": "auv9"}, {"vehicle": "all"}):
+        asked = (
+            client.get(f"/api/dives/{dive}/timeline", params=named),
+            client.put("/api/replay/at", json={"dive": dive, "t_s": 0.0, **named}),
+            client.post(f"/api/dives/{dive}/replay", params=named, headers=AUTH),
+        )
+        for r, where in zip(asked, ("query", "body", "query"), strict=True):
             assert r.status_code == 422, r.text
             (item,) = r.json()["detail"]
-            assert item["loc"] == where and all(n in item["msg"] for n in NAMES), item
+            assert item["loc"] == [where, "vehicle"], item
+            assert all(n in item["msg"] for n in NAMES), item
 
 
 def test_the_single_vehicles_replay_may_name_it_and_no_other(client: TestClient) -> None:
