@@ -49,15 +49,23 @@ async def get_query_vehicle(
     (:meth:`backend.console.Console.checked_vehicle`): a fleet's name, None without a fleet.
     A fleet's read that names none, or a name the console has not, is a 422 at
     ``["query", "vehicle"]`` naming the vehicles (a fleet's reads never mix vehicles)."""
-    try:
-        return console.checked_vehicle(vehicle)
-    except VehicleRefused as err:
-        where = {"type": "vehicle", "loc": ("query", "vehicle"), "msg": err.message}
-        raise RequestValidationError([{**where, "input": vehicle}]) from None
+    return required_vehicle(console, vehicle, ("query", "vehicle"))
 
 
 #: A read of one vehicle's: its name, checked (None: the single vehicle).
 QueryVehicleDep = Annotated[str | None, Depends(get_query_vehicle)]
+
+
+def required_vehicle(console: Console, vehicle: str | None, where: tuple[str, ...]) -> str | None:
+    """The vehicle a request names at ``where`` (a query's or a body's ``vehicle``), checked:
+    with a fleet one of its names (none, or another: a 422 at ``where`` naming them); None
+    without a fleet (absent or its one name, nemesys)."""
+    try:
+        return console.checked_vehicle(vehicle)
+    except VehicleRefused as err:
+        raise RequestValidationError(
+            [{"type": "vehicle", "loc": where, "msg": err.message, "input": vehicle}]
+        ) from None
 
 
 def filter_vehicle(console: Console, vehicle: str | None, where: tuple[str, ...]) -> str | None:

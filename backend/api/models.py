@@ -181,6 +181,8 @@ class ReplayAtIn(Strict):
     dive: Annotated[int, Field(ge=1, le=SQLITE_INT_MAX)]
     #: Seconds on the dive's clock (from its start; within its timeline's range).
     t_s: Annotated[float, Field(ge=-86_400.0, le=864_000.0)]
+    #: The fleet's vehicle replayed (required with a fleet: its own timeline's clock).
+    vehicle: VehicleIn = None
 
 
 class LinkIn(Strict):

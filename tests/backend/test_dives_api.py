@@ -19,7 +19,15 @@ from planner import VehicleState
 from station.link import Capability
 from station.link_fleet import FleetLink
 from tests.agent_link import HOLDING, AgentLink, agent_fleet
-from tests.backend.conftest import MakeLightClient, console_of, send, wait_state, wait_until
+from tests.backend.conftest import (
+    AUTH,
+    CIRCLE,
+    MakeLightClient,
+    console_of,
+    send,
+    wait_state,
+    wait_until,
+)
 from tests.backend.log_backend import LogBackend
 from vehicle_contract.fleet import parse_vehicles
 
@@ -230,6 +238,72 @@ def test_the_slider_gives_the_vehicle_at_a_time_and_refuses_one_outside_the_dive
     assert client.put("/api/replay/at", json={"dive": 4, "t_s": 0}).status_code == 404
     for bad in ({"dive": 1, "t_s": "1"}, {"dive": 1}, {"dive": True, "t_s": 0}):
         assert client.put("/api/replay/at", json=bad).status_code == 422, bad
+
+
+def test_a_fleets_replay_is_the_named_vehicles_alone(make_light_client: MakeLightClient) -> None:
+    """Three vehicles in one dive, each on its own lane: the timeline, the slider and the 3D
+    replay of one are its samples, its commands, its events and those naming no vehicle,
+    never another's; a fleet's replay names its vehicle (422 naming them otherwise)."""
+    link: FleetLink = agent_fleet(FLEET)
+    client = make_light_client(link, vehicles="3")  # type: ignore[arg-type]
+    wait_until(lambda: all(v["pose"] for v in client.get("/api/vehicles").json()))
+    console = console_of(client)
+    log, dive = console.log, console.dive
+    assert log is not None and dive is not None
+    body = {"pattern": "circle", "params": CIRCLE, "vehicle": "auv2"}
+    sent = client.post("/api/commands", json=body, headers=AUTH).json()
+    wait_state(client, sent["id"], ("acknowledged",))
+    start = max(r["t_s"] for r in log.track_rows(dive, positioned=False))
+    for k in range(1, 4):
+        for i, name in enumerate(NAMES):
+            log.add_track(dive, start + k, 2.0 * k, 20.0 * i, 2.0, 0.0, {}, vehicle=name)
+    log.add_event(dive, "echo_mismatch", "auv1 runs another", vehicle="auv1")
+    log.add_event(dive, "datum", "datum set")
+    doc = client.get(f"/api/dives/{dive}/timeline", params={"vehicle": "auv2"}).json()
+    assert doc["vehicle"] == "auv2"
+    rows = log.track_rows(dive, vehicle="auv2")
+    assert len(doc["samples"]) == len(rows) >= 4  # its first pose's point, then the three
+    assert {s["y_m"] for s in doc["samples"][-3:]} == {20.0}  # auv2's lane only
+    assert [c["id"] for c in doc["commands"]] == [sent["id"]]
+    texts = [e["text"] for e in doc["events"]]
+    assert "datum set" in texts and "auv1 runs another" not in texts
+    assert {e["command_id"] for e in doc["events"]} == {sent["id"], None}
+    other = client.get(f"/api/dives/{dive}/timeline", params={"vehicle": "auv1"}).json()
+    assert other["commands"] == [] and "auv1 runs another" in [e["text"] for e in other["events"]]
+    assert {s["y_m"] for s in other["samples"]} == {0.0}
+    t_s = doc["samples"][-1]["t_s"]
+    at = client.put("/api/replay/at", json={"dive": dive, "t_s": t_s, "vehicle": "auv3"}).json()
+    assert at["vehicle"] == "auv3" and at["position"]["y_m"] == 40.0, at
+    r = client.post(f"/api/dives/{dive}/replay", params={"vehicle": "auv2"}, headers=AUTH)
+    assert r.json() == {"dive": dive, "vehicle": "auv2", "track_points": len(rows), "commands": 1}
+    for named in ({}, {"vehicle": "auv9"}, {"vehicle": "all"}):
+        asked = (
+            client.get(f"/api/dives/{dive}/timeline", params=named),
+            client.put("/api/replay/at", json={"dive": dive, "t_s": 0.0, **named}),
+            client.post(f"/api/dives/{dive}/replay", params=named, headers=AUTH),
+        )
+        for r, where in zip(asked, ("query", "body", "query"), strict=True):
+            assert r.status_code == 422, r.text
+            (item,) = r.json()["detail"]
+            assert item["loc"] == [where, "vehicle"], item
+            assert all(n in item["msg"] for n in NAMES), item
+
+
+def test_the_single_vehicles_replay_may_name_it_and_no_other(client: TestClient) -> None:
+    plain = client.get("/api/dives/1/timeline").json()
+    assert "vehicle" not in plain
+    assert client.get("/api/dives/1/timeline", params={"vehicle": "nemesys"}).json() == plain
+    at = client.put("/api/replay/at", json={"dive": 1, "t_s": 0.0}).json()
+    assert "vehicle" not in at
+    named = client.put("/api/replay/at", json={"dive": 1, "t_s": 0.0, "vehicle": "nemesys"})
+    assert named.json() == at
+    assert set(client.post("/api/dives/1/replay", headers=AUTH).json()) == {
+        "dive",
+        "track_points",
+        "commands",
+    }
+    r = client.put("/api/replay/at", json={"dive": 1, "t_s": 0.0, "vehicle": "auv1"})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "vehicle"]
 
 
 def test_a_dive_downloads_as_mcap_with_the_logs_rows(

@@ -386,6 +386,17 @@ def test_a_fleets_answers_validate(make_client: MakeClient) -> None:
     assert missing.status_code == 422
     assert missing.json()["detail"][0]["loc"] == ["query", "vehicle"]
     c.call("GET", "/api/dives/1?vehicle=auv3")
+    # the replay of one vehicle's: its timeline, its slider, its track in a view
+    timeline = c.call("GET", "/api/dives/1/timeline?vehicle=auv2").json()
+    assert timeline["vehicle"] == "auv2"
+    assert c.call("GET", "/api/dives/1/timeline").status_code == 422
+    view = {"X-Nemesys-View": "fleet-view-1"}
+    at = c.call(
+        "PUT", "/api/replay/at", json={"dive": 1, "t_s": 0.0, "vehicle": "auv2"}, headers=view
+    )
+    assert at.json()["vehicle"] == "auv2"
+    replay = c.call("POST", "/api/dives/1/replay?vehicle=auv2", headers={**AUTH, **view})
+    assert replay.json()["vehicle"] == "auv2"
     c.call("GET", "/api/transmitter")
 
 

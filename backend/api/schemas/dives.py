@@ -90,6 +90,11 @@ class DiveTimeline(BaseModel):
     (time order). The replay's slider runs from ``from_t_s`` to ``duration_s``."""
 
     dive: int
+    vehicle: str | None = Field(
+        None,
+        description="the fleet's vehicle whose timeline it is (absent without a fleet: the "
+        "one vehicle's)",
+    )
     started_at: str
     start_t_s: float | None = Field(
         description="the vehicle's clock at the dive's start (null: no track; the dive's clock "
@@ -107,6 +112,9 @@ class ReplayAt(BaseModel):
     """The replayed vehicle at ``t_s`` (drawn as a marker in the caller's 3D view)."""
 
     dive: int
+    vehicle: str | None = Field(
+        None, description="the fleet's vehicle replayed (absent without a fleet)"
+    )
     t_s: float
     position: TimelineSample | None = Field(
         description="where it was, between the samples around t_s; null: the dive has no track"

@@ -240,6 +240,16 @@ def test_a_script_drives_one_vehicle_named_in_every_step(fleet: TestClient) -> N
     assert doc["path"]["y_m"][0] == pytest.approx(20.0, abs=1.0)  # from auv2's place
     onboard = fleet.post("/api/scripts/export", json=ok).json()
     assert decode_addressed_frame(onboard["frames"][0]["hex"]).address == 2
+    # the run's log names the vehicle of every step, and of the one proposed next
+    two = {**ok, "steps": [{**step, "vehicle": "auv2"}, {**step, "vehicle": "auv2"}]}
+    run = post(fleet, "/api/scripts/run", {"script": two, "mode": "step"})
+    assert run.status_code == 200, run.text
+    assert [s["vehicle"] for s in run.json()["steps"]] == ["auv2", "auv2"]
+    assert run.json()["next"]["vehicle"] == "auv2"
+    state = fleet.get("/api/scripts/run").json()
+    assert [s["vehicle"] for s in state["steps"]] == ["auv2", "auv2"]
+    stopped = post(fleet, "/api/scripts/run/stop", {})
+    assert [s["vehicle"] for s in stopped.json()["steps"]] == ["auv2", "auv2"]
 
 
 def test_one_way_fleet_vehicles_share_the_transmitters_health(
