@@ -156,6 +156,11 @@ def cmd_console(args: argparse.Namespace, out: TextIO) -> int:
         # /ws answers an over-size message itself (live.py); above the body cap uvicorn
         # closes the connection (1009) rather than hold up to its default 16 MiB
         ws_max_size=settings.max_body_bytes,
+        # no permessage-deflate: compressing is per connection (each page its own zlib
+        # context), so a telemetry message compressed for 20 pages is 20 encodings. Sent
+        # uncompressed, it is serialised once and the same bytes go to every page (issue 23:
+        # the pages' cost must not grow with the fleet); ~60 KB/s a page for 10 vehicles.
+        ws_per_message_deflate=False,
     )
     server = _server(config, announce)
     try:

@@ -6,8 +6,9 @@ console`` starts them): the single vehicle, and a fleet of 10 (``NEMESYS_VEHICLE
 send and preview names its vehicle, the sends to the vehicles in turn). Each console is
 measured three times: with no page, with 20 telemetry pages connected (a child process, as
 other people's browsers; with 10 vehicles each page gets every vehicle's telemetry, 10 a
-second each, in one ``fleet_telemetry`` message a period), and with no page again; the two unloaded phases pooled are the
-reference, so a drift of the machine's background load over the run cancels. Each phase:
+second each, in one ``fleet_telemetry`` message a period), and with no page again; the two
+unloaded phases pooled are the reference, so a drift of the machine's background load over
+the run cancels. Each phase:
 
 - send -> acknowledgement (:mod:`bench.console_send`): sends 0.1-0.3 s apart, the excess
   beyond the frame's airtime (an addressed frame's with a fleet); target: the median with 20

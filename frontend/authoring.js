@@ -151,10 +151,20 @@ export function renderBits(container, response) {
   container.replaceChildren(...(spans.length ? spans : [el("span", { class: "sec" }, bits)]));
 }
 
+/** "(100 bits)", or a fleet's addressed frame: "(108 bits, to address 2)" (0: all vehicles). */
+function frameSize(r) {
+  const size = r.frame_bits ?? (r.bits || "").length;
+  const section = (Array.isArray(r.sections) ? r.sections : []).find((s) => s.name === "address");
+  if (!section || !/^[01]+$/.test(section.bits || "")) return `(${size} bits)`;
+  const address = parseInt(section.bits, 2);
+  return `(${size} bits, to ${address === 0 ? "all vehicles, address 0" : `address ${address}`})`;
+}
+
 function renderPreview(r) {
   setStale(false);
   renderBits($("bits-strip"), r);
   $("frame-hex").textContent = r.hex || "–";
+  $("frame-size").textContent = frameSize(r);
   $("airtime").textContent = r.airtime_ms == null ? "–" : `${num(r.airtime_ms, 3)} ms at ${num(r.bitrate_bps, 0)} b/s`;
   renderEstimates(r.estimate);
   renderStart(r.start);

@@ -1,5 +1,5 @@
 // The chart's own Leaflet controls (chart.js adds them): the buttons that centre on the vehicle
-// and fit the preview, and the legend of the link's reach and the lines drawn.
+// and fit the preview and the vehicles, and the legend of the link's reach and the lines drawn.
 
 import { el } from "./ui.js";
 
@@ -11,6 +11,16 @@ const REACH = {
   marginal: "marginal",
   out_of_range: "out of range",
 };
+
+const FIT_PAD_PX = 24; // a fit's margin inside the chart's edges
+
+/** A fit's padding (Leaflet's fitBounds options) inside the chart's element `box`: its margin,
+ *  and on the right the buttons' column too, so that nothing fitted lies under them. */
+export function fitPadding(box) {
+  const buttons = box.querySelector(".leaflet-top.leaflet-right");
+  const right = FIT_PAD_PX + (buttons ? buttons.offsetWidth : 0);
+  return { paddingTopLeft: [FIT_PAD_PX, FIT_PAD_PX], paddingBottomRight: [right, FIT_PAD_PX] };
+}
 
 /** The centre and fit buttons (Leaflet `L`): `centre()` and `fit()` on a press. */
 export function buttonsControl(L, { centre, fit }) {
@@ -25,7 +35,7 @@ export function buttonsControl(L, { centre, fit }) {
       };
       box.append(
         button(ICON_CENTRE, "centre on the vehicle", "chart-centre-vehicle", centre),
-        button(ICON_FIT, "fit the preview, the predicted track and the vehicle (and each new preview again)", "chart-fit", fit),
+        button(ICON_FIT, "fit the preview, the predicted track and the vehicle, or every vehicle of a fleet (and each new preview again)", "chart-fit", fit),
       );
       L.DomEvent.disableClickPropagation(box);
       return box;

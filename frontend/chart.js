@@ -6,9 +6,10 @@
 
 import { api } from "./api.js";
 import { beliefLayers } from "./belief.js";
-import { buttonsControl, legendControl } from "./chart-controls.js";
+import { buttonsControl, fitPadding, legendControl } from "./chart-controls.js";
 import { watchOperator } from "./chart-operator.js";
 import { vehicleQuery } from "./fleet.js";
+import { fleetLatLngs } from "./fleet-chart.js";
 import { drawGraticule } from "./graticule.js";
 import { $, el, emit, on, num } from "./ui.js";
 
@@ -87,13 +88,14 @@ function fitButton() {
   fitAll();
 }
 
-/** Fit the preview, the vehicle and (`predicted`) the predicted track: a new preview's own
- *  fit leaves out the track predicted for the command before it. */
+/** Fit the preview, the vehicle (a fleet: every vehicle) and (`predicted`) the predicted
+ *  track: a new preview's own fit leaves out the track predicted for the command before it. */
 function fitAll(predicted = true) {
   $("chart").dataset.fits = String(Number($("chart").dataset.fits || 0) + 1); // (tests)
   const pts = [...(latLngs(state.preview && state.preview.path) || []), ...((predicted && state.predicted) || [])];
   if (state.pose) pts.push(state.pose);
-  if (pts.length) map.fitBounds(L.latLngBounds(pts), { padding: [24, 24], maxZoom: FIT_MAX_ZOOM });
+  pts.push(...fleetLatLngs()); // none without a fleet
+  if (pts.length) map.fitBounds(L.latLngBounds(pts), { ...fitPadding($("chart")), maxZoom: FIT_MAX_ZOOM });
   else if (layers.ring) map.fitBounds(layers.ring.getBounds(), { padding: [8, 8] });
 }
 
@@ -353,6 +355,9 @@ export async function initChart() {
   on("vehicle", ({ msg }) => msg && onActive(msg.active));
   on("active_path", ({ path }) => onActivePath(path));
   on("preview", onPreview);
+  on("fleet_marker_added", () => { // a fleet: a vehicle newly on the chart is fitted in too
+    if (map && state.fittedPath && !state.operatorMoved) fitAll(false);
+  });
   on("belief", ({ belief }) => {
     state.belief = belief;
     if (map) drawBelief();

@@ -13,6 +13,13 @@ import { $, el, emit, num, notifyError, resolved, setTip } from "./ui.js";
 const RETRY_MS = 3000;
 const TRANSMITTER_MS = 1000; // the budget counts down: asked again every second
 const state = { on: false, names: [], addresses: new Map(), selected: null, timer: null };
+let known; // resolves fleetKnown
+
+/** Resolves to fleetOn() once loadFleet() has heard the console's vehicles: a read of one
+ *  vehicle's (the plots' series) waits for it, so that a fleet's names its vehicle. */
+export const fleetKnown = new Promise((resolve) => {
+  known = resolve;
+});
 
 /** A fleet is configured (known once loadFleet() resolved). */
 export function fleetOn() {
@@ -62,6 +69,7 @@ export async function loadFleet() {
       const list = await api("/api/vehicles");
       resolved("vehicles");
       if (Array.isArray(list)) configure(list);
+      known(state.on);
       return state.on;
     } catch (err) {
       if (attempt === 0) notifyError("vehicles", err);

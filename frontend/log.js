@@ -2,7 +2,7 @@
 
 import { api } from "./api.js";
 import { copiesText, stateText } from "./delivery.js";
-import { openReplay } from "./replay.js";
+import { drawReplay, openReplay } from "./replay.js";
 import { dictionary, unitOf } from "./form.js";
 import { $, el, clock, withUnit, summarize, notify, notifyError, resolved, applyAuth, debounce } from "./ui.js";
 
@@ -127,10 +127,10 @@ async function loadDives() {
 
 async function replay(id) {
   try {
-    await api(`/api/dives/${encodeURIComponent(id)}/replay`, { method: "POST" });
+    const vehicle = await drawReplay(id); // a fleet's: the selected vehicle's
     resolved(`replay of dive ${id}`);
-    notify(`dive ${id} drawn in the 3D view: its time slider is under the view`);
-    openReplay(id);
+    notify(`dive ${id}${vehicle ? ` of ${vehicle}` : ""} drawn in the 3D view: its time slider is under the view`);
+    openReplay(id, vehicle);
   } catch (err) {
     notifyError(`replay of dive ${id}`, err);
   }

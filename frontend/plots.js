@@ -5,9 +5,12 @@
 // own clock), then live telemetry is appended, so a reload loses nothing and the axis starts
 // at the dive's start. The samples are a bounded buffer that keeps the whole dive: when it is
 // full every other sample goes and the sampling interval doubles. Redrawn at most once a
-// second; emptied and loaded again on a new dive.
+// second; emptied and loaded again on a new dive. With a fleet the plots are the selected
+// vehicle's (the series of it, GET /api/series?vehicle=; the live telemetry app.js hands on
+// is its alone), their titles naming it; emptied and loaded again when another is selected.
 
 import { api } from "./api.js";
+import { fleetKnown, selectedVehicle } from "./fleet.js";
 import { $, el, on } from "./ui.js";
 
 const UPLOT_JS = "/vendor/uplot/uPlot.esm.js";
@@ -21,7 +24,7 @@ let uPlot = null;
 const plots = [];
 // t: the vehicle's clock (s); shown as t - t0, t0 the dive's start (its first sample)
 const buf = { t: [], depth: [], commanded: [], navLost: [], battery: [], speed: [] };
-const state = { t0: null, lastT: null, minDtS: 0.5, dirty: false, dive: undefined, samples: 0, loads: 0, logged: 0 };
+const state = { t0: null, lastT: null, minDtS: 0.5, dirty: false, dive: undefined, samples: 0, loads: 0, logged: 0, vehicle: null };
 
 /** The nav-lost bar's value: 0 (the surface line) where navigation was not valid, else null. */
 export function navLost(navValid) {
@@ -82,12 +85,17 @@ function add(msg) {
   state.dirty = true;
 }
 
-/** The dive so far from the mission log, before the live samples newer than its last. */
+/** The dive so far from the mission log, before the live samples newer than its last (a
+ *  fleet's: of the selected vehicle, once the page knows whether there is a fleet). */
 async function loadSeries() {
   const load = ++state.loads;
+  const fleet = await fleetKnown;
+  if (load !== state.loads) return; // asked again meanwhile (another vehicle, another dive)
+  const vehicle = fleet ? selectedVehicle() : null;
+  const which = vehicle ? `&vehicle=${encodeURIComponent(vehicle)}` : "";
   let s;
   try {
-    s = await api(`/api/series?limit=${MAX_POINTS}`);
+    s = await api(`/api/series?limit=${MAX_POINTS}${which}`);
   } catch {
     return; // the live telemetry still plots from now on
   }
@@ -110,6 +118,28 @@ async function loadSeries() {
   halveIfFull();
   state.dirty = true;
   redraw();
+}
+
+/** Another vehicle of the fleet selected: its samples, from its series, under its name. */
+function selectVehicle(vehicle) {
+  if (vehicle === state.vehicle) return;
+  state.vehicle = vehicle;
+  reset();
+  retitle();
+  $("plots").dataset.vehicle = vehicle;
+  loadSeries();
+}
+
+/** A plot's title, naming the fleet's vehicle it shows ("Depth: auv2"). */
+function titled(title) {
+  return state.vehicle ? `${title}: ${state.vehicle}` : title;
+}
+
+function retitle() {
+  for (const p of plots) {
+    const node = p.root.querySelector(".u-title");
+    if (node) node.textContent = titled(p.baseTitle);
+  }
 }
 
 function redraw() {
@@ -184,7 +214,7 @@ function makePlot(host, title, testid, series, yLabel, scaleY) {
   const box = el("figure", { class: "plot", testid });
   host.append(box);
   const opts = {
-    title,
+    title: titled(title),
     width: 300,
     height: HEIGHT_PX,
     legend: { live: true },
@@ -196,6 +226,7 @@ function makePlot(host, title, testid, series, yLabel, scaleY) {
   };
   const plot = new uPlot(opts, [[], ...series.map(() => [])], box);
   plot.box = box;
+  plot.baseTitle = title;
   return plot;
 }
 
@@ -216,6 +247,7 @@ function valueScale(minSpan, floor, ceiling = Infinity, extra = {}) {
  *  draw once a second. */
 export async function initPlots() {
   on("telemetry", ({ msg }) => add(msg));
+  on("vehicle_selected", ({ vehicle }) => selectVehicle(vehicle)); // a fleet's (fleet.js)
   on("session", ({ session }) => {
     if (!session || session.dive === state.dive) return;
     if (state.dive !== undefined) reset(); // another dive (a reset, a console restarted)

@@ -2,16 +2,20 @@
 // its own clock (GET /api/dives/{id}/timeline); as the slider moves, the console says where the
 // vehicle was and the command it was running then (PUT /api/replay/at, which also moves the
 // vehicle marker in this page's 3D view), and the link events of the seconds before are listed
-// from the timeline. Clear replay closes it.
+// from the timeline. Clear replay closes it. With a fleet a replay is one vehicle's, the one
+// selected (its track, its commands, its events and those naming no vehicle, on its own clock:
+// every request names it), the panel's title naming it; selecting another vehicle replays the
+// same dive for that one.
 
 import { api } from "./api.js";
-import { $, el, num, notifyError, resolved, latLon } from "./ui.js";
+import { fleetKnown, selectedVehicle } from "./fleet.js";
+import { $, el, num, notifyError, on, resolved, latLon } from "./ui.js";
 
 /** Link events listed: those of the last WINDOW_S seconds up to the slider's time, newest first. */
 const WINDOW_S = 10;
 const MAX_EVENTS = 5;
 
-const state = { dive: null, timeline: null, t: 0, busy: false, wanted: null };
+const state = { dive: null, vehicle: null, timeline: null, t: 0, busy: false, wanted: null, opens: 0 };
 
 function commandOf(id) {
   const commands = (state.timeline && state.timeline.commands) || [];
@@ -70,11 +74,12 @@ async function seek(t) {
     return;
   }
   state.busy = true;
-  const dive = state.dive;
+  const { dive, vehicle } = state;
+  const body = vehicle ? { dive, t_s: t, vehicle } : { dive, t_s: t };
   try {
-    const at = await api("/api/replay/at", { method: "PUT", body: { dive, t_s: t } });
+    const at = await api("/api/replay/at", { method: "PUT", body });
     resolved("replay slider");
-    if (dive === state.dive && at.t_s === state.t) renderAt(at);
+    if (dive === state.dive && vehicle === state.vehicle && at.t_s === state.t) renderAt(at);
   } catch (err) {
     notifyError("replay slider", err);
   } finally {
@@ -87,37 +92,71 @@ async function seek(t) {
   }
 }
 
-/** Open the slider on dive `dive` (already drawn in this page's 3D view by log.js). */
-export async function openReplay(dive) {
+/** Draw dive `dive` in this page's 3D view (POST /api/dives/{id}/replay; a fleet's: of the
+ *  selected vehicle, once the page knows whether there is a fleet); resolves to the vehicle
+ *  drawn (null: no fleet), for openReplay(). */
+export async function drawReplay(dive) {
+  const fleet = await fleetKnown;
+  const vehicle = fleet ? selectedVehicle() : null;
+  const which = vehicle ? `?vehicle=${encodeURIComponent(vehicle)}` : "";
+  await api(`/api/dives/${encodeURIComponent(dive)}/replay${which}`, { method: "POST" });
+  return vehicle;
+}
+
+/** Open the slider on dive `dive` (already drawn in this page's 3D view by drawReplay()), of
+ *  the fleet's `vehicle` (null: no fleet). */
+export async function openReplay(dive, vehicle = null) {
+  const open = ++state.opens;
+  const which = vehicle ? `?vehicle=${encodeURIComponent(vehicle)}` : "";
   let timeline;
   try {
-    timeline = await api(`/api/dives/${encodeURIComponent(dive)}/timeline`);
+    timeline = await api(`/api/dives/${encodeURIComponent(dive)}/timeline${which}`);
   } catch (err) {
     notifyError(`replay of dive ${dive}`, err);
     return;
   }
+  if (open !== state.opens) return; // opened again meanwhile (another dive, another vehicle)
   state.dive = dive;
+  state.vehicle = vehicle;
   state.timeline = timeline;
   state.wanted = null;
   const slider = $("replay-slider");
   slider.min = String(Math.floor(timeline.from_t_s));
   slider.max = String(Math.ceil(timeline.duration_s));
   slider.value = "0";
-  $("replay-title").textContent = `dive ${dive}`;
+  $("replay-title").textContent = vehicle ? `dive ${dive}: ${vehicle}` : `dive ${dive}`;
   const bar = $("replay-bar");
   bar.dataset.dive = String(dive);
+  if (vehicle) bar.dataset.vehicle = vehicle;
+  else delete bar.dataset.vehicle;
   bar.hidden = false;
   bar.scrollIntoView({ block: "nearest" });
   seek(0);
 }
 
 function closeReplay() {
+  state.opens++; // a timeline still on its way opens nothing
   state.dive = null;
+  state.vehicle = null;
   state.timeline = null;
   $("replay-bar").hidden = true;
+}
+
+/** Another vehicle of the fleet selected while a dive is replayed: the same dive, of that one. */
+async function replayOf(vehicle) {
+  const dive = state.dive;
+  if (dive === null || !state.vehicle || vehicle === state.vehicle) return;
+  try {
+    const drawn = await drawReplay(dive);
+    resolved(`replay of dive ${dive}`);
+    if (dive === state.dive) openReplay(dive, drawn);
+  } catch (err) {
+    notifyError(`replay of dive ${dive}`, err);
+  }
 }
 
 export function initReplay() {
   $("replay-slider").addEventListener("input", (e) => state.timeline && seek(Number(e.target.value)));
   $("clear-replay").addEventListener("click", closeReplay); // view.js clears the 3D view
+  on("vehicle_selected", ({ vehicle }) => replayOf(vehicle)); // a fleet's (fleet.js)
 }

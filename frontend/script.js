@@ -322,7 +322,7 @@ function renderRun(run) {
   const next = running && run.next ? run.next : null;
   const proposal = $("script-next-proposal");
   proposal.hidden = !next;
-  proposal.textContent = next ? `Proposed next: ${commandText(next)}${next.trigger ? ` (${triggerText(next.trigger)})` : ""}` : "";
+  proposal.textContent = next ? `Proposed next: ${commandText(next)}${next.vehicle ? ` to ${next.vehicle}` : ""}${next.trigger ? ` (${triggerText(next.trigger)})` : ""}` : "";
   setOff($("script-next"), !(running && run.mode === "step" && next));
   setOff($("script-stop"), !running);
   setOff($("script-run"), running);

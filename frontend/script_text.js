@@ -12,5 +12,6 @@ export function timelineText(e) {
 export function runStepText(s, i) {
   if (!s || typeof s !== "object") return `${i + 1}. –`;
   const name = String(s.pattern || "").replace(/_/g, " ");
-  return [`${i + 1}. ${name}`, s.trigger_text, s.takes_text, s.state_text].filter(Boolean).join(" · ");
+  const to = s.vehicle ? ` to ${s.vehicle}` : ""; // a fleet's: the vehicle it is sent to
+  return [`${i + 1}. ${name}${to}`, s.trigger_text, s.takes_text, s.state_text].filter(Boolean).join(" · ");
 }

@@ -11,6 +11,7 @@ from backend.api.deps import ConsoleDep, token_from, token_ok
 from backend.api.models import CommandIn, DecodeIn
 from backend.api.responses import DocResponse
 from backend.api.schemas import (
+    AddressedDecodeResult,
     DecodeFailure,
     DecodeResult,
     EncodeDoc,
@@ -30,7 +31,7 @@ from backend.api.schemas.chart import DatumDoc
 from backend.api.view import ViewHeader
 from backend.authoring import operations
 from backend.mission_log.records import CommandJson
-from codec import DecodeError, decode_frame, describe_dictionary
+from codec import AddressedDecoded, DecodeError, describe_dictionary
 from onboard.agent import command_json
 from station.link import Capability
 
@@ -131,24 +132,37 @@ async def encode(body: CommandIn, console: ConsoleDep) -> DocResponse:
 
 @router.post(
     "/decode",
-    response_model=DecodeResult,
+    # the addressed answer first: a single vehicle's lacks its fields, so is never taken for one
+    response_model=AddressedDecodeResult | DecodeResult,
     responses=errors(
         (413, 422),
         models={422: ValidationErrorResponse | DecodeFailure},
         why={422: "invalid input, or the frame is rejected (detail: reason, message, field)"},
     ),
 )
-def decode(body: DecodeIn) -> DecodeResult:
-    """Decode 100 bits or 25 hex digits; 422 with the reason when the frame is rejected."""
+def decode(body: DecodeIn, console: ConsoleDep) -> AddressedDecodeResult | DecodeResult:
+    """Decode a frame: 100 bits or 25 hex digits (a single vehicle's), or a fleet's addressed
+    frame, 108 bits or 27 hex digits (then also its ``address``, the console's ``vehicle``
+    with it, ``"all"`` for 0, and ``addressed_to`` in words); 422 with the reason when the
+    frame is rejected, a wrong length naming both."""
     try:
-        dec = decode_frame(body.frame)
+        dec = operations.decode_text(body.frame)
     except DecodeError as err:
         raise HTTPException(
             422, {"reason": err.reason.value, "message": str(err), "field": err.field}
         ) from None
+    command = CommandJson.model_validate(command_json(dec.command))
+    if isinstance(dec, AddressedDecoded):
+        vehicle, words = operations.addressee(console, dec)
+        return AddressedDecodeResult(
+            ok=True,
+            command=command,
+            corrected=dec.corrected,
+            sync_errors=dec.sync_errors,
+            address=dec.address,
+            vehicle=vehicle,
+            addressed_to=words,
+        )
     return DecodeResult(
-        ok=True,
-        command=CommandJson.model_validate(command_json(dec.command)),
-        corrected=dec.corrected,
-        sync_errors=dec.sync_errors,
+        ok=True, command=command, corrected=dec.corrected, sync_errors=dec.sync_errors
     )

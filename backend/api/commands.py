@@ -10,7 +10,15 @@ from fastapi import APIRouter, HTTPException, Query, Response, status
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 
-from backend.api.deps import ConsoleDep, IdField, IdPath, OperatorDep, ServiceDep
+from backend.api.deps import (
+    ConsoleDep,
+    IdField,
+    IdPath,
+    OperatorDep,
+    QueryVehicleDep,
+    ServiceDep,
+    filter_vehicle,
+)
 from backend.api.models import LinkIn, RetryIn, SendIn, SurfaceIn
 from backend.api.schemas import (
     OPERATOR,
@@ -157,7 +165,8 @@ FilterQ = Annotated[LogFilter, Query()]
 def _rows(console: ConsoleDep, filters: LogFilter, limit: int) -> list[dict[str, Any]]:
     """The log's rows as written (the exports hand them on as they are)."""
     assert console.log is not None
-    return console.log.commands(**filters.model_dump(), limit=limit)
+    vehicle = filter_vehicle(console, filters.vehicle, ("query", "vehicle"))
+    return console.log.commands(**{**filters.model_dump(), "vehicle": vehicle}, limit=limit)
 
 
 @router.get(
@@ -265,18 +274,27 @@ def dive(
 ) -> DiveDetail:
     """A dive's track (1 Hz) and its commands, for replay (of a fleet's ``vehicle``: its
     track points and records only)."""
-    return _dive(console, dive, vehicle)
+    return _dive(console, dive, filter_vehicle(console, vehicle, ("query", "vehicle")))
 
 
 @router.post(
-    "/dives/{dive}/replay", response_model=ReplayResult, responses=errors((*OPERATOR, 404, 422))
+    "/dives/{dive}/replay",
+    response_model=ReplayResult,
+    response_model_exclude_unset=True,
+    responses=errors((*OPERATOR, 404, 422)),
 )
 def replay(
-    dive: IdPath, console: ConsoleDep, _op: OperatorDep, x_nemesys_view: ViewHeader = None
+    dive: IdPath,
+    console: ConsoleDep,
+    _op: OperatorDep,
+    vehicle: QueryVehicleDep,
+    x_nemesys_view: ViewHeader = None,
 ) -> ReplayResult:
     """Draw a dive's track and its acknowledged commands in the caller's own 3D view
-    (``X-Nemesys-View``; without it, in none). ``DELETE /api/replay`` clears it."""
-    doc = _dive(console, dive)
+    (``X-Nemesys-View``; without it, in none). ``DELETE /api/replay`` clears it. With a
+    fleet, of the ``vehicle`` named (required: 422 naming the fleet's vehicles): its track
+    and its commands only."""
+    doc = _dive(console, dive, vehicle)
     if console.viewer is not None:
         track = [(p.t_s, p.x_m, p.y_m, p.z_m, p.heading_deg) for p in doc.track]
         marks = []
@@ -285,7 +303,10 @@ def replay(
             if c.state == "acknowledged" and origin:
                 marks.append((origin.t_s, origin.x_m, origin.y_m, origin.z_m, f"#{c.id}"))
         console.viewer.show_replay(x_nemesys_view, track, marks)
-    return ReplayResult(dive=dive, track_points=len(doc.track), commands=len(doc.commands))
+    named = {} if vehicle is None else {"vehicle": vehicle}  # a fleet's names its vehicle
+    return ReplayResult.model_validate(
+        {"dive": dive, **named, "track_points": len(doc.track), "commands": len(doc.commands)}
+    )
 
 
 @router.get("/vehicle", response_model=VehicleView, response_model_exclude_unset=True)

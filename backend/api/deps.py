@@ -1,15 +1,17 @@
-"""Shared dependencies: the running console, the operator token check, and the bounds of
-integers that reach the mission log (SQLite's INTEGER is signed 64-bit)."""
+"""Shared dependencies: the running console, the operator token check, the vehicle a read
+names, and the bounds of integers that reach the mission log (SQLite's INTEGER is signed
+64-bit)."""
 
 from __future__ import annotations
 
 import secrets
 from typing import Annotated
 
-from fastapi import Depends, HTTPException, Path, Request, status
+from fastapi import Depends, HTTPException, Path, Query, Request, status
+from fastapi.exceptions import RequestValidationError
 from pydantic import Field
 
-from backend.commands.service import CommandService
+from backend.commands.service import CommandService, VehicleRefused
 from backend.console import Console
 
 
@@ -30,6 +32,56 @@ async def get_service(console: ConsoleDep) -> CommandService:
 
 
 ServiceDep = Annotated[CommandService, Depends(get_service)]
+
+
+async def get_query_vehicle(
+    console: ConsoleDep,
+    vehicle: Annotated[
+        str | None,
+        Query(
+            max_length=32,
+            description="with a fleet: the vehicle it is of (required: one of the fleet's "
+            "names); without one: absent, or the single vehicle's name, nemesys",
+        ),
+    ] = None,
+) -> str | None:
+    """The vehicle a read's ``vehicle`` query names, checked as every request's vehicle is
+    (:meth:`backend.console.Console.checked_vehicle`): a fleet's name, None without a fleet.
+    A fleet's read that names none, or a name the console has not, is a 422 at
+    ``["query", "vehicle"]`` naming the vehicles (a fleet's reads never mix vehicles)."""
+    return required_vehicle(console, vehicle, ("query", "vehicle"))
+
+
+#: A read of one vehicle's: its name, checked (None: the single vehicle).
+QueryVehicleDep = Annotated[str | None, Depends(get_query_vehicle)]
+
+
+def required_vehicle(console: Console, vehicle: str | None, where: tuple[str, ...]) -> str | None:
+    """The vehicle a request names at ``where`` (a query's or a body's ``vehicle``), checked:
+    with a fleet one of its names (none, or another: a 422 at ``where`` naming them); None
+    without a fleet (absent or its one name, nemesys)."""
+    try:
+        return console.checked_vehicle(vehicle)
+    except VehicleRefused as err:
+        raise RequestValidationError(
+            [{"type": "vehicle", "loc": where, "msg": err.message, "input": vehicle}]
+        ) from None
+
+
+def filter_vehicle(console: Console, vehicle: str | None, where: tuple[str, ...]) -> str | None:
+    """A log filter's ``vehicle`` (at ``where`` in the request), checked: absent is every
+    vehicle's rows (None); a name must be one of the console's vehicles (422 at ``where``
+    naming them, never an empty answer for a misspelt name). Without a fleet the single
+    vehicle's name stands for all rows (None)."""
+    if vehicle is None:
+        return None
+    try:
+        return console.checked_vehicle(vehicle)
+    except VehicleRefused as err:
+        raise RequestValidationError(
+            [{"type": "vehicle", "loc": where, "msg": err.message, "input": vehicle}]
+        ) from None
+
 
 #: The largest integer SQLite stores (signed 64-bit); beyond it a query would raise
 #: ``OverflowError`` (a 500): every integer that reaches the log is bounded to 422 first.

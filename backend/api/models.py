@@ -127,7 +127,15 @@ class RetryIn(Strict):
 
 
 class DecodeIn(Strict):
-    frame: Annotated[str, Field(min_length=1, max_length=200, description="100 bits or 25 hex")]
+    frame: Annotated[
+        str,
+        Field(
+            min_length=1,
+            max_length=200,
+            description="100 bits or 25 hex digits; a fleet's addressed frame: 108 bits or 27 "
+            "hex digits",
+        ),
+    ]
 
 
 class ChannelIn(Strict):
@@ -173,6 +181,8 @@ class ReplayAtIn(Strict):
     dive: Annotated[int, Field(ge=1, le=SQLITE_INT_MAX)]
     #: Seconds on the dive's clock (from its start; within its timeline's range).
     t_s: Annotated[float, Field(ge=-86_400.0, le=864_000.0)]
+    #: The fleet's vehicle replayed (required with a fleet: its own timeline's clock).
+    vehicle: VehicleIn = None
 
 
 class LinkIn(Strict):

@@ -179,7 +179,7 @@ def _state(console: Console) -> RunState:
     return RunState.model_validate({**state, "commands": console.script_commands})
 
 
-@router.get("/run", response_model=RunState)
+@router.get("/run", response_model=RunState, response_model_exclude_unset=True)
 def run_state(console: ConsoleDep) -> RunState:
     return _state(console)
 
@@ -187,6 +187,7 @@ def run_state(console: ConsoleDep) -> RunState:
 @router.post(
     "/run",
     response_model=RunState,
+    response_model_exclude_unset=True,
     responses=errors(
         (*OPERATOR, 409, 413, 422),
         models={
@@ -222,6 +223,7 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> RunState:
         body.mode,
         clock=run_clock(console),
         completion_by=_completion_by(console, "estimate", vehicle),
+        vehicle=vehicle,
     )
     console.script_commands = {}
     console.start_script_loop(_loop(console))
@@ -229,7 +231,9 @@ async def run(body: RunIn, console: ConsoleDep, _op: OperatorDep) -> RunState:
     return _state(console)
 
 
-@router.post("/run/next", response_model=RunState, responses=RUN_CONTROL)
+@router.post(
+    "/run/next", response_model=RunState, response_model_exclude_unset=True, responses=RUN_CONTROL
+)
 async def run_next(console: ConsoleDep, _op: OperatorDep) -> RunState:
     """Operator's go: send the proposed step."""
     runner = console.runner
@@ -243,7 +247,12 @@ async def run_next(console: ConsoleDep, _op: OperatorDep) -> RunState:
     return _state(console)
 
 
-@router.post("/run/stop", response_model=RunState, responses=errors(OPERATOR))
+@router.post(
+    "/run/stop",
+    response_model=RunState,
+    response_model_exclude_unset=True,
+    responses=errors(OPERATOR),
+)
 def run_stop(console: ConsoleDep, _op: OperatorDep) -> RunState:
     if console.runner is not None:
         console.runner.stop()

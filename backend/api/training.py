@@ -22,12 +22,13 @@ from backend.api.schemas import (
     errors,
 )
 from backend.api.schemas.errors import ERROR_TEXT
-from backend.api.schemas.training import ChannelStats, Retask
+from backend.api.schemas.training import ChannelStats, Retask, VehicleChannelStats
 from backend.commands.service import SendRequest
 from backend.console import SCENARIO_PRESETS
 
 if TYPE_CHECKING:
     from rosbridge.server import BridgeServer
+    from sim.fleet import FleetSimulation
     from sim.simulation import Simulation
 
 router = APIRouter(prefix="/api/training", tags=["training"])
@@ -56,19 +57,49 @@ def _given(body: ChannelIn | CurrentIn) -> dict[str, Any]:
     return {k: v for k, v in body.model_dump(exclude_unset=True).items() if v is not None}
 
 
-@router.get("", response_model=TrainingOn | TrainingOff)
+@router.get("", response_model=TrainingOn | TrainingOff, response_model_exclude_unset=True)
 def training(console: ConsoleDep) -> TrainingOn | TrainingOff:
+    """The simulator's settings and its channel's counters (with a fleet, each vehicle's
+    receiver's in ``vehicle_channel_stats``, and their sums); ``enabled: false`` on a real
+    vehicle."""
     sim = console.sim
     if sim is None:
         return TrainingOff(enabled=False, scenarios=[])
+    fleet = console.fleet_sim
+    stats = (
+        {"channel_stats": ChannelStats.model_validate(asdict(sim.channel.stats))}
+        if fleet is None
+        else _fleet_stats(fleet)
+    )
     return TrainingOn(
         enabled=True,
         channel=_channel(sim),
         current=CurrentSettings.model_validate(asdict(sim.current.config)),
         time_scale=console.bridge.time_scale if console.bridge is not None else 1.0,
         scenarios=list(SCENARIO_PRESETS),
-        channel_stats=ChannelStats.model_validate(asdict(sim.channel.stats)),
+        **stats,
     )
+
+
+def _fleet_stats(fleet: FleetSimulation) -> dict[str, Any]:
+    """``vehicle_channel_stats`` (each vehicle's receiver's counters) and ``channel_stats``
+    (their sums) of a fleet's shared link."""
+    each = [
+        VehicleChannelStats(
+            vehicle=v.name,
+            address=v.address,
+            channel_stats=ChannelStats.model_validate(asdict(fleet.sim(v.name).channel.stats)),
+        )
+        for v in fleet.vehicles
+    ]
+    totals = {
+        name: sum(getattr(v.channel_stats, name) for v in each)
+        for name in ChannelStats.model_fields
+    }
+    return {
+        "channel_stats": ChannelStats.model_validate(totals),
+        "vehicle_channel_stats": each,
+    }
 
 
 @router.put("/channel", response_model=ChannelSettings, responses=SETTING)

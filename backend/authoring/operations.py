@@ -20,9 +20,16 @@ from backend.commands.checks import CheckReport, SendViolation, check_plan
 from backend.commands.service import Assessment
 from backend.commands.vehicles import ALL_VEHICLES
 from codec import (
+    ADDRESSED_FRAME_BITS,
+    BROADCAST_ADDRESS,
+    FRAME_BITS,
+    AddressedDecoded,
     AddressedFrame,
     Command,
+    Decoded,
+    DecodeError,
     Encoded,
+    RejectReason,
     decode_addressed_frame,
     decode_frame,
     delivery_probability,
@@ -157,4 +164,70 @@ def preview(
     return enc, doc
 
 
-__all__ = ["assess", "encode", "plan_violations", "preview", "report"]
+#: The text forms of a frame, by length (characters, once spaces, ``_`` and a ``0x`` are
+#: dropped): a single vehicle's 100 bits or 25 hex digits, a fleet's addressed 108 bits or 27.
+_SINGLE_LENGTHS = (FRAME_BITS, FRAME_BITS // 4)
+_ADDRESSED_LENGTHS = (ADDRESSED_FRAME_BITS, ADDRESSED_FRAME_BITS // 4)
+_HEX_DIGITS = "0123456789abcdefABCDEF"
+
+
+def decode_text(text: str) -> Decoded:
+    """The frame ``text`` as the console reads it: a 100-bit frame as the single vehicle
+    decodes it (:func:`codec.decode_frame`), a 108-bit addressed one with any address
+    (:class:`codec.AddressedDecoded`: its ``address``, 0 for all vehicles). Its length decides
+    which, never a guess at what a broken frame might have been.
+
+    Raises:
+        DecodeError: the codec's reason; a length of neither is ``malformed``, naming both.
+    """
+    compact = text.strip().replace(" ", "").replace("_", "")
+    if compact[:2].lower() == "0x":
+        compact = compact[2:]
+    if len(compact) in _ADDRESSED_LENGTHS:
+        digits = "01" if len(compact) == ADDRESSED_FRAME_BITS else _HEX_DIGITS
+        bad = [c for c in compact if c not in digits]
+        if bad:
+            kind = "binary" if digits == "01" else "hex"
+            raise DecodeError(
+                RejectReason.MALFORMED,
+                f"malformed frame: {len(compact)} {kind} digits make an addressed frame, but "
+                f"{bad[0]!r} is no {kind} digit",
+            )
+        return decode_addressed_frame(compact)
+    if len(compact) in _SINGLE_LENGTHS:
+        return decode_frame(text)
+    shown = text if len(text) <= 40 else text[:37] + "..."
+    raise DecodeError(
+        RejectReason.MALFORMED,
+        f"malformed frame: expected {FRAME_BITS} binary digits or {FRAME_BITS // 4} hex digits "
+        f"(a single vehicle's frame), or {ADDRESSED_FRAME_BITS} binary digits or "
+        f"{ADDRESSED_FRAME_BITS // 4} hex digits (a fleet's addressed frame), got "
+        f"{len(compact)} characters: {shown!r}",
+    )
+
+
+def addressee(console: Console, decoded: AddressedDecoded) -> tuple[str | None, str]:
+    """Whom an addressed frame is for on this console: the name of the fleet's vehicle with
+    its address (``"all"`` for address 0; None: no vehicle of this console has it), and that
+    in words."""
+    address = decoded.address
+    if address == BROADCAST_ADDRESS:
+        return ALL_VEHICLES, f"all vehicles (address {address})"
+    if console.fleet.configured:
+        for vehicle in console.fleet.vehicles.values():
+            if vehicle.address == address:
+                return vehicle.name, f"{vehicle.name} (address {address})"
+        has = ", ".join(f"{v.name} {v.address}" for v in console.fleet.vehicles.values())
+        return None, f"address {address}: no vehicle of this console's fleet ({has})"
+    return None, f"address {address}: this console has no fleet (one vehicle, unaddressed)"
+
+
+__all__ = [
+    "addressee",
+    "assess",
+    "decode_text",
+    "encode",
+    "plan_violations",
+    "preview",
+    "report",
+]

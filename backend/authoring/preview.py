@@ -49,7 +49,7 @@ def frame_doc(enc: Encoded, bitrate_bps: float) -> dict[str, Any]:
         ],
         "airtime_ms": airtime_s(bitrate_bps, len(bits)) * 1e3,
         "bitrate_bps": bitrate_bps,
-        "frame_bits": FRAME_BITS,
+        "frame_bits": len(bits),  # 100, or a fleet's addressed 108
     }
 
 

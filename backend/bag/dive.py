@@ -10,6 +10,13 @@ acknowledgement that carries ``t_s``), the console's UTC for what the console di
 point of an older log without its arrival time is placed at the dive's start plus its
 vehicle seconds since the first point.
 
+A fleet's dive (rows naming their ``vehicle``) is every vehicle's in one export: what is a
+vehicle's (its pose, fix and status, its commands' records, frames and acknowledgements, its
+events) on its own topics under ``/<name>`` (:func:`backend.bag.messages.vehicle_topic`, the
+live Foxglove view's naming), its odometry's child frame ``<name>/base_link``; the events
+naming no vehicle on the plain topic. A row naming no vehicle (every row of a single
+vehicle's dive) is on the topics as they always were.
+
 The tables' rows are merged by log time (one row of each table in memory at a time), and a
 stamp older than the one before it (a log whose clock was stepped, before the monotonic
 anchor) is written at the one before: the log times never go back.
@@ -86,13 +93,15 @@ def _track(reader: DiveReader, dive: int, started_ns: int, datums: DatumWalk) ->
         first_t_s = t_s if first_t_s is None else first_t_s
         at = ns_of(row["at"])
         log_ns = at if at is not None else started_ns + round((t_s - first_t_s) * 1e9)
+        vehicle = row.get("vehicle")
         if row["x_m"] is not None:
-            yield Message(log_ns, m.ODOM, m.odometry(row))
+            yield Message(log_ns, m.vehicle_topic(m.ODOM, vehicle), m.odometry(row))
             datum = datums.at(log_ns)
             if datum is not None:
                 lat, lon = ned_to_geodetic(datum, row["x_m"], row["y_m"])
-                yield Message(log_ns, m.FIX, m.nav_sat_fix(row, float(lat), float(lon)))
-        yield Message(log_ns, m.STATUS, m.status(row))
+                fix = m.nav_sat_fix(row, float(lat), float(lon))
+                yield Message(log_ns, m.vehicle_topic(m.FIX, vehicle), fix)
+        yield Message(log_ns, m.vehicle_topic(m.STATUS, vehicle), m.status(row))
 
 
 def _console(ns: int) -> float:
@@ -104,14 +113,16 @@ def _commands(reader: DiveReader, dive: int) -> Iterator[Message]:
     for record in reader.commands(dive):
         ns = ns_of(record["created_at"])
         if ns is not None:
-            yield Message(ns, m.COMMANDS, m.command_record(record, _console(ns)))
+            topic = m.vehicle_topic(m.COMMANDS, record.get("vehicle"))
+            yield Message(ns, topic, m.command_record(record, _console(ns)))
 
 
 def _frames(reader: DiveReader, dive: int) -> Iterator[Message]:
     for left_at, record in reader.sent(dive):
         ns = ns_of(left_at)
         if ns is not None and record.get("hex"):
-            yield Message(ns, m.FRAME, m.frame(record["hex"]))
+            topic = m.vehicle_topic(m.FRAME, record.get("vehicle"))
+            yield Message(ns, topic, m.frame(record["hex"]))
 
 
 def _acks(reader: DiveReader, dive: int) -> Iterator[Message]:
@@ -122,8 +133,9 @@ def _acks(reader: DiveReader, dive: int) -> Iterator[Message]:
             continue
         vehicle_t = ack.get("t_s")
         t_s = float(vehicle_t) if isinstance(vehicle_t, int | float) else _console(ns)
-        yield Message(ns, m.ACK, m.ack(ack, t_s))
-        yield Message(ns, m.MISSION, m.json_string(ack))
+        vehicle = record.get("vehicle")
+        yield Message(ns, m.vehicle_topic(m.ACK, vehicle), m.ack(ack, t_s))
+        yield Message(ns, m.vehicle_topic(m.MISSION, vehicle), m.json_string(ack))
 
 
 def _events(reader: DiveReader, dive: int) -> Iterator[Message]:
@@ -131,7 +143,8 @@ def _events(reader: DiveReader, dive: int) -> Iterator[Message]:
         ns = ns_of(event["at"])
         if ns is not None:
             doc = {k: event[k] for k in ("kind", "detail", "data")}
-            yield Message(ns, m.EVENTS, m.json_string(doc))
+            topic = m.vehicle_topic(m.EVENTS, event.get("vehicle"))
+            yield Message(ns, topic, m.json_string(doc))
 
 
 def _keyed(k: int, stream: Iterator[Message]) -> Iterator[tuple[tuple[int, int, int], Message]]:

@@ -60,6 +60,9 @@ def plan(
         "pose_frame": f"{m.MAP_FRAME} (ENU, REP-103), body {m.BODY_FRAME} (FLU)",
         "datum": "given" if datum is not None else "the log's" if datums.any else "none",
     }
+    vehicles = reader.vehicles(dive)
+    if vehicles:  # a fleet's: each vehicle's topics under /<name>
+        metadata["vehicles"] = ",".join(vehicles)
     messages = dive_messages(reader, dive, datums, str(row["started_at"]))
     return DivePlan(dive, messages, metadata, expected)
 

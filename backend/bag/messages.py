@@ -84,6 +84,21 @@ EVENTS = Topic(
 TOPICS: Final = (ODOM, FIX, STATUS, FRAME, COMMANDS, ACK, MISSION, EVENTS)
 
 
+def vehicle_topic(topic: Topic, vehicle: str | None) -> Topic:
+    """``topic`` of a fleet's ``vehicle``: under ``/<name>`` (``/auv2/nemesys/odom``), the
+    naming of the live Foxglove view's (:func:`backend.foxglove_live.channels.vehicle_topic`);
+    None (a single vehicle's, or a row naming no vehicle): ``topic`` as it is."""
+    if vehicle is None:
+        return topic
+    return topic._replace(name=f"/{vehicle}{topic.name}", what=f"{vehicle}: {topic.what}")
+
+
+def body_frame(vehicle: str | None) -> str:
+    """The body frame of a fleet's ``vehicle``'s odometry, ``<name>/base_link`` (each vehicle
+    its own frame, as ROS names a robot's among several); :data:`BODY_FRAME` without one."""
+    return BODY_FRAME if vehicle is None else f"{vehicle}/{BODY_FRAME}"
+
+
 def stamp(t_s: float) -> Msg:
     """``builtin_interfaces/Time`` of ``t_s`` seconds (rounded to the nanosecond)."""
     ns = round(t_s * 1e9)
@@ -137,13 +152,14 @@ def _optional(obj: Any) -> list[Msg]:
 
 
 def odometry(row: Mapping[str, Any]) -> Msg:
-    """``nav_msgs/Odometry`` of a track row with a position (NED -> ENU, the yaw about up)."""
+    """``nav_msgs/Odometry`` of a track row with a position (NED -> ENU, the yaw about up);
+    its child frame the row's vehicle's body (:func:`body_frame`)."""
     enu = ned_to_enu(NedPose(row["x_m"], row["y_m"], row["z_m"], row["heading_deg"]))
     qx, qy, qz, qw = quaternion_from_roll_yaw(0.0, enu.yaw_deg)
     zero6 = [0.0] * 36
     return {
         "header": header(row["t_s"], MAP_FRAME),
-        "child_frame_id": BODY_FRAME,
+        "child_frame_id": body_frame(row.get("vehicle")),
         "pose": {
             "pose": {
                 "position": {"x": enu.x_east_m, "y": enu.y_north_m, "z": enu.z_up_m},

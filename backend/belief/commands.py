@@ -67,7 +67,7 @@ def same_command(a: Mapping[str, Any] | None, b: Mapping[str, Any] | None) -> bo
     return pa is None or pb is None or dict(pa) == dict(pb)
 
 
-def _pct(p: float) -> str:
+def percent_text(p: float) -> str:
     """``0.99951`` -> ``99.95 %``: enough decimals that a value below 1 never reads 100 %."""
     if p >= 1.0:
         return "100 %"
@@ -187,7 +187,7 @@ def one_way(
         newer = len(sent) - k - 1
         reason = (
             f"one-way link: {n} cop{'y' if n == 1 else 'ies'} left, p(delivered) "
-            f"{_pct(float(r['p_delivered']))}"
+            f"{percent_text(float(r['p_delivered']))}"
         )
         if newer == 1:
             reason += "; the newer command did not arrive"

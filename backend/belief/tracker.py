@@ -23,6 +23,7 @@ from typing import TYPE_CHECKING, Any, Final, Protocol
 from backend.authoring.profile import VehicleProfile
 from backend.belief.commands import Echo
 from backend.belief.estimate import Evidence, estimate
+from backend.belief.label import fleet_label
 from backend.belief.model import DEFAULT_VEHICLE, Belief, BelievedPosition
 from backend.belief.position import Fix, Start
 from backend.belief.reckoning import UNKNOWN_CURRENT, Current
@@ -328,7 +329,7 @@ class BeliefTracker:
     def _show_in_fleet(self, viewer: Viewer, belief: Belief) -> None:
         """This vehicle of the fleet: where it is believed to be, named, with its address
         and the command it is believed to run."""
-        from backend.viewer.fleet import fleet_drawing, fleet_label  # viser: with the view
+        from backend.viewer.fleet import fleet_drawing  # viser: with the view
 
         p, c = belief.position, belief.command
         address = self.rt.fleet.get(self.vehicle).address

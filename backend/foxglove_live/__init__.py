@@ -11,6 +11,8 @@ Read-only: no client publishing, no services, no parameters.
 * :mod:`backend.foxglove_live.clock`: the dive's clock in nanoseconds;
 * :mod:`backend.foxglove_live.channels`: the channels, their topics and schemas;
 * :mod:`backend.foxglove_live.scene`: the drawings (scene updates);
+* :mod:`backend.foxglove_live.vehicles`: each vehicle as the view keeps it (a fleet's: every
+  vehicle, on its own channels, entities and frame);
 * :mod:`backend.foxglove_live.publish`: the news as Foxglove messages;
 * :mod:`backend.foxglove_live.server`: the server, following the console.
 

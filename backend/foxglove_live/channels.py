@@ -7,16 +7,22 @@ updates, the Map panel the location fixes, the Log panel the log lines. The rest
 with a JSON Schema generated from the console's own pydantic models (the shapes ``/ws`` and
 the API carry), with their ``$ref``s inlined (a schema Foxglove reads field by field for the
 Plot and Raw Messages panels).
+
+With a fleet (``NEMESYS_VEHICLES``) each vehicle has its own channels of what is its alone
+(:data:`PER_VEHICLE`, under ``/<name>``: ``/auv2/vehicle/pose``), the scene's shared channels
+draw one entity per vehicle (``auv2/active``), and :data:`FRAMES` names each vehicle's frame.
+Without one the channels are :data:`CHANNELS`, as they always were.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Final
 
 import foxglove
 from foxglove.channels import (
+    FrameTransformsChannel,
     LocationFixChannel,
     LogChannel,
     PoseInFrameChannel,
@@ -133,6 +139,46 @@ MODELS: Final[Mapping[str, type[BaseModel]]] = {
     LINK.topic: LinkHealth,
 }
 
+#: With a fleet, each vehicle's own channels: these topics under ``/<name>``.
+PER_VEHICLE: Final = (POSE, TRACK, FIX, STATUS, BELIEF_FIX, BELIEF, LINK)
+#: With a fleet: each vehicle's frame, named by the vehicle, in the scene frame.
+FRAMES = Spec(
+    "/tf",
+    "foxglove.FrameTransforms",
+    "with a fleet: each vehicle's frame, its name, in map at its last pose (3D panel)",
+)
+#: A typed channel's class by its schema.
+_TYPED: Final[Mapping[str, Any]] = {
+    "foxglove.PoseInFrame": PoseInFrameChannel,
+    "foxglove.PosesInFrame": PosesInFrameChannel,
+    "foxglove.LocationFix": LocationFixChannel,
+    "foxglove.SceneUpdate": SceneUpdateChannel,
+    "foxglove.Log": LogChannel,
+    "foxglove.FrameTransforms": FrameTransformsChannel,
+}
+_JSON_MODELS: Final = {SCHEMA_PREFIX + model.__name__: model for model in MODELS.values()}
+
+
+def vehicle_topic(topic: str, vehicle: str | None) -> str:
+    """``topic`` of vehicle ``vehicle``: a fleet's under ``/<name>``; None (the single
+    vehicle): ``topic`` as it is."""
+    return topic if vehicle is None else f"/{vehicle}{topic}"
+
+
+def channel_specs(vehicles: Sequence[str] = ()) -> tuple[Spec, ...]:
+    """The view's channels: :data:`CHANNELS` without a fleet; with one (``vehicles``: its
+    names, in order) the shared ones, then each vehicle's own (:data:`PER_VEHICLE` under
+    ``/<name>``), then :data:`FRAMES`."""
+    if not vehicles:
+        return CHANNELS
+    shared = tuple(c for c in CHANNELS if c not in PER_VEHICLE)
+    own = tuple(
+        Spec(vehicle_topic(c.topic, name), c.schema, f"{name}: {c.what}")
+        for name in vehicles
+        for c in PER_VEHICLE
+    )
+    return (*shared, *own, FRAMES)
+
 
 def json_schema(model: type[BaseModel], title: str) -> dict[str, Any]:
     """``model``'s JSON Schema as its JSON is sent (by alias), its ``$ref``s inlined, titled
@@ -165,43 +211,23 @@ def json_schema(model: type[BaseModel], title: str) -> dict[str, Any]:
 
 class Channels:
     """The live view's channels, in ``context`` (one per console: two consoles in one process
-    do not share channels)."""
+    do not share channels): :func:`channel_specs` of the fleet's ``vehicles`` (none: the
+    single vehicle's)."""
 
-    def __init__(self, context: foxglove.Context) -> None:
-        self.pose = PoseInFrameChannel(POSE.topic, context=context)
-        self.track = PosesInFrameChannel(TRACK.topic, context=context)
-        self.fix = LocationFixChannel(FIX.topic, context=context)
-        self.active = SceneUpdateChannel(ACTIVE.topic, context=context)
-        self.preview = SceneUpdateChannel(PREVIEW.topic, context=context)
-        self.prediction = SceneUpdateChannel(PREDICTION.topic, context=context)
-        self.belief_scene = SceneUpdateChannel(BELIEF_SCENE.topic, context=context)
-        self.belief_fix = LocationFixChannel(BELIEF_FIX.topic, context=context)
-        self.station = SceneUpdateChannel(STATION.topic, context=context)
-        self.station_fix = LocationFixChannel(STATION_FIX.topic, context=context)
-        self.log = LogChannel(LOG.topic, context=context)
+    def __init__(self, context: foxglove.Context, vehicles: Sequence[str] = ()) -> None:
+        self.specs = channel_specs(vehicles)
         #: The typed channels by topic.
-        self.typed: dict[str, Any] = {
-            POSE.topic: self.pose,
-            TRACK.topic: self.track,
-            FIX.topic: self.fix,
-            ACTIVE.topic: self.active,
-            PREVIEW.topic: self.preview,
-            PREDICTION.topic: self.prediction,
-            BELIEF_SCENE.topic: self.belief_scene,
-            BELIEF_FIX.topic: self.belief_fix,
-            STATION.topic: self.station,
-            STATION_FIX.topic: self.station_fix,
-            LOG.topic: self.log,
-        }
+        self.typed: dict[str, Any] = {}
         #: The JSON channels by topic (their messages: the model's JSON as ``/ws`` sends it).
-        self.json = {
-            topic: foxglove.Channel(
-                topic,
-                schema=json_schema(model, SCHEMA_PREFIX + model.__name__),
-                context=context,
-            )
-            for topic, model in MODELS.items()
-        }
+        self.json: dict[str, foxglove.Channel] = {}
+        for spec in self.specs:
+            model = _JSON_MODELS.get(spec.schema)
+            if model is None:
+                self.typed[spec.topic] = _TYPED[spec.schema](spec.topic, context=context)
+            else:
+                schema = json_schema(model, spec.schema)
+                self.json[spec.topic] = foxglove.Channel(spec.topic, schema=schema, context=context)
+        self.log: LogChannel = self.typed[LOG.topic]
 
     def close(self) -> None:
         """Close every channel (their clients are told they are gone)."""
@@ -211,9 +237,13 @@ class Channels:
 
 __all__ = [
     "CHANNELS",
+    "FRAMES",
     "MODELS",
+    "PER_VEHICLE",
     "SCHEMA_PREFIX",
     "Channels",
     "Spec",
+    "channel_specs",
     "json_schema",
+    "vehicle_topic",
 ]

@@ -11,12 +11,16 @@ Foxglove's WebSocket protocol keeps no message for a client that subscribes late
 is drawn once and stays (the paths, the believed position's ring, the transmitter, the track)
 is *latched*: sent again to whoever subscribes to it, and again when a new dive starts.
 Single-threaded: everything here runs on the console's event loop.
+
+With a fleet every vehicle is drawn: the news about one vehicle, named in it, goes to that
+vehicle's own channels, entities and frame (:mod:`backend.foxglove_live.vehicles`).
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from functools import partial
 from typing import Any, Final
 
 from foxglove.messages import (
@@ -28,19 +32,21 @@ from foxglove.messages import (
     PoseInFrame,
     PosesInFrame,
 )
-from pydantic import BaseModel
 
 from backend.belief.model import Belief
 from backend.chart.gps import Station
 from backend.commands.lifecycle import State
-from backend.dives import TRACK_INTERVAL_S
 from backend.foxglove_live import scene
 from backend.foxglove_live.channels import (
     ACTIVE,
     BELIEF,
+    BELIEF_FIX,
     BELIEF_SCENE,
     COMMANDS,
+    FIX,
+    FRAMES,
     LINK,
+    POSE,
     PREDICTION,
     PREVIEW,
     STATION,
@@ -51,6 +57,13 @@ from backend.foxglove_live.channels import (
 )
 from backend.foxglove_live.clock import DiveClock
 from backend.foxglove_live.frames import FRAME, attitude, heading_rad, stamp, vector
+from backend.foxglove_live.vehicles import (
+    MAX_TRACK_POSES,
+    Trail,
+    ViewedVehicle,
+    belief_label,
+    frame_of,
+)
 from backend.messages import (
     ActivePath,
     ActivePathMessage,
@@ -64,9 +77,6 @@ from backend.messages import (
     message_json,
 )
 
-#: The track keeps at most this many poses: past it, every other one goes and the interval
-#: between poses doubles (the whole dive stays, in constant memory).
-MAX_TRACK_POSES: Final = 3600
 #: The track is sent at most this often (station s): it grows a pose at a time.
 TRACK_SEND_S: Final = 1.0
 #: Python's logging levels as Foxglove's.
@@ -86,34 +96,11 @@ def level_of(levelno: int) -> LogLevel:
     return next((level for at, level in LEVELS if levelno >= at), LogLevel.Unknown)
 
 
-class Trail:
-    """The dive's track: a pose at most every ``interval_s`` of the vehicle's clock, at most
-    :data:`MAX_TRACK_POSES` of them (then thinned, the interval doubled)."""
-
-    def __init__(self, interval_s: float = TRACK_INTERVAL_S) -> None:
-        self.start_interval_s = interval_s
-        self.interval_s = interval_s
-        self.poses: list[tuple[float, Pose]] = []  # (vehicle t_s, pose)
-
-    def clear(self) -> None:
-        self.poses.clear()
-        self.interval_s = self.start_interval_s
-
-    def add(self, t_s: float, pose: Pose) -> bool:
-        """Keep the pose if it is due; True when kept."""
-        if self.poses and self.poses[-1][0] <= t_s < self.poses[-1][0] + self.interval_s:
-            return False
-        self.poses.append((t_s, pose))
-        if len(self.poses) > MAX_TRACK_POSES:
-            self.poses = self.poses[::2]
-            self.interval_s *= 2.0
-        return True
-
-
 class Publisher:
     """The live view's messages from the news, on ``channels``. ``tick`` tells Foxglove the
     time (the server's broadcast time), ``new_session`` makes its clients start again (a new
-    dive), ``monotonic`` is the station's clock (s)."""
+    dive), ``monotonic`` is the station's clock (s). ``vehicles``: a fleet's names and
+    addresses, in order (empty: the single vehicle)."""
 
     def __init__(
         self,
@@ -123,20 +110,30 @@ class Publisher:
         tick: Callable[[int], None],
         new_session: Callable[[], None],
         monotonic: Callable[[], float],
+        vehicles: Mapping[str, int | None] | None = None,
     ) -> None:
         self.ch = channels
         self.clock = clock
         self._tick = tick
         self._new_session = new_session
         self._monotonic = monotonic
-        self.trail = Trail()
-        self._track_sent_s: float | None = None
-        self._pose_t_s: float | None = None
-        self._status: BaseModel | None = None
+        self.fleet = bool(vehicles)
+        named = [ViewedVehicle(n, a) for n, a in (vehicles or {}).items()]
+        #: Each vehicle by the name its news carry (None: the single vehicle's).
+        self.vehicles: dict[str | None, ViewedVehicle] = (
+            {v.name: v for v in named} if named else {None: ViewedVehicle(None)}
+        )
         self._station: tuple[float | None, ...] | None = None
-        self._belief_drawn = False  # the believed position is drawn (not the fresh fix)
-        #: What a late subscriber gets sent again, by topic.
-        self.latched: dict[str, Callable[[], object]] = {TRACK.topic: self.send_track}
+        #: What a late subscriber gets sent again: by topic, each drawing's send by its key
+        #: (a fleet's vehicle's name on a shared scene channel; "" otherwise).
+        self.latched: dict[str, dict[str, Callable[[], object]]] = {}
+        for v in self.vehicles.values():
+            self.latched[v.topic(TRACK)] = {"": partial(self.send_track, v)}
+
+    def _vehicle(self, name: str | None) -> ViewedVehicle | None:
+        """The vehicle news naming ``name`` is about (the single one: whatever it names);
+        None: not one of the fleet's."""
+        return self.vehicles.get(name) if self.fleet else self.vehicles[None]
 
     # --- the news ------------------------------------------------------------------------
 
@@ -151,16 +148,19 @@ class Publisher:
             record = item.command
             ns = self.clock.now()
             self.ch.json[COMMANDS.topic].log(message_json(record).encode(), log_time=ns)
-            words = f"command {record.id} {record.pattern}: {record.state}"
+            to = f" to {record.vehicle}" if record.vehicle else ""
+            words = f"command {record.id} {record.pattern}{to}: {record.state}"
             if record.reason:
                 words += f" ({record.reason})"
             level = LogLevel.Warning if record.state in TROUBLE else LogLevel.Info
             self.line(ns, level, words, "commands")
         elif isinstance(item, ActivePathMessage):
-            self.active(item.active_path)
+            self.active(item.active_path, item.vehicle)
         elif isinstance(item, LinkMessage):
             ns = self.clock.now()
-            self.ch.json[LINK.topic].log(message_json(item.link).encode(), log_time=ns)
+            v = self._vehicle(item.vehicle)
+            if v is not None:
+                self.ch.json[v.topic(LINK)].log(message_json(item.link).encode(), log_time=ns)
             self._tick(ns)
         elif isinstance(item, EventMessage):
             event = item.event
@@ -171,26 +171,33 @@ class Publisher:
     def telemetry(self, item: TelemetryMessage) -> None:
         if self.clock.follow(item.dive):
             self.new_dive(item.dive)
+        v = self._vehicle(item.vehicle)
+        if v is None:
+            return
         pose, status = item.pose, item.status
-        if status is not None and status != self._status:
-            self._status = status
-            if self.ch.json[STATUS.topic].has_sinks():
+        status_ch = self.ch.json[v.topic(STATUS)]
+        if status is not None and status != v.status:
+            v.status = status
+            if status_ch.has_sinks():
                 ns = self.clock.now() if status.t_s is None else self.clock.at(status.t_s)
-                self.ch.json[STATUS.topic].log(message_json(status).encode(), log_time=ns)
-        if pose is None or pose.t_s is None or pose.t_s == self._pose_t_s:
+                status_ch.log(message_json(status).encode(), log_time=ns)
+        if pose is None or pose.t_s is None or pose.t_s == v.pose_t_s:
             return
         x, y, z, heading = pose.x_m, pose.y_m, pose.z_m, pose.heading_deg
         if x is None or y is None or z is None or heading is None:
             return  # an unknown number: not drawn (the page shows it unknown)
-        self._pose_t_s = pose.t_s
+        v.pose_t_s = pose.t_s
         ns = self.clock.heard(pose.t_s)
         self._tick(ns)
-        placed = Pose(position=vector(x, y, z), orientation=attitude(heading, pose.roll_deg or 0.0))
-        if self.ch.pose.has_sinks():
-            self.ch.pose.log(
-                PoseInFrame(timestamp=stamp(ns), frame_id=FRAME, pose=placed), log_time=ns
-            )
-        if pose.lat_deg is not None and pose.lon_deg is not None and self.ch.fix.has_sinks():
+        roll = pose.roll_deg or 0.0
+        placed = Pose(position=vector(x, y, z), orientation=attitude(heading, roll))
+        pose_ch, fix_ch = self.ch.typed[v.topic(POSE)], self.ch.typed[v.topic(FIX)]
+        if pose_ch.has_sinks():
+            pose_ch.log(PoseInFrame(timestamp=stamp(ns), frame_id=FRAME, pose=placed), log_time=ns)
+        if v.name is not None and self.ch.typed[FRAMES.topic].has_sinks():
+            frame = frame_of(v.name, ns, x, y, z, heading, roll)
+            self.ch.typed[FRAMES.topic].log(frame, log_time=ns)
+        if pose.lat_deg is not None and pose.lon_deg is not None and fix_ch.has_sinks():
             fix = LocationFix(
                 timestamp=stamp(ns),
                 frame_id=FRAME,
@@ -199,39 +206,51 @@ class Publisher:
                 altitude=-z,
                 heading=heading_rad(heading),
             )
-            self.ch.fix.log(fix, log_time=ns)
-        if self.trail.add(pose.t_s, placed):
+            fix_ch.log(fix, log_time=ns)
+        if v.trail.add(pose.t_s, placed):
             mono = self._monotonic()
-            due = self._track_sent_s is None or mono - self._track_sent_s >= TRACK_SEND_S
-            if due and self.send_track():
-                self._track_sent_s = mono
+            due = v.track_sent_s is None or mono - v.track_sent_s >= TRACK_SEND_S
+            if due and self.send_track(v):
+                v.track_sent_s = mono
 
     def new_dive(self, dive: int | None) -> None:
-        """A new dive: Foxglove's clients start again, the track is emptied, what stays drawn
-        is sent again on the new dive's clock."""
-        self.trail.clear()
-        self._pose_t_s = self._track_sent_s = None
+        """A new dive: Foxglove's clients start again, the tracks are emptied, what stays
+        drawn is sent again on the new dive's clock."""
+        tracks = set()
+        for v in self.vehicles.values():
+            v.trail.clear()
+            v.pose_t_s = v.track_sent_s = None
+            tracks.add(v.topic(TRACK))
         self._new_session()
         if dive is not None:
             self.line(0, LogLevel.Info, f"dive {dive}: its clock starts at 0", "dives")
-        for topic, send in self.latched.items():
-            if topic != TRACK.topic:
-                send()
+        for topic in self.latched:
+            if topic not in tracks:
+                self.resend(topic)
 
-    def send_track(self) -> bool:
-        """The track so far, to its subscribers (none: nothing is built); True when sent."""
-        if not self.ch.track.has_sinks() or not self.trail.poses:
+    def resend(self, topic: str) -> None:
+        """What stays drawn on ``topic``, sent again (a late subscriber, a new dive)."""
+        for send in list(self.latched.get(topic, {}).values()):
+            send()
+
+    def send_track(self, v: ViewedVehicle | None = None) -> bool:
+        """The track so far of ``v`` (None: the single vehicle, or a fleet's first), to its
+        subscribers (none: nothing is built); True when sent."""
+        v = v or next(iter(self.vehicles.values()))
+        channel = self.ch.typed[v.topic(TRACK)]
+        if not channel.has_sinks() or not v.trail.poses:
             return False
-        ns = self.clock.at(self.trail.poses[-1][0])
-        poses = [pose for _t, pose in self.trail.poses]
-        self.ch.track.log(
-            PosesInFrame(timestamp=stamp(ns), frame_id=FRAME, poses=poses), log_time=ns
-        )
+        ns = self.clock.at(v.trail.poses[-1][0])
+        poses = [pose for _t, pose in v.trail.poses]
+        channel.log(PosesInFrame(timestamp=stamp(ns), frame_id=FRAME, poses=poses), log_time=ns)
         return True
 
     def belief(self, belief: Belief) -> None:
+        v = self._vehicle(belief.vehicle)
+        if v is None:
+            return
         p, ns = belief.position, self.clock.now()
-        self.ch.json[BELIEF.topic].log(message_json(belief).encode(), log_time=ns)
+        self.ch.json[v.topic(BELIEF)].log(message_json(belief).encode(), log_time=ns)
         if p.lat_deg is not None and p.lon_deg is not None:
             sigma2 = 0.0 if p.sigma_m is None else p.sigma_m**2
             known = LocationFixPositionCovarianceType.DiagonalKnown
@@ -247,32 +266,46 @@ class Publisher:
                     LocationFixPositionCovarianceType.Unknown if p.sigma_m is None else known
                 ),
             )
-            self.ch.belief_fix.log(fix, log_time=ns)
-        if p.source == "telemetry":  # the fresh fix is the pose itself: no ring
-            if self._belief_drawn:
-                self._belief_drawn = False
+            self.ch.typed[v.topic(BELIEF_FIX)].log(fix, log_time=ns)
+        entity = v.entity("believed")
+        if v.name is not None:  # a fleet's: always, named, with its address and command
+            label = belief_label(v.name, v.address, belief)
+            sigma = None if p.source == "telemetry" else p.sigma_m
+        elif p.source == "telemetry":  # the fresh fix is the pose itself: no ring
+            if v.belief_drawn:
+                v.belief_drawn = False
                 self.latch(BELIEF_SCENE.topic, scene.deletion)
             return
-        self._belief_drawn = True
-        spread = "" if p.sigma_m is None else f", +-{p.sigma_m:.1f} m"
-        label = f"believed ({p.source.replace('_', ' ')}{spread})"
+        else:
+            v.belief_drawn = True
+            spread = "" if p.sigma_m is None else f", +-{p.sigma_m:.1f} m"
+            label = f"believed ({p.source.replace('_', ' ')}{spread})"
+            sigma = p.sigma_m
         self.latch(
             BELIEF_SCENE.topic,
-            lambda ns: scene.belief_update("believed", ns, p.x_m, p.y_m, p.z_m, p.sigma_m, label),
+            lambda ns: scene.belief_update(entity, ns, p.x_m, p.y_m, p.z_m, sigma, label),
+            v.key,
         )
 
     # --- what the pages ask for, and the station -----------------------------------------
 
-    def active(self, path: ActivePath | None) -> None:
-        if path is None or not path.x_m:
-            self.latch(ACTIVE.topic, scene.deletion)
+    def active(self, path: ActivePath | None, vehicle: str | None = None) -> None:
+        """The path ``vehicle`` (a fleet's; None: the single one) flies, as mirrored."""
+        v = self._vehicle(vehicle)
+        if v is None:
             return
-        label = f"active: {path.pattern}"
+        entity = v.entity("active")
+        if path is None or not path.x_m:
+            gone = scene.deletion if v.name is None else lambda ns: scene.deletion(ns, entity)
+            self.latch(ACTIVE.topic, gone, v.key)
+            return
+        label = f"active: {path.pattern}" if v.name is None else f"{v.name} active: {path.pattern}"
         self.latch(
             ACTIVE.topic,
             lambda ns: scene.path_update(
-                "active", ns, path.x_m, path.y_m, path.z_m, label, scene.ACTIVE_RGB
+                entity, ns, path.x_m, path.y_m, path.z_m, label, scene.ACTIVE_RGB
             ),
+            v.key,
         )
 
     def path(
@@ -322,16 +355,17 @@ class Publisher:
                 ),
             )
 
-    def latch(self, topic: str, build: Callable[[int], Any]) -> None:
+    def latch(self, topic: str, build: Callable[[int], Any], key: str = "") -> None:
         """Send ``build(now)`` on ``topic`` now, and again (built anew at its time) to a late
-        subscriber and at a new dive."""
+        subscriber and at a new dive, in place of what ``key`` drew there before (a fleet's
+        vehicle's name: each vehicle's drawing on a shared scene channel stays)."""
         channel = self.ch.typed[topic]
 
         def send() -> None:
             ns = self.clock.now()
             channel.log(build(ns), log_time=ns)
 
-        self.latched[topic] = send
+        self.latched.setdefault(topic, {})[key] = send
         send()
 
     def line(self, ns: int, level: LogLevel, words: str, name: str) -> None:
@@ -341,4 +375,4 @@ class Publisher:
         )
 
 
-__all__ = ["MAX_TRACK_POSES", "Publisher", "Trail", "level_of"]
+__all__ = ["MAX_TRACK_POSES", "Publisher", "Trail", "ViewedVehicle", "level_of"]

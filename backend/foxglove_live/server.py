@@ -3,8 +3,9 @@ console's news, started and stopped with the app (:func:`backend.foxglove_live.l
 
 * **What it shows**: the news every page gets, as a page gets it (the view is one more
   client of :class:`backend.telemetry.TelemetryHub`), converted by
-  :class:`backend.foxglove_live.publish.Publisher`; the previews and predictions the pages
-  ask for (:meth:`FoxgloveLive.preview`, :meth:`FoxgloveLive.prediction`); the ME
+  :class:`backend.foxglove_live.publish.Publisher` (with a fleet, every vehicle's); the
+  previews and predictions the pages ask for (:meth:`FoxgloveLive.preview`,
+  :meth:`FoxgloveLive.prediction`); the ME
   transmitter, looked at with each link health; the console's log lines (a logging handler
   on the console's loggers, at the level logging is configured to).
 * **Read-only**: the server advertises only the ``time`` capability (the dive's clock, so
@@ -94,7 +95,10 @@ class FoxgloveLive:
     def __init__(self, console: Console, host: str, port: int) -> None:
         self.console = console
         self.context = foxglove.Context()
-        self.channels = Channels(self.context)
+        fleet = console.fleet
+        #: A fleet's vehicles by name, with their addresses (empty: the single vehicle).
+        vehicles = {v.name: v.address for v in fleet.vehicles.values()} if fleet.configured else {}
+        self.channels = Channels(self.context, list(vehicles))
         dives = console.dives
         self.clock = DiveClock(lambda: None if dives is None else dives.start_t_s)
         self._loop = asyncio.get_running_loop()
@@ -119,6 +123,7 @@ class FoxgloveLive:
             tick=self.server.broadcast_time,
             new_session=self.server.clear_session,
             monotonic=time.monotonic,
+            vehicles=vehicles,
         )
         self._lines = _LogLines(self, [console.settings.token])
         for name in LOGGERS:
@@ -158,7 +163,9 @@ class FoxgloveLive:
         """Be one of the hub's clients for as long as the view runs (again, if ever dropped
         for falling behind)."""
         self.publisher.station(self.console.station(), self.console.settings.me_range_m)
-        self.publisher.active(self.console.active_path)
+        fleet = self.console.fleet
+        for vehicle in fleet.vehicles.values():  # the single one's is the console's
+            self.publisher.active(vehicle.active_path, fleet.news_name(vehicle))
         while True:
             await self.console.hub.serve(self)
             logger.warning("the live Foxglove view fell behind the news; following again")
@@ -184,9 +191,8 @@ class FoxgloveLive:
 
     def subscribed(self, topic: str) -> None:
         """A client subscribed to ``topic`` (an SDK thread): what stays drawn, again."""
-        send = self.publisher.latched.get(topic)
-        if send is not None:
-            self._soon(send)
+        if topic in self.publisher.latched:
+            self._soon(self.publisher.resend, topic)
 
     def _soon(self, call: Any, *args: Any) -> None:
         with contextlib.suppress(RuntimeError):  # the loop is closed: the view is gone

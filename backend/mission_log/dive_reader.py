@@ -138,11 +138,22 @@ class DiveReader:
     def _rows(self, sql: str, args: tuple[Any, ...]) -> Iterator[Row]:
         return self._db.stream(sql, args, BATCH_ROWS)
 
+    def vehicles(self, dive: int) -> list[str]:
+        """The fleet's vehicles the dive's track points and commands name, in name order
+        (none: a single vehicle's dive, or a log from before fleets)."""
+        names: set[str] = set()
+        for table in ("track", "commands"):
+            if "vehicle" in self.columns(table):
+                sql = f"SELECT DISTINCT vehicle FROM {table} WHERE dive = ? AND vehicle IS NOT NULL"
+                names.update(str(r["vehicle"]) for r in self._db.all(sql, (dive,)))
+        return sorted(names)
+
     def track(self, dive: int) -> Iterator[dict[str, Any]]:
-        """The dive's track points in arrival order, every column (one this log lacks: null;
-        ``active`` parsed, ``nav_valid`` a boolean)."""
+        """The dive's track points in arrival order, every column and the fleet's ``vehicle``
+        each is of (one this log lacks: null; ``active`` parsed, ``nav_valid`` a boolean)."""
         have = self.columns("track")
-        cols = ", ".join(c if c in have else f"NULL AS {c}" for c in TRACK_COLUMNS[1:])
+        wanted = (*TRACK_COLUMNS[1:], "vehicle")
+        cols = ", ".join(c if c in have else f"NULL AS {c}" for c in wanted)
         sql = f"SELECT {cols} FROM track WHERE dive = ? ORDER BY {self._db.track_order}"
         for r in self._rows(sql, (dive,)):
             row = dict(r)

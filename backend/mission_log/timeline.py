@@ -153,6 +153,14 @@ def link_events(
     return out, unplaced
 
 
+def vehicle_events(events: Sequence[Row], vehicle: str | None) -> list[Row]:
+    """The log's ``events`` a fleet's ``vehicle``'s replay shows: its own and those naming no
+    vehicle (a datum set, the console's own); None (no fleet): every one."""
+    if vehicle is None:
+        return list(events)
+    return [e for e in events if e.get("vehicle") in (None, vehicle)]
+
+
 def position_at(samples: Sequence[Row], t_s: float) -> dict[str, Any]:
     """The vehicle at ``t_s`` on the dive's clock (``samples``: the timeline's, ``t_s`` since
     the start, time order, at least one): position linear between the samples around it,

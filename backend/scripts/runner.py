@@ -85,6 +85,7 @@ class ScriptRunner:
         start_s: float | None = None,
         clock: Callable[[], float] | None = None,
         completion_by: CompletionBy = "estimate",
+        vehicle: str | None = None,
     ) -> None:
         if mode not in ("auto", "step"):
             raise ValueError(f"run mode must be 'auto' or 'step', got {mode!r}")
@@ -102,6 +103,8 @@ class ScriptRunner:
         self.start_s = start_s
         self.clock = clock
         self.completion_by: CompletionBy = completion_by
+        #: The fleet's vehicle the run drives (every step names it); None without a fleet.
+        self.vehicle = vehicle
         self.now_s: float | None = None
         self.running = True
         self.outcome: Outcome = "running"
@@ -130,6 +133,7 @@ class ScriptRunner:
         *,
         clock: Callable[[], float] | None = None,
         completion_by: CompletionBy = "estimate",
+        vehicle: str | None = None,
     ) -> ScriptRunner:
         """A runner timed by ``expanded`` (:func:`backend.scripts.expand.expand` of
         ``script`` from where the vehicle is, timed by its profile), as the preview is."""
@@ -139,6 +143,7 @@ class ScriptRunner:
             completion_s=[s.completion_s for s in expanded],
             clock=clock,
             completion_by=completion_by,
+            vehicle=vehicle,
         )
 
     # --- queries --------------------------------------------------------------------------
@@ -220,6 +225,8 @@ class ScriptRunner:
         """The run as JSON (:class:`backend.api.schemas.RunState`); times in s from the run's
         start, the texts in words (:mod:`backend.scripts.labels`)."""
         proposed, watched = self.proposed(), self.watched()
+        # a fleet's run names its vehicle in every step (the run's log says where each went)
+        named = {} if self.vehicle is None else {"vehicle": self.vehicle}
         nxt: dict[str, Any] | None = None
         if proposed is not None:
             s = self.script.steps[proposed]
@@ -228,6 +235,7 @@ class ScriptRunner:
                 "pattern": s.pattern,
                 "params": dict(s.params),
                 "trigger": s.trigger.model_dump(),
+                **named,
             }
         steps = [
             {
@@ -241,6 +249,7 @@ class ScriptRunner:
                 "sent_s": self._rel(self._handed_at[i]),
                 "completion_s": self.completion_s[i],
                 "completed_s": self._rel(self._done_at[i]),
+                **named,
             }
             for i, s in enumerate(self.script.steps)
         ]

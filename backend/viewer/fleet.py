@@ -20,7 +20,7 @@ import numpy as np
 from backend.viewer.belief import SharedDrawing, ring_points
 from backend.viewer.draw import Canvas, Rgb, ned_to_view
 
-__all__ = ["FLEET_RGB", "LABEL_UP_M", "MARKER_M", "fleet_drawing", "fleet_label", "group_of"]
+__all__ = ["FLEET_RGB", "LABEL_UP_M", "MARKER_M", "fleet_drawing", "group_of"]
 
 #: A fleet vehicle's marker, ring and label.
 FLEET_RGB: Final[Rgb] = (90, 200, 255)
@@ -31,51 +31,11 @@ MARKER_M: Final = 0.5
 LABEL_UP_M: Final = 1.2
 
 #: Where the position comes from, in the label's words.
-_BASIS: Final = {"telemetry": "fix", "dead_reckoning": "dead-reckoned", "assumed": "assumed"}
 
 
 def group_of(name: str) -> str:
     """The scene group of vehicle ``name`` (a fleet's name: ``[a-z][a-z0-9_]*``)."""
     return f"/fleet/{name}"
-
-
-def _p_text(p: float) -> str:
-    """A probability as the page says it: never 100 % unless it is 1."""
-    if p >= 1.0:
-        return "100 %"
-    for digits in range(2, 7):
-        text = f"{100.0 * p:.{digits}f}"
-        if float(text) < 100.0:
-            return f"{text.rstrip('0').rstrip('.')} %"
-    return "> 99.9999 %"
-
-
-def fleet_label(
-    name: str,
-    address: int | None,
-    command: tuple[str, str | None, float],
-    position: tuple[float, float, float],
-    source: str,
-    sigma_m: float | None,
-) -> str:
-    """Three short lines (vehicles a few tens of metres apart keep their labels apart)::
-
-        auv2 (address 2)
-        circle p 99.99 %
-        x 0.0 y 20.0 m, depth 2.0 m (fix)
-
-    the vehicle, what it is believed to run (``command``: the belief's kind, pattern and p)
-    and where it is believed to be (NED m: north, east, depth; the position's source and
-    uncertainty)."""
-    kind, pattern, p = command
-    what = "unknown" if kind == "unknown" else pattern or "holding"
-    basis = _BASIS.get(source, source)
-    if source != "telemetry" and sigma_m is not None:
-        basis += f" +-{sigma_m:.1f} m"
-    x, y, z = position
-    where = f"x {x:.1f} y {y:.1f} m, depth {z:.1f} m"
-    named = name if address is None else f"{name} (address {address})"
-    return f"{named}\n{what} p {_p_text(p)}\n{where} ({basis})"
 
 
 def fleet_drawing(

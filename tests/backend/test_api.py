@@ -600,6 +600,8 @@ def test_commands_list_filters_and_order(client: TestClient) -> None:
     since = client.get("/api/commands", params={"since": b["created_at"]}).json()
     assert [x["id"] for x in since] == [c["id"], b["id"]]
     assert client.get("/api/commands", params={"pattern": "hover"}).json() == []
+    # the single vehicle's name stands for its records: all of them
+    assert len(client.get("/api/commands", params={"vehicle": "nemesys"}).json()) == 3
 
 
 @pytest.mark.parametrize(
@@ -611,6 +613,7 @@ def test_commands_list_filters_and_order(client: TestClient) -> None:
         ({"state": "lost"}, "state"),
         ({"dive": 0}, "dive"),
         ({"pattern": "p" * 33}, "pattern"),
+        ({"vehicle": "auv2"}, "vehicle"),  # no fleet: only the single vehicle, nemesys
     ],
 )
 def test_commands_list_bad_queries_are_422(

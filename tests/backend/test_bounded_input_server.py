@@ -160,3 +160,14 @@ def test_ws_limits_through_uvicorn(server: ConsoleProcess) -> None:
             assert reply(ws, " " * (CAP + 10))["detail"] == over["detail"]
         except ConnectionClosed as closed:
             assert closed.rcvd is not None and closed.rcvd.code == 1009
+
+
+def test_ws_pages_get_uncompressed_messages(server: ConsoleProcess) -> None:
+    """A page that offers permessage-deflate (as browsers and the websockets client do) is
+    answered without it: compression is per connection, so each message would be encoded
+    again for every page; sent as it is, one serialisation's bytes go to all of them."""
+    with connect(server.ws_url, open_timeout=5) as ws:  # offers permessage-deflate
+        assert ws.request is not None and ws.response is not None
+        assert "permessage-deflate" in ws.request.headers.get("Sec-WebSocket-Extensions", "")
+        assert "Sec-WebSocket-Extensions" not in ws.response.headers
+        assert json.loads(ws.recv(timeout=30))["type"]  # and the news still comes

@@ -1,6 +1,7 @@
-"""A dive read back from the mission log: ``GET /api/series`` (the plots),
-``GET /api/dives/{dive}/timeline`` and ``PUT /api/replay/at`` (the replay's slider), and
-``GET /api/dives/{dive}/export.mcap`` (on both back-ends: ``log_backend``)."""
+"""A dive read back from the mission log: ``GET /api/series`` (the plots; a fleet's, of the
+vehicle it names, on both back-ends: ``log_backend``), ``GET /api/dives/{dive}/timeline`` and
+``PUT /api/replay/at`` (the replay's slider), and ``GET /api/dives/{dive}/export.mcap`` (on
+both back-ends)."""
 
 from __future__ import annotations
 
@@ -16,9 +17,22 @@ from mcap_ros2.decoder import DecoderFactory
 from backend.chart.geo import Datum
 from planner import VehicleState
 from station.link import Capability
-from tests.agent_link import HOLDING, AgentLink
-from tests.backend.conftest import MakeLightClient, console_of, send, wait_state
+from station.link_fleet import FleetLink
+from tests.agent_link import HOLDING, AgentLink, agent_fleet
+from tests.backend.conftest import (
+    AUTH,
+    CIRCLE,
+    MakeLightClient,
+    console_of,
+    send,
+    wait_state,
+    wait_until,
+)
 from tests.backend.log_backend import LogBackend
+from vehicle_contract.fleet import parse_vehicles
+
+FLEET = parse_vehicles("3")
+NAMES = [v.name for v in FLEET]
 
 
 def test_before_any_dive_the_series_is_empty(make_light_client: MakeLightClient) -> None:
@@ -107,6 +121,58 @@ def test_a_dive_that_does_not_exist_is_404(client: TestClient) -> None:
     assert r.status_code == 404 and r.json() == {"detail": "no dive 99"}
 
 
+def test_the_single_vehicle_may_be_named_and_no_other(client: TestClient) -> None:
+    plain = client.get("/api/series").json()
+    assert "vehicle" not in plain and plain["dive"] == 1  # as it always was
+    assert client.get("/api/series", params={"vehicle": "nemesys"}).json() == plain
+    r = client.get("/api/series", params={"vehicle": "auv1"})
+    assert r.status_code == 422, r.text
+    (item,) = r.json()["detail"]
+    assert item["loc"] == ["query", "vehicle"] and "'nemesys'" in item["msg"], item
+
+
+def test_a_fleets_series_is_the_named_vehicles_alone(
+    make_light_client: MakeLightClient, log_backend: LogBackend
+) -> None:
+    """Three vehicles' tracks in one dive: each series holds its vehicle's samples only (its
+    own depths and commanded depth), says whose it is, and a fleet's request names one of
+    its vehicles (422 at the query's ``vehicle`` naming them otherwise)."""
+    link: FleetLink = agent_fleet(FLEET)
+    client = make_light_client(link, vehicles="3", **log_backend.settings())  # type: ignore[arg-type]
+    wait_until(lambda: all(v["pose"] for v in client.get("/api/vehicles").json()))
+    console = console_of(client)
+    assert console.log is not None and console.dive is not None
+    dive = console.dive
+    start = max(r["t_s"] for r in console.log.track_rows(dive, positioned=False))
+    for k in range(1, 4):
+        for i, name in enumerate(NAMES):
+            status = {
+                "depth_m": 10.0 * (i + 1) + k,
+                "battery_pct": 90 - i,
+                "active": {"pattern": "circle", "params": {"depth": 5.0 + i}},
+            }
+            console.log.add_track(dive, start + k, 0.0, 20.0 * i, 2.0, 0.0, status, vehicle=name)
+    for i, name in enumerate(NAMES):
+        s = client.get("/api/series", params={"vehicle": name}).json()
+        assert s["vehicle"] == name and s["dive"] == dive
+        rows = console.log.track_rows(dive, positioned=False, vehicle=name)
+        assert len(s["t_s"]) == len(rows) >= 4  # its first pose's point, then the three
+        assert s["depth_m"][-3:] == [10.0 * (i + 1) + k for k in range(1, 4)]
+        assert s["commanded_depth_m"][-3:] == [5.0 + i] * 3
+        assert s["battery_pct"][-3:] == [90 - i] * 3
+        assert s["t_s"][-1] - s["t_s"][-3] == 2.0
+    thin = client.get("/api/series", params={"vehicle": "auv2", "dive": dive, "limit": 2})
+    assert thin.json()["depth_m"][-1] == 23.0 and len(thin.json()["t_s"]) == 2
+    for params in ({}, {"vehicle": "auv9"}, {"vehicle": "all"}, {"dive": 99}):
+        r = client.get("/api/series", params=params)
+        assert r.status_code == 422, r.text  # the vehicle first, before the dive
+        (item,) = r.json()["detail"]
+        assert item["loc"] == ["query", "vehicle"], item
+        assert all(n in item["msg"] for n in NAMES), item
+    r = client.get("/api/series", params={"vehicle": "auv1", "dive": 99})
+    assert r.status_code == 404 and r.json() == {"detail": "no dive 99"}
+
+
 # --- the replay's timeline and its slider ----------------------------------------------------
 
 
@@ -172,6 +238,72 @@ def test_the_slider_gives_the_vehicle_at_a_time_and_refuses_one_outside_the_dive
     assert client.put("/api/replay/at", json={"dive": 4, "t_s": 0}).status_code == 404
     for bad in ({"dive": 1, "t_s": "1"}, {"dive": 1}, {"dive": True, "t_s": 0}):
         assert client.put("/api/replay/at", json=bad).status_code == 422, bad
+
+
+def test_a_fleets_replay_is_the_named_vehicles_alone(make_light_client: MakeLightClient) -> None:
+    """Three vehicles in one dive, each on its own lane: the timeline, the slider and the 3D
+    replay of one are its samples, its commands, its events and those naming no vehicle,
+    never another's; a fleet's replay names its vehicle (422 naming them otherwise)."""
+    link: FleetLink = agent_fleet(FLEET)
+    client = make_light_client(link, vehicles="3")  # type: ignore[arg-type]
+    wait_until(lambda: all(v["pose"] for v in client.get("/api/vehicles").json()))
+    console = console_of(client)
+    log, dive = console.log, console.dive
+    assert log is not None and dive is not None
+    body = {"pattern": "circle", "params": CIRCLE, "vehicle": "auv2"}
+    sent = client.post("/api/commands", json=body, headers=AUTH).json()
+    wait_state(client, sent["id"], ("acknowledged",))
+    start = max(r["t_s"] for r in log.track_rows(dive, positioned=False))
+    for k in range(1, 4):
+        for i, name in enumerate(NAMES):
+            log.add_track(dive, start + k, 2.0 * k, 20.0 * i, 2.0, 0.0, {}, vehicle=name)
+    log.add_event(dive, "echo_mismatch", "auv1 runs another", vehicle="auv1")
+    log.add_event(dive, "datum", "datum set")
+    doc = client.get(f"/api/dives/{dive}/timeline", params={"vehicle": "auv2"}).json()
+    assert doc["vehicle"] == "auv2"
+    rows = log.track_rows(dive, vehicle="auv2")
+    assert len(doc["samples"]) == len(rows) >= 4  # its first pose's point, then the three
+    assert {s["y_m"] for s in doc["samples"][-3:]} == {20.0}  # auv2's lane only
+    assert [c["id"] for c in doc["commands"]] == [sent["id"]]
+    texts = [e["text"] for e in doc["events"]]
+    assert "datum set" in texts and "auv1 runs another" not in texts
+    assert {e["command_id"] for e in doc["events"]} == {sent["id"], None}
+    other = client.get(f"/api/dives/{dive}/timeline", params={"vehicle": "auv1"}).json()
+    assert other["commands"] == [] and "auv1 runs another" in [e["text"] for e in other["events"]]
+    assert {s["y_m"] for s in other["samples"]} == {0.0}
+    t_s = doc["samples"][-1]["t_s"]
+    at = client.put("/api/replay/at", json={"dive": dive, "t_s": t_s, "vehicle": "auv3"}).json()
+    assert at["vehicle"] == "auv3" and at["position"]["y_m"] == 40.0, at
+    r = client.post(f"/api/dives/{dive}/replay", params={"vehicle": "auv2"}, headers=AUTH)
+    assert r.json() == {"dive": dive, "vehicle": "auv2", "track_points": len(rows), "commands": 1}
+    for named in ({}, {"vehicle": "auv9"}, {"vehicle": "all"}):
+        asked = (
+            client.get(f"/api/dives/{dive}/timeline", params=named),
+            client.put("/api/replay/at", json={"dive": dive, "t_s": 0.0, **named}),
+            client.post(f"/api/dives/{dive}/replay", params=named, headers=AUTH),
+        )
+        for r, where in zip(asked, ("query", "body", "query"), strict=True):
+            assert r.status_code == 422, r.text
+            (item,) = r.json()["detail"]
+            assert item["loc"] == [where, "vehicle"], item
+            assert all(n in item["msg"] for n in NAMES), item
+
+
+def test_the_single_vehicles_replay_may_name_it_and_no_other(client: TestClient) -> None:
+    plain = client.get("/api/dives/1/timeline").json()
+    assert "vehicle" not in plain
+    assert client.get("/api/dives/1/timeline", params={"vehicle": "nemesys"}).json() == plain
+    at = client.put("/api/replay/at", json={"dive": 1, "t_s": 0.0}).json()
+    assert "vehicle" not in at
+    named = client.put("/api/replay/at", json={"dive": 1, "t_s": 0.0, "vehicle": "nemesys"})
+    assert named.json() == at
+    assert set(client.post("/api/dives/1/replay", headers=AUTH).json()) == {
+        "dive",
+        "track_points",
+        "commands",
+    }
+    r = client.put("/api/replay/at", json={"dive": 1, "t_s": 0.0, "vehicle": "auv1"})
+    assert r.status_code == 422 and r.json()["detail"][0]["loc"] == ["body", "vehicle"]
 
 
 def test_a_dive_downloads_as_mcap_with_the_logs_rows(

@@ -30,7 +30,7 @@ from starlette.requests import Request
 from backend.api import authoring, commands, scripts, training
 from backend.api.commands import LogFilter
 from backend.mission_log.store import LogWriteError
-from codec import describe_dictionary
+from codec import describe_dictionary, encode_frame
 from tests.backend.api.test_survey import SURVEY
 from tests.backend.chart.test_tiles import tile_dir
 from tests.backend.conftest import (
@@ -314,6 +314,9 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     c.call("POST", "/api/survey/preview", json=SURVEY)
     frame = c.call("POST", "/api/encode", json=body).json()["hex"]
     c.call("POST", "/api/decode", json={"frame": frame})
+    # a fleet's addressed frame: with its address (no vehicle of this console has it)
+    addressed = encode_frame("circle", CIRCLE, address=2).frame.hex
+    assert c.call("POST", "/api/decode", json={"frame": addressed}).json()["address"] == 2
     sent = c.call("POST", "/api/commands", json=body, headers=AUTH).json()
     wait_state(client, sent["id"], ("acknowledged",))
     # a preview against the active pattern: with its diff
@@ -364,6 +367,37 @@ def test_a_tour_of_every_operation_validates(make_client: MakeClient, tmp_path: 
     c.call("GET", "/api/control")
     ok = {(m, p) for m, p, status in c.seen if status < 300}
     assert ok == {(m, normal(p)) for m, p, _ in c.operations()}
+
+
+@pytest.mark.training
+def test_a_fleets_answers_validate(make_client: MakeClient) -> None:
+    """Training with a fleet of three: the answers that are then each vehicle's validate,
+    and the reads of one vehicle name it."""
+    client = make_client(vehicles="3")
+    c = contract(client)
+    wait_until(lambda: all(v["pose"] for v in c.call("GET", "/api/vehicles").json()))
+    training = c.call("GET", "/api/training").json()
+    assert [v["vehicle"] for v in training["vehicle_channel_stats"]] == ["auv1", "auv2", "auv3"]
+    c.call("GET", "/api/vehicles/auv2")
+    c.call("GET", "/api/vehicle")
+    series = c.call("GET", "/api/series?vehicle=auv2").json()
+    assert series["vehicle"] == "auv2" and series["dive"] == 1
+    missing = c.call("GET", "/api/series")
+    assert missing.status_code == 422
+    assert missing.json()["detail"][0]["loc"] == ["query", "vehicle"]
+    c.call("GET", "/api/dives/1?vehicle=auv3")
+    # the replay of one vehicle's: its timeline, its slider, its track in a view
+    timeline = c.call("GET", "/api/dives/1/timeline?vehicle=auv2").json()
+    assert timeline["vehicle"] == "auv2"
+    assert c.call("GET", "/api/dives/1/timeline").status_code == 422
+    view = {"X-Nemesys-View": "fleet-view-1"}
+    at = c.call(
+        "PUT", "/api/replay/at", json={"dive": 1, "t_s": 0.0, "vehicle": "auv2"}, headers=view
+    )
+    assert at.json()["vehicle"] == "auv2"
+    replay = c.call("POST", "/api/dives/1/replay?vehicle=auv2", headers={**AUTH, **view})
+    assert replay.json()["vehicle"] == "auv2"
+    c.call("GET", "/api/transmitter")
 
 
 def test_a_real_vehicles_answers_validate(make_client: MakeClient) -> None:
@@ -625,6 +659,7 @@ def test_the_models_drop_nothing_the_handlers_return(client: TestClient) -> None
     same_keys(on["channel"], asdict(sim.channel.config), "channel")
     same_keys(on["current"], asdict(sim.current.config), "current")
     same_keys(on["channel_stats"], asdict(sim.channel.stats), "channel_stats")
+    assert "vehicle_channel_stats" not in on  # a fleet's only
     vehicle = c.call("GET", "/api/vehicle").json()
     same_keys(vehicle["pose"], console.hub.pose, "pose")
     same_keys(vehicle["status"], console.hub.status, "status")

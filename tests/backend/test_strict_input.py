@@ -67,7 +67,7 @@ BASES: dict[str, dict[str, Any]] = {
     "MissionScript": SCRIPT,
     "RunIn": {"script": SCRIPT, "mode": "step"},
     "DatumIn": {"lat_deg": 1.0, "lon_deg": 2.0},
-    "ReplayAtIn": {"dive": 1, "t_s": 0.0},
+    "ReplayAtIn": {"dive": 1, "t_s": 0.0, "vehicle": "nemesys"},  # a fleet's names its vehicle
     "SurveyIn": {"area": SURVEY_AREA, "vehicles": [SURVEY_VEHICLE]},
     "ControlIn": {"action": "request", "vehicle": "nemesys", "takeover_allowed": False},
     "SurfaceIn": {"vehicle": "nemesys"},  # issue 23: a fleet's Surface names its vehicle

@@ -26,6 +26,7 @@ import httpx
 import pytest
 import viser
 from playwright.sync_api import Browser, Page, Request, expect
+from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
 from backend.app import create_app
 from backend.console import Console as Runtime
@@ -155,6 +156,48 @@ def posted(path: str, vehicle: str | None = None) -> Any:
     return match
 
 
+#: The vehicles' markers (their dots) and labels not wholly inside the chart's box, as
+#: ``"auv1 label"``; ``null`` until every vehicle has its marker.
+FLEET_OUTSIDE_CHART = """
+(count) => {
+  const chart = document.getElementById('chart').getBoundingClientRect();
+  const markers = [...document.querySelectorAll('#chart .chart-fleet')];
+  if (markers.length !== count) return null;
+  const out = [];
+  for (const m of markers) {
+    for (const [what, node] of [['marker', m], ['label', m.querySelector('.chart-fleet-label')]]) {
+      const r = node.getBoundingClientRect();
+      if (r.width === 0 || r.left < chart.left - 0.5 || r.right > chart.right + 0.5
+          || r.top < chart.top - 0.5 || r.bottom > chart.bottom + 0.5) {
+        out.push(`${m.dataset.vehicle} ${what}`);
+      }
+    }
+  }
+  return out;
+}
+"""
+
+
+def fleet_outside_chart(page: Page) -> list[str] | None:
+    """What of the fleet's markers and labels the chart's box does not hold (None: not every
+    vehicle is on the chart yet)."""
+    out: list[str] | None = page.evaluate(FLEET_OUTSIDE_CHART, len(NAMES))
+    return out
+
+
+def assert_fleet_inside_chart(page: Page, what: str) -> None:
+    """Every vehicle's marker and label lies wholly inside the chart's box (waits for the
+    chart to settle: a fit's moves end, then the labels are placed)."""
+    with contextlib.suppress(PlaywrightTimeout):  # the assertion below says what is outside
+        page.wait_for_function(
+            f"(n) => {{ const out = ({FLEET_OUTSIDE_CHART})(n); return out && !out.length; }}",
+            arg=len(NAMES),
+            polling=POLL_MS,
+            timeout=10_000,
+        )
+    assert fleet_outside_chart(page) == [], f"outside the chart's box ({what})"
+
+
 def no_overlaps(page: Page, testids: list[str], what: str) -> None:
     boxes = {t: place(page, t) for t in testids}
     for i, one in enumerate(testids):
@@ -216,6 +259,8 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
         expect(shown).to_have_attribute("data-command", re.compile(r'"vehicle":"auv3"'))
         expect(send).to_contain_text("Send to auv3")
         expect(page.locator("#status-title")).to_have_text("Vehicle status: auv3")
+        # the frame shown is auv3's addressed one
+        expect(page.get_by_test_id("frame-size")).to_have_text("(108 bits, to address 3)")
         wait_preview(page, "circle")
         expect(page.get_by_test_id("confirm-dialog")).to_be_hidden()
         # auv3 holds 40 m east of the origin: the preview starts there
@@ -269,6 +314,8 @@ def test_the_fleet_page_at_1280x800_with_5_vehicles(
             expect(marker).to_contain_text(f"{v.name} · {v.address}")
             expect(marker).to_contain_text(re.compile(r"(holding|circle) p 100 %"))
         expect(page.get_by_test_id("chart-fleet-auv3")).to_contain_text("circle")
+        # the preview's fit holds every vehicle, and no label is cut by the chart's edge
+        assert_fleet_inside_chart(page, "the preview's fit, auv3 selected")
         labels = wait_until(lambda: len(fleet_labels(console)) == 5 and fleet_labels(console))
         assert sorted(labels) == NAMES
         wait_until(lambda: "\ncircle p 100 %\n" in fleet_labels(console)["auv3"])
@@ -381,4 +428,69 @@ def test_the_airtime_budget_and_a_repeating_surface_are_shown_as_the_console_say
             what="the retry's record",
         )
         assert [r["vehicle"] for r in retried] == ["auv5"]
+        w.assert_clean()
+
+
+def plots_shown(page: Page) -> dict[str, Any]:
+    """What the plots hold (``t0``, ``t``: s since the dive's start, ``depth``), their titles,
+    and the vehicle they say they are of."""
+    got: dict[str, Any] = page.evaluate(
+        """() => {
+            const box = document.getElementById('plots');
+            const titles = [...box.querySelectorAll('.u-title')].map((n) => n.textContent);
+            return { ...box.samplesShown(), titles, vehicle: box.dataset.vehicle ?? null };
+        }"""
+    )
+    return got
+
+
+def test_the_plots_are_the_selected_vehicles_named_in_their_titles(
+    fleet_console: FleetConsole, browser: Browser
+) -> None:
+    """auv3 goes to 6, 7 and 8 m (a second of its clock apart) while the others hold at 2 m:
+    the plots of auv1 (selected first) hold auv1's series alone; selecting auv3 loads its
+    series (``GET /api/series?vehicle=auv3``), and the plots hold it, titled "Depth: auv3".
+    Every series the page asked for named its vehicle."""
+    console = fleet_console
+    auv3 = console.link.vehicles["auv3"]
+    assert isinstance(auv3, AgentLink)
+
+    def logged() -> int:
+        return len(console.get("/api/series?vehicle=auv3")["t_s"])
+
+    for k in (1, 2, 3):  # each reported within REPORT_S and logged as a track point
+        auv3.state = VehicleState(0.0, 40.0, 5.0 + k, 0.0, 0.0, 100.0 + k)
+        wait_until(lambda: logged() == 1 + k, what=f"auv3's track point at {100 + k} s")  # noqa: B023
+    own = {n: console.get(f"/api/series?vehicle={n}") for n in ("auv1", "auv3")}
+    # (a point keeps the status heard before its pose: the depth said a second earlier)
+    assert own["auv3"]["depth_m"] == [2.0, 2.0, 6.0, 7.0] and own["auv3"]["t_s"] == [0, 1, 2, 3]
+    with sized_page(browser, 1280, 800) as w:
+        page = open_fleet_page(w, console)
+        page.wait_for_function(
+            "() => document.querySelector('#plots.plots-ready') !== null"
+            " && document.getElementById('plots').dataset.vehicle === 'auv1'"
+            " && Number(document.getElementById('plots').dataset.logged) >= 1",
+            polling=POLL_MS,
+        )
+        shown = plots_shown(page)
+        assert shown["titles"] == ["Depth: auv1", "Battery: auv1", "Speed: auv1"]
+        assert shown["depth"] == own["auv1"]["depth_m"] == [2.0]  # none of auv3's depths
+        assert shown["t0"] == own["auv1"]["start_t_s"]
+
+        with page.expect_response(
+            lambda r: "/api/series?" in r.url and "vehicle=auv3" in r.url
+        ) as answer:
+            page.get_by_test_id("vehicle-select").select_option("auv3")
+        assert answer.value.status == 200
+        page.wait_for_function(
+            "() => Number(document.getElementById('plots').dataset.logged) === 4",
+            polling=POLL_MS,
+        )
+        shown = plots_shown(page)
+        assert shown["titles"] == ["Depth: auv3", "Battery: auv3", "Speed: auv3"]
+        assert shown["vehicle"] == "auv3"
+        assert shown["t0"] == own["auv3"]["start_t_s"]
+        assert (shown["t"], shown["depth"]) == ([0, 1, 2, 3], [2.0, 2.0, 6.0, 7.0])
+        asked = [url for method, url in w.requests if "/api/series" in url]
+        assert asked and all(re.search(r"[?&]vehicle=auv\d", url) for url in asked), asked
         w.assert_clean()

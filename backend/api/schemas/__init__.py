@@ -8,6 +8,7 @@ acknowledgements) stay open: fields outside the contract are kept.
 """
 
 from backend.api.schemas.authoring import (
+    AddressedDecodeResult,
     DecodeResult,
     EncodeDoc,
     PatternDoc,
@@ -52,6 +53,7 @@ from backend.api.schemas.training import (
 __all__ = [
     "OPERATOR",
     "Ack",
+    "AddressedDecodeResult",
     "ChannelSettings",
     "ChartDoc",
     "CheckLineDoc",

@@ -302,3 +302,14 @@ class DecodeResult(BaseModel):
     command: CommandJson
     corrected: int = Field(description="bits the BCH decoder corrected")
     sync_errors: int = Field(description="preamble and delimiter bits wrong")
+
+
+class AddressedDecodeResult(DecodeResult):
+    """A fleet's addressed (108-bit) frame: the decode and whom it is addressed to."""
+
+    address: int = Field(ge=0, le=15, description="the frame's address: 0 all vehicles, 1-15 one")
+    vehicle: str | None = Field(
+        description='the console\'s vehicle with that address ("all" for address 0); null: '
+        "no vehicle of this console has it"
+    )
+    addressed_to: str = Field(description="whom the frame is for, in words")

@@ -11,9 +11,15 @@ from pydantic import BaseModel, Field
 class DiveSeries(BaseModel):
     """The current (or a chosen) dive's telemetry as the log keeps it: a sample a second of
     the vehicle's clock, on the dive's own clock (s since its start), oldest first. Columns
-    of equal length; a value the vehicle did not report is null."""
+    of equal length; a value the vehicle did not report is null. With a fleet, one
+    vehicle's (``vehicle``)."""
 
     dive: int | None = Field(description="the dive; null: none has started yet (no samples)")
+    vehicle: str | None = Field(
+        None,
+        description="the fleet's vehicle whose series it is (absent without a fleet: the one "
+        "vehicle's)",
+    )
     started_at: str | None = Field(description="when the dive started (station clock, ISO 8601)")
     start_t_s: float | None = Field(
         description="the vehicle's clock at the dive's start, its first sample (s); "
@@ -84,6 +90,11 @@ class DiveTimeline(BaseModel):
     (time order). The replay's slider runs from ``from_t_s`` to ``duration_s``."""
 
     dive: int
+    vehicle: str | None = Field(
+        None,
+        description="the fleet's vehicle whose timeline it is (absent without a fleet: the "
+        "one vehicle's)",
+    )
     started_at: str
     start_t_s: float | None = Field(
         description="the vehicle's clock at the dive's start (null: no track; the dive's clock "
@@ -101,6 +112,9 @@ class ReplayAt(BaseModel):
     """The replayed vehicle at ``t_s`` (drawn as a marker in the caller's 3D view)."""
 
     dive: int
+    vehicle: str | None = Field(
+        None, description="the fleet's vehicle replayed (absent without a fleet)"
+    )
     t_s: float
     position: TimelineSample | None = Field(
         description="where it was, between the samples around t_s; null: the dive has no track"

@@ -7,7 +7,7 @@ hand them to the routers typed; they are named here with the responses built fro
 
 from __future__ import annotations
 
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
 from backend.messages import ActivePath, LastSent, Pose, VehicleStatus, VehicleView
 from backend.mission_log.records import (
@@ -41,6 +41,9 @@ class DiveDetail(BaseModel):
 
 class ReplayResult(BaseModel):
     dive: int
+    vehicle: str | None = Field(
+        None, description="the fleet's vehicle replayed (absent without a fleet)"
+    )
     track_points: int
     commands: int
 

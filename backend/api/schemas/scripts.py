@@ -46,11 +46,17 @@ class ProposedStep(BaseModel):
     pattern: str
     params: Params
     trigger: Trigger
+    vehicle: str | None = Field(
+        None, description="the fleet's vehicle it goes to (absent without a fleet)"
+    )
 
 
 class RunStep(BaseModel):
     index: int
     pattern: str
+    vehicle: str | None = Field(
+        None, description="the fleet's vehicle the step is sent to (absent without a fleet)"
+    )
     trigger: TriggerKind
     t_s: float | None = Field(description="an 'at' trigger's time, s from the run's start")
     state: StepState

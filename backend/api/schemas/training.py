@@ -34,7 +34,8 @@ class CurrentSettings(BaseModel):
 
 
 class ChannelStats(BaseModel):
-    """The emulated channel's counters."""
+    """The emulated channel's counters (with a fleet, :class:`VehicleChannelStats` are each
+    vehicle's receiver's)."""
 
     frames_in: int
     frames_delivered: int
@@ -45,15 +46,34 @@ class ChannelStats(BaseModel):
     bursts: int
 
 
+class VehicleChannelStats(BaseModel):
+    """One fleet vehicle's receiver on the shared emulated link: every frame reaches every
+    vehicle, each through its own channel (its own bit errors, bursts and range)."""
+
+    vehicle: str = Field(description="the fleet's vehicle (NEMESYS_VEHICLES)")
+    address: int = Field(description="its frames' address (1-15)")
+    channel_stats: ChannelStats = Field(description="its own receiver's counters")
+
+
 class TrainingOn(BaseModel):
-    """Training mode: the simulated vehicle's settings."""
+    """Training mode: the simulated vehicle's settings (with a fleet, every vehicle's: they
+    share the link's settings and the water)."""
 
     enabled: Literal[True]
     channel: ChannelSettings
     current: CurrentSettings
     time_scale: float
     scenarios: list[str]
-    channel_stats: ChannelStats
+    channel_stats: ChannelStats = Field(
+        description="the emulated link's counters; with a fleet, the sums over every "
+        "vehicle's receiver (each frame counted once per vehicle: each is in "
+        "vehicle_channel_stats)"
+    )
+    vehicle_channel_stats: list[VehicleChannelStats] | None = Field(
+        None,
+        description="with a fleet: each vehicle's receiver's counters, in the fleet's order "
+        "(absent without a fleet)",
+    )
 
 
 class TrainingOff(BaseModel):

@@ -193,6 +193,13 @@ def test_the_log_filters_and_exports_by_vehicle(fleet: TestClient) -> None:
     console.log.flush_track()
     points = console.log.track_rows(dive, vehicle="auv2")
     assert points and all(p["y_m"] == 20.0 for p in points)
+    # a name the fleet has not is a 422 naming its vehicles, never an empty answer
+    for path in ("/api/commands", "/api/log.csv", "/api/log.json", f"/api/dives/{dive}"):
+        r = fleet.get(path, params={"vehicle": "auv9"})
+        assert r.status_code == 422, (path, r.text)
+        (problem,) = r.json()["detail"]
+        assert problem["loc"] == ["query", "vehicle"]
+        assert all(name in problem["msg"] for name in NAMES), problem["msg"]
 
 
 def test_live_news_name_their_vehicle_and_surface_all_answers_every_record(
@@ -233,6 +240,16 @@ def test_a_script_drives_one_vehicle_named_in_every_step(fleet: TestClient) -> N
     assert doc["path"]["y_m"][0] == pytest.approx(20.0, abs=1.0)  # from auv2's place
     onboard = fleet.post("/api/scripts/export", json=ok).json()
     assert decode_addressed_frame(onboard["frames"][0]["hex"]).address == 2
+    # the run's log names the vehicle of every step, and of the one proposed next
+    two = {**ok, "steps": [{**step, "vehicle": "auv2"}, {**step, "vehicle": "auv2"}]}
+    run = post(fleet, "/api/scripts/run", {"script": two, "mode": "step"})
+    assert run.status_code == 200, run.text
+    assert [s["vehicle"] for s in run.json()["steps"]] == ["auv2", "auv2"]
+    assert run.json()["next"]["vehicle"] == "auv2"
+    state = fleet.get("/api/scripts/run").json()
+    assert [s["vehicle"] for s in state["steps"]] == ["auv2", "auv2"]
+    stopped = post(fleet, "/api/scripts/run/stop", {})
+    assert [s["vehicle"] for s in stopped.json()["steps"]] == ["auv2", "auv2"]
 
 
 def test_one_way_fleet_vehicles_share_the_transmitters_health(

@@ -4,7 +4,8 @@ telemetry and acknowledgements under its namespace, every frame published once o
 station's transmitter topic.
 
 A command to one vehicle changes only that one's active command; Surface to all surfaces all
-three, each record ending ``acknowledged`` by its own vehicle."""
+three, each record ending ``acknowledged`` by its own vehicle; ``GET /api/training`` gives each
+vehicle's receiver's counters (every frame reached all three) and their sums."""
 
 from __future__ import annotations
 
@@ -65,4 +66,18 @@ def test_training_with_three_vehicles(make_client: MakeClient) -> None:
         console.fleet_sim.sim(n).agent.active.pattern == "surface"  # type: ignore[union-attr]
         for n in NAMES
     )
-    assert client.get("/api/training").json()["enabled"]
+    # the shared link's counters, each vehicle's receiver's: every frame reached all three
+    training = client.get("/api/training").json()
+    assert training["enabled"]
+    each = training["vehicle_channel_stats"]
+    assert [(v["vehicle"], v["address"]) for v in each] == [(n, i + 1) for i, n in enumerate(NAMES)]
+    sent = console.fleet_sim.transmissions
+    assert sent >= 2  # the circle, Surface all
+    for v in each:
+        own = console.fleet_sim.sim(v["vehicle"]).channel.stats
+        assert v["channel_stats"]["frames_in"] == own.frames_in == sent
+        assert v["channel_stats"]["bits_sent"] == own.bits_sent
+    totals = training["channel_stats"]
+    for counter, total in totals.items():
+        assert total == sum(v["channel_stats"][counter] for v in each), counter
+    assert totals["frames_in"] == 3 * sent

@@ -1,5 +1,6 @@
 """The live view's channels (backend/foxglove_live/channels.py): the list docs/foxglove.md
-gives, the schemas the JSON channels are advertised with, and the track's bound."""
+gives (and, with a fleet, each vehicle's), the schemas the JSON channels are advertised with,
+and the track's bound."""
 
 from __future__ import annotations
 
@@ -14,19 +15,29 @@ import pytest
 from foxglove.messages import LogLevel, Pose
 from pydantic import BaseModel
 
-from backend.foxglove_live.channels import CHANNELS, MODELS, SCHEMA_PREFIX, Channels, json_schema
+from backend.foxglove_live.channels import (
+    CHANNELS,
+    FRAMES,
+    MODELS,
+    PER_VEHICLE,
+    SCHEMA_PREFIX,
+    Channels,
+    channel_specs,
+    json_schema,
+)
 from backend.foxglove_live.publish import MAX_TRACK_POSES, Trail, level_of
 
 DOC = Path(__file__).resolve().parents[3] / "docs" / "foxglove.md"
 _ROW = re.compile(r"^\| `(/[^`]*)` \| `([^`]+)` \| (.+) \|$")
 
 
-def documented_channels(doc: Path = DOC) -> dict[str, str]:
-    """topic -> schema name, as the "Live" section's channel table of docs/foxglove.md lists
-    them (the section ends at the next second-level heading)."""
+def documented_channels(doc: Path = DOC, part: str = "Channels") -> dict[str, str]:
+    """topic -> schema name, as the table of the "Live" section's ``part`` of
+    docs/foxglove.md lists them ("Channels"; "A fleet": each vehicle's, ``/<name>/...``)."""
     text = doc.read_text(encoding="utf-8")
     live = text.split("\n## Live\n", 1)[1].split("\n## ", 1)[0]
-    rows = [m for line in live.splitlines() if (m := _ROW.match(line))]
+    section = live.split(f"\n### {part}\n", 1)[1].split("\n### ", 1)[0]
+    rows = [m for line in section.splitlines() if (m := _ROW.match(line))]
     return {m.group(1): m.group(2) for m in rows}
 
 
@@ -36,18 +47,37 @@ def test_the_doc_lists_every_channel_with_its_schema_once() -> None:
     assert len(CHANNELS) == len({c.topic for c in CHANNELS})
 
 
-def test_the_channels_made_are_the_listed_ones() -> None:
-    channels = Channels(foxglove.Context())
+def test_the_doc_lists_a_fleets_channels_of_each_vehicle_and_its_frames() -> None:
+    documented = documented_channels(part="A fleet")
+    own = {f"/<name>{c.topic}": c.schema for c in PER_VEHICLE}
+    assert documented == {**own, FRAMES.topic: FRAMES.schema}
+
+
+@pytest.mark.parametrize("vehicles", [(), ("auv1", "alpha")])
+def test_the_channels_made_are_the_listed_ones(vehicles: tuple[str, ...]) -> None:
+    channels = Channels(foxglove.Context(), vehicles)
+    specs = channel_specs(vehicles)
     try:
         made = {**channels.typed, **channels.json}
         assert {topic: ch.schema_name() for topic, ch in made.items()} == {
-            c.topic: c.schema for c in CHANNELS
+            c.topic: c.schema for c in specs
         }
         encodings = {topic: ch.message_encoding for topic, ch in made.items()}
-        assert {t for t, e in encodings.items() if e == "json"} == set(MODELS)
-        assert {e for t, e in encodings.items() if t not in MODELS} == {"protobuf"}
+        json_topics = {t for t, e in encodings.items() if e == "json"}
+        assert json_topics == {c.topic for c in specs if c.schema.startswith(SCHEMA_PREFIX)}
+        assert {e for t, e in encodings.items() if t not in json_topics} == {"protobuf"}
     finally:
         channels.close()
+
+
+def test_a_fleets_channels_are_the_shared_ones_each_vehicles_own_and_their_frames() -> None:
+    specs = {c.topic: c.schema for c in channel_specs(("auv1", "alpha"))}
+    assert channel_specs(()) == CHANNELS  # no fleet: as they always were
+    shared = {c.topic: c.schema for c in CHANNELS if c not in PER_VEHICLE}
+    assert "/paths/active" in shared and "/vehicle/pose" not in shared
+    own = {f"/{n}{c.topic}": c.schema for n in ("auv1", "alpha") for c in PER_VEHICLE}
+    assert specs == {**shared, **own, "/tf": "foxglove.FrameTransforms"}
+    assert specs["/alpha/belief"] == "nemesys.Belief"
 
 
 def _refs(node: Any) -> list[str]:

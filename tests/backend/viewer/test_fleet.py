@@ -17,7 +17,7 @@ from fastapi.testclient import TestClient
 from backend.app import create_app
 from backend.settings import Settings
 from backend.viewer.belief import ring_points
-from backend.viewer.fleet import FLEET_RGB, LABEL_UP_M, fleet_drawing, fleet_label
+from backend.viewer.fleet import FLEET_RGB, LABEL_UP_M, fleet_drawing
 from backend.viewer.viewer import Viewer, ned_to_view
 from tests.agent_link import TARGET, agent_fleet
 from tests.backend.conftest import CIRCLE, TOKEN, wait_until
@@ -25,21 +25,6 @@ from tests.backend.viewer.test_viewer import cloud, label, lines, polyline, posi
 from vehicle_contract.fleet import parse_vehicles
 
 __all__ = ["viewer"]  # the fixture
-
-
-def test_the_label_names_the_vehicle_its_address_its_command_and_where_it_is() -> None:
-    text = fleet_label(
-        "auv2", 2, ("command", "circle", 0.99994), (1.25, 20.0, 2.0), "telemetry", None
-    )
-    assert text == "auv2 (address 2)\ncircle p 99.99 %\nx 1.2 y 20.0 m, depth 2.0 m (fix)"
-    reckoned = fleet_label("auv3", 3, ("last_known", None, 1.0), (0, 40, 0), "dead_reckoning", 3.5)
-    assert reckoned.endswith("(dead-reckoned +-3.5 m)")
-    assert "holding p 100 %" in reckoned
-    unknown = fleet_label("auv4", 4, ("unknown", None, 0.0), (0, 0, 0), "assumed", None)
-    assert unknown.startswith("auv4 (address 4)\nunknown p 0 %\n") and unknown.endswith("(assumed)")
-    # a p below 1 never reads 100 %
-    nearly = fleet_label("a", 1, ("command", "x", 0.999999), (0, 0, 0), "assumed", None)
-    assert "p 99.9999 %" in nearly
 
 
 def test_each_vehicle_is_drawn_in_its_own_group_and_its_label_is_kept_clear_of(
