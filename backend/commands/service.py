@@ -59,9 +59,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
-from backend.commands.checks import CheckLine, SendViolation
+from backend.commands.checks import SendViolation
 from backend.commands.lifecycle import RETRYABLE
 from backend.commands.manager import CommandManager
+from backend.commands.policy import Accepted, Assessment, decide, key
 from backend.commands.refusals import (
     LimitRefused,
     NotRetryableCommand,
@@ -81,39 +82,6 @@ logger = logging.getLogger("backend.commands.service")
 #: The ways a frame can leave the console, as the record's ``origin`` names them.
 Origin = Literal["api", "ws", "surface", "retry", "script", "scenario", "cli"]
 ORIGINS: tuple[Origin, ...] = ("api", "ws", "surface", "retry", "script", "scenario", "cli")
-
-
-@dataclass(frozen=True)
-class Assessment:
-    """A command as the checks see it: the frame that would leave, and what it breaks."""
-
-    enc: Encoded
-    violations: tuple[SendViolation, ...] = ()
-    #: Every check's line (what the confirm dialog shows).
-    lines: tuple[CheckLine, ...] = ()
-
-    @property
-    def hard(self) -> tuple[SendViolation, ...]:
-        return tuple(v for v in self.violations if v.kind == "hard")
-
-    @property
-    def soft(self) -> tuple[SendViolation, ...]:
-        return tuple(v for v in self.violations if v.kind == "soft")
-
-
-def decide(assessment: Assessment, override: bool) -> tuple[SendViolation, ...]:
-    """The policy on what the checks found: the violations the operator overrode (empty when
-    there were none).
-
-    Raises:
-        LimitRefused: a hard violation (whatever ``override`` says).
-        OverrideNeeded: a soft violation without ``override``.
-    """
-    if assessment.hard:
-        raise LimitRefused("limit violation: no operator can override it", assessment.violations)
-    if assessment.soft and not override:
-        raise OverrideNeeded("limit violation: send with override to accept it", assessment.soft)
-    return assessment.soft
 
 
 @dataclass(frozen=True)
@@ -145,6 +113,8 @@ class SendRequest:
         vehicle: the fleet's vehicle it is for (``"all"``: a Surface to every vehicle); None
             without a fleet (the single vehicle's name is taken too).
         relayed: taken from another console's outbox row (None: asked of this console).
+        accepted: relayed, the soft violations its operator accepted there (an override
+            covers those only: :func:`decide`).
     """
 
     pattern: str
@@ -156,6 +126,7 @@ class SendRequest:
     retry_of: int | None = None
     vehicle: str | None = None
     relayed: Relayed | None = None
+    accepted: Accepted | None = None
 
 
 @dataclass(frozen=True)
@@ -206,9 +177,10 @@ class Relay(Protocol):
     """Where a console without a transmitter hands its checked commands (see the module's
     docstring)."""
 
-    async def relay(self, request: SendRequest) -> CommandRecord:
+    async def relay(self, request: SendRequest, accepted: Accepted) -> CommandRecord:
         """The record the console with the transmitter made of ``request`` (raise a
-        :class:`SendRefused` with its refusal)."""
+        :class:`SendRefused` with its refusal); ``accepted``: the soft violations this
+        console's checks found and its operator overrode."""
         ...
 
 
@@ -252,7 +224,7 @@ class CommandService:
             assessment = self.assess(request.pattern, dict(request.params))
         else:
             assessment = self.assess(request.pattern, dict(request.params), vehicle)
-        overridden = decide(assessment, request.override)
+        overridden = decide(assessment, request.override, request.accepted)
         return await self._submit(
             request, assessment.enc, request.kind, request.copies, overridden, vehicle
         )
@@ -309,7 +281,8 @@ class CommandService:
         for watcher in self._watchers:
             watcher.admit(request)
         if self.relay is not None:
-            outcome = SendOutcome(await self.relay.relay(request), tuple(overridden))
+            accepted = frozenset(key(v) for v in overridden)
+            outcome = SendOutcome(await self.relay.relay(request, accepted), tuple(overridden))
         else:
             relayed = request.relayed
             rows = await self.manager.submit_all(
@@ -385,6 +358,7 @@ class CommandService:
 
 __all__ = [
     "ORIGINS",
+    "Accepted",
     "Assessment",
     "CommandService",
     "LimitRefused",

@@ -42,6 +42,8 @@ class OutboxRow:
     pattern: str
     params: dict[str, Any]
     override: bool
+    #: With ``override``: the soft violations (check, parameter) the operator accepted.
+    accepted: frozenset[tuple[str, str]] | None
     copies: int | None
     retry_of: int | None
     state: OutboxState
@@ -57,6 +59,10 @@ def _row(values: Mapping[str, Any]) -> OutboxRow:
     fields = {k: values[k] for k in OutboxRow.__dataclass_fields__}
     fields["params"] = json.loads(fields["params"])
     fields["override"] = bool(fields["override"])
+    accepted = fields["accepted"]
+    fields["accepted"] = (
+        None if accepted is None else frozenset((c, p) for c, p in json.loads(accepted))
+    )
     fields["detail"] = None if fields["detail"] is None else json.loads(fields["detail"])
     return OutboxRow(**fields)
 
@@ -74,8 +80,10 @@ def put(
     override: bool,
     copies: int | None,
     retry_of: int | None,
+    accepted: frozenset[tuple[str, str]] = frozenset(),
 ) -> OutboxRow:
-    """Write a ``waiting`` row (committed); returns it.
+    """Write a ``waiting`` row (committed); returns it. ``accepted``: with ``override``, the
+    soft violations (check, parameter) the operator accepted.
 
     Raises:
         LogWriteError: the log cannot be written (no row).
@@ -83,8 +91,8 @@ def put(
     with log.connection() as db, db.writing():
         new_id = db.insert(
             "INSERT INTO outbox (created_at, created_s, console, operator, vehicle, origin, "
-            "kind, pattern, params, override, copies, retry_of, state) "
-            f"VALUES (?, {db.now_s_sql}, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 'waiting')",
+            "kind, pattern, params, override, accepted, copies, retry_of, state) "
+            f"VALUES (?, {db.now_s_sql}, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, ?, 'waiting')",
             (
                 now_iso(),
                 console,
@@ -95,6 +103,7 @@ def put(
                 pattern,
                 json.dumps(dict(params)),
                 int(override),
+                json.dumps(sorted(accepted)) if override else None,
                 copies,
                 retry_of,
             ),

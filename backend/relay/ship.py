@@ -236,6 +236,8 @@ def request_of(row: OutboxRow) -> SendRequest:
         row.params,
         origin,
         override=row.override,
+        # an override covers what its operator was shown (none said: nothing of ours)
+        accepted=(row.accepted or frozenset()) if row.override else None,
         copies=row.copies,
         kind=kind,
         retry_of=row.retry_of,

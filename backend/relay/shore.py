@@ -27,10 +27,14 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
+from collections.abc import Mapping
 from typing import Any, Final
 
 from backend.commands.checks import SendViolation
+from backend.commands.policy import Accepted, key
+from backend.commands.refusals import OverrideNeeded
 from backend.commands.service import SendRefused, SendRequest
 from backend.mission_log import outbox
 from backend.mission_log.outbox import OutboxRow
@@ -44,6 +48,10 @@ logger = logging.getLogger("backend.relay")
 POLL_S: Final = 0.25
 #: How much longer a row another console is deciding at the deadline is waited for (s).
 GRACE_S: Final = 5.0
+
+
+#: How many commands' refusals :attr:`RelaySender._shown` keeps (the newest).
+SHOWN_KEPT: Final = 32
 
 
 class RelayRefused(SendRefused):
@@ -74,6 +82,9 @@ class RelaySender:
         self.operator = operator
         self.wait_s = wait_s
         self._waiting: dict[int, asyncio.Event] = {}
+        #: The soft violations the transmitting console last refused a command for (shown to
+        #: the operator with that refusal), by the command (vehicle, pattern, parameters).
+        self._shown: dict[str, Accepted] = {}
 
     def notice(self, row_id: int) -> None:
         """Another console wrote outbox row ``row_id`` (a decision, perhaps on one of ours)."""
@@ -81,8 +92,11 @@ class RelaySender:
         if event is not None:
             event.set()
 
-    async def relay(self, request: SendRequest) -> CommandRecord:
+    async def relay(self, request: SendRequest, accepted: Accepted) -> CommandRecord:
         """Write ``request`` to the outbox and wait for the answer (see the module's doc).
+        ``accepted``: what this console's checks found and its operator overrode; with an
+        override, also what the transmitting console refused this same command for lately
+        (its own limits: the operator was shown them and sent again with override).
 
         Raises:
             RelayRefused: the other console's refusal. RelayNoAnswer: none in time (504).
@@ -91,11 +105,15 @@ class RelaySender:
                 then shows in the log).
         """
         surface = request.pattern == "surface"
+        vehicle = getattr(request, "vehicle", None) or SINGLE_VEHICLE
+        what = _command_key(vehicle, request.pattern, request.params)
+        if request.override:
+            accepted |= self._shown.get(what, frozenset())
         row = outbox.put(
             self.log,
             console=self.console,
             operator=self.operator,
-            vehicle=getattr(request, "vehicle", None) or SINGLE_VEHICLE,
+            vehicle=vehicle,
             origin=request.origin,
             kind="surface" if surface else request.kind,
             pattern=request.pattern,
@@ -103,11 +121,19 @@ class RelaySender:
             override=request.override,
             copies=request.copies,
             retry_of=request.retry_of,
+            accepted=accepted,
         )
         logger.info("%s relayed as outbox row %d", request.pattern, row.id)
         event = self._waiting[row.id] = asyncio.Event()
         try:
             return await self._answer(row.id, event)
+        except RelayRefused as err:
+            if err.status == OverrideNeeded.status and err.violations:  # shown to the operator
+                self._shown.pop(what, None)
+                self._shown[what] = frozenset(key(v) for v in err.violations)
+                while len(self._shown) > SHOWN_KEPT:  # the oldest go
+                    del self._shown[next(iter(self._shown))]
+            raise
         except LogWriteError as err:
             err.outcome = (
                 f"outbox row {row.id} was written: whether it was sent shows in the log once "
@@ -155,6 +181,11 @@ class RelaySender:
             f"console {row.decided_by!r} (holding the transmitter) refused it: {message}",
             violations,
         )
+
+
+def _command_key(vehicle: str, pattern: str, params: Mapping[str, Any]) -> str:
+    """One command, whatever its parameters' order."""
+    return json.dumps([vehicle, pattern, dict(params)], sort_keys=True)
 
 
 def refusal_of(detail: Any, reason: str) -> tuple[str, tuple[SendViolation, ...]]:

@@ -165,6 +165,37 @@ def test_a_command_the_ships_checks_refuse_is_answered_to_the_shore_with_its_rea
         shore_page.close()
 
 
+def test_a_shore_override_covers_only_the_violations_its_operator_was_shown(
+    shared_url: str, tmp_path: Path, make_client: MakeClient
+) -> None:
+    """The shore's operator overrides what the shore's checks found (here nothing); the ship's
+    stricter limit is not covered by it: refused back with the violation, shown to the
+    operator. Sent again with override, having seen it, the ship sends it (the training
+    vehicle, on the ship's limits, may still reject it: that is the vehicle's answer)."""
+    ship, shore = ship_and_shore(shared_url, tmp_path, make_client, max_depth_m=2.0)
+    grant_the_shore(ship, shore)
+    before = frames_at_the_vehicle(ship)
+    body = {"pattern": "circle", "params": {**CIRCLE, "depth": 3}, "override": True}
+    r = shore.post("/api/commands", json=body, headers=AUTH)
+    assert r.status_code == 409, r.text
+    detail = r.json()["detail"]
+    assert "did not cover" in detail["message"], detail
+    assert [v["param"] for v in detail["violations"]] == ["depth"]
+    first = outbox_rows(shared_url)[0]
+    assert first["override"] and first["accepted"] == "[]"  # the shore's checks found none
+    assert frames_at_the_vehicle(ship) == before and shore.get("/api/commands").json() == []
+
+    again = shore.post("/api/commands", json=body, headers=AUTH)  # the operator saw it now
+    assert again.status_code == 202, again.text
+    record = wait_state(shore, again.json()["id"])  # the ship sent it
+    assert frames_at_the_vehicle(ship) > before
+    assert record["origin"] == "relay:shore" and record["first_sent_at"]
+    assert record["overrides"]["by"] == "bob"
+    assert [v["param"] for v in record["overrides"]["violations"]] == ["depth"]
+    second = outbox_rows(shared_url)[1]
+    assert second["state"] == "taken" and "depth" in second["accepted"]
+
+
 def test_surface_from_the_shore_is_sent_by_the_ship_whoever_is_in_control(
     shared_url: str, tmp_path: Path, make_client: MakeClient
 ) -> None:

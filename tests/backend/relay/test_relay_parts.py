@@ -112,11 +112,13 @@ def test_an_outbox_row_is_the_ships_request_with_who_asked() -> None:
         pattern="circle",
         params=CIRCLE,
         override=True,
+        accepted=frozenset({("depth", "depth")}),
         copies=2,
         retry_of=3,
         state="waiting",
     )
     request = request_of(row)
+    assert request.accepted == frozenset({("depth", "depth")})
     assert (request.pattern, dict(request.params), request.origin) == ("circle", CIRCLE, "script")
     assert request.override and request.copies == 2 and request.retry_of == 3
     assert request.kind == "script"
