@@ -56,6 +56,8 @@ __all__ = [
 
 #: How long a write waits for a lock another connection holds before it fails (s).
 BUSY_TIMEOUT_S = 1.0
+#: How long opening a log waits for another console's migration of it to finish (s).
+MIGRATION_WAIT_S = 30.0
 #: The page cache of an export's own connection (KiB; SQLite's default is 2000): it reads
 #: once, in order (``backend.mission_log.dive_reader``).
 EXPORT_CACHE_KIB = 256
@@ -101,7 +103,11 @@ class MissionLog(TrackStore):
         #: The console writing (:meth:`name_console`; None: not named).
         self.console: str | None = None
         try:
+            # another console may be migrating the same log: wait for its whole migration
+            # (every step in one transaction), not a write's usual lock wait
+            self._db.set_busy_timeout(max(busy_timeout_s, MIGRATION_WAIT_S))
             migrate(self._db)
+            self._db.set_busy_timeout(busy_timeout_s)
         except BaseException:
             self._db.close()
             raise
