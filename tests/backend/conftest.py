@@ -96,6 +96,15 @@ def pg_server() -> Iterator[PgServer]:
     _PG_SERVER[0].stop()  # again by another conftest's: does nothing
 
 
+@pytest.fixture
+def shared_url(pg_server: PgServer) -> Iterator[str]:
+    """A fresh database on this worker's PostgreSQL (dropped after), for consoles that share
+    one mission log."""
+    name = pg_server.new_database()
+    yield pg_server.url(name)
+    pg_server.drop_database(name)
+
+
 @pytest.fixture(params=KINDS)
 def log_backend(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[LogBackend]:
     """The mission log on SQLite, then on PostgreSQL (a fresh database, dropped after)."""

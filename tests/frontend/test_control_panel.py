@@ -20,22 +20,14 @@ import pytest
 from playwright.sync_api import Browser, Page, expect
 
 from bench._server import start_console
-from tests.backend.conftest import pg_server
+from tests.backend.conftest import pg_server, shared_url
 from tests.frontend.conftest import START_TIMEOUT_S, TOKEN, Console, Watched
 from tests.frontend.pagekit import POLL_MS, open_sized, sized_page, wait_preview
-from tests.pg_server import PgServer
 
-__all__ = ["pg_server"]
+__all__ = ["pg_server", "shared_url"]
 
 #: The one vehicle's name without a fleet (the control rows' key).
 V = "nemesys"
-
-
-@pytest.fixture
-def shared_url(pg_server: PgServer) -> Iterator[str]:
-    name = pg_server.new_database()
-    yield pg_server.url(name)
-    pg_server.drop_database(name)
 
 
 @pytest.fixture

@@ -15,19 +15,11 @@ import pytest
 from playwright.sync_api import expect
 
 from bench._server import ConsoleProcess, start_console
-from tests.backend.conftest import pg_server, wait_until
+from tests.backend.conftest import pg_server, shared_url, wait_until
 from tests.frontend.conftest import TOKEN, Console, Watched
 from tests.frontend.pagekit import POLL_MS, open_sized
-from tests.pg_server import PgServer
 
-__all__ = ["pg_server"]
-
-
-@pytest.fixture
-def shared_url(pg_server: PgServer) -> Iterator[str]:
-    name = pg_server.new_database()
-    yield pg_server.url(name)
-    pg_server.drop_database(name)
+__all__ = ["pg_server", "shared_url"]
 
 
 @pytest.fixture

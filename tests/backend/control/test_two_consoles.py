@@ -10,7 +10,6 @@ timeout, on the database's clock. Waits are on conditions, never fixed sleeps.""
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -30,7 +29,6 @@ from tests.backend.conftest import (
 )
 from tests.backend.control.consoles import Page, act, order, owner
 from tests.manual_clock import ManualClock
-from tests.pg_server import PgServer
 
 #: Control is released this long after the owner's last heartbeat (s): short for the test,
 #: long enough for a loaded machine's event loop to beat (every third of it) in time.
@@ -39,14 +37,6 @@ TIMEOUT_S = 3.0
 SYNC_S = 1.0
 
 pytestmark = pytest.mark.slow
-
-
-@pytest.fixture
-def shared_url(pg_server: PgServer) -> Iterator[str]:
-    """A fresh database both consoles share (dropped after them)."""
-    name = pg_server.new_database()
-    yield pg_server.url(name)
-    pg_server.drop_database(name)
 
 
 def consoles(

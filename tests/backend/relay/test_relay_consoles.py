@@ -12,7 +12,6 @@ shows its link as "relay via ship". Waits are on conditions, never fixed sleeps.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -31,19 +30,11 @@ from tests.backend.conftest import (
     wait_until,
 )
 from tests.backend.control.consoles import Page, act, order, owner
-from tests.pg_server import PgServer
 
 pytestmark = pytest.mark.slow
 
 #: The issue's bound on what another console's pages are told.
 SYNC_S = 1.0
-
-
-@pytest.fixture
-def shared_url(pg_server: PgServer) -> Iterator[str]:
-    name = pg_server.new_database()
-    yield pg_server.url(name)
-    pg_server.drop_database(name)
 
 
 def ship_and_shore(

@@ -29,7 +29,6 @@ from psycopg.rows import dict_row
 from bench._gateway import FrameGateway
 from bench._server import ConsoleProcess, start_console
 from tests.backend.conftest import CIRCLE, TOKEN, clear_nemesys_env, wait_until
-from tests.pg_server import PgServer
 
 pytestmark = pytest.mark.slow  # console processes, killed and started again
 
@@ -51,13 +50,6 @@ def gateway() -> Iterator[FrameGateway]:
     server = FrameGateway()
     yield server
     server.close()
-
-
-@pytest.fixture
-def shared_url(pg_server: PgServer) -> Iterator[str]:
-    name = pg_server.new_database()
-    yield pg_server.url(name)
-    pg_server.drop_database(name)
 
 
 @pytest.fixture

@@ -7,7 +7,6 @@ time (the track keeps a point a second of the vehicle's clock). Waits are on con
 
 from __future__ import annotations
 
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -18,20 +17,12 @@ from backend.app import create_app
 from backend.commands.health import STALE_TELEMETRY_S
 from tests.backend.conftest import MakeClient, console_of, settings_for, wait_until
 from tests.backend.control.consoles import Page
-from tests.pg_server import PgServer
 
 pytestmark = pytest.mark.slow
 
 #: The issue's bound: the shore has the vehicle's pose this soon after the ship (s): the
 #: track's interval of 1 s, its batch's 0.5 s and the notification's read.
 LAG_S = 2.0
-
-
-@pytest.fixture
-def shared_url(pg_server: PgServer) -> Iterator[str]:
-    name = pg_server.new_database()
-    yield pg_server.url(name)
-    pg_server.drop_database(name)
 
 
 def vehicle(client: TestClient) -> dict[str, Any]:
