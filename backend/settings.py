@@ -112,6 +112,8 @@ class Settings(BaseSettings):
     #: A fleet on one ME link (docs/protocol.md, "Addressing"): a count (``3``: vehicles auv1,
     #: auv2, auv3 at addresses 1, 2, 3) or a JSON list of ``{"name", "address"}``
     #: (:func:`vehicle_contract.fleet.parse_vehicles`). "": the single vehicle, as always.
+    #: On a console without a transmitter (target relay): the fleet of the console that holds
+    #: it (the same names; a name it lacks is refused there, naming its vehicles).
     vehicles: str = ""
     #: Port of the embedded simulator's rosbridge (0: any free port), loopback only.
     sim_port: Annotated[int, Field(ge=0, le=65535)] = 0
@@ -291,11 +293,6 @@ class Settings(BaseSettings):
             raise ValueError(
                 f"vehicle_namespace {self.vehicle_namespace!r} names one vehicle; with a fleet "
                 "(vehicles) each vehicle's namespace is its name: leave vehicle_namespace empty"
-            )
-        if self.relay:
-            raise ValueError(
-                "a console without a transmitter (target relay) drives the single vehicle: "
-                "leave vehicles empty there (the console holding the transmitter has the fleet)"
             )
         return self
 

@@ -6,7 +6,8 @@ the rosbridge auth op). Otherwise: the target the settings name (a rosbridge URL
 or a modem with telemetry over rosbridge: :func:`station.link_modem.open_link`), or no
 transmitter at all (``relay``: :class:`backend.relay.link.RelayLink`). A fleet
 (``NEMESYS_VEHICLES``) on one of those: :func:`station.link_fleet.open_fleet_link`, one
-transmitter and each vehicle's own link for what it reports.
+transmitter and each vehicle's own link for what it reports; with ``relay``,
+:func:`backend.relay.link.relay_fleet_link`, a relay link per vehicle.
 """
 
 from __future__ import annotations
@@ -36,9 +37,9 @@ async def open_vehicle_link(
             which forms are allowed).
     """
     if s.relay:
-        from backend.relay.link import RelayLink
+        from backend.relay.link import RelayLink, relay_fleet_link
 
-        return RelayLink(), None, None
+        return (relay_fleet_link(s.fleet) if s.fleet else RelayLink()), None, None
     if s.fleet and not s.training:  # in training: open_training_fleet
         fleet = open_fleet_link(s.target, s.bitrate_bps, s.fleet, s.telemetry or None)
         return fleet, None, None

@@ -140,7 +140,7 @@ class SendOutcome:
     records: tuple[CommandRecord, ...] = field(default=())
 
     def __post_init__(self) -> None:
-        if not self.records:  # one record (a relayed command's too): itself
+        if not self.records:  # one record: itself
             object.__setattr__(self, "records", (self.record,))
 
 
@@ -177,10 +177,11 @@ class Relay(Protocol):
     """Where a console without a transmitter hands its checked commands (see the module's
     docstring)."""
 
-    async def relay(self, request: SendRequest, accepted: Accepted) -> CommandRecord:
-        """The record the console with the transmitter made of ``request`` (raise a
-        :class:`SendRefused` with its refusal); ``accepted``: the soft violations this
-        console's checks found and its operator overrode."""
+    async def relay(self, request: SendRequest, accepted: Accepted) -> tuple[CommandRecord, ...]:
+        """The records the console with the transmitter made of ``request`` (one; a fleet's
+        Surface to all: one per vehicle) (raise a :class:`SendRefused` with its refusal);
+        ``accepted``: the soft violations this console's checks found and its operator
+        overrode."""
         ...
 
 
@@ -282,7 +283,8 @@ class CommandService:
             watcher.admit(request)
         if self.relay is not None:
             accepted = frozenset(key(v) for v in overridden)
-            outcome = SendOutcome(await self.relay.relay(request, accepted), tuple(overridden))
+            made = await self.relay.relay(request, accepted)
+            outcome = SendOutcome(made[0], tuple(overridden), made)
         else:
             relayed = request.relayed
             rows = await self.manager.submit_all(

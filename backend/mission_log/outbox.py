@@ -119,23 +119,42 @@ def get(log: MissionLog, row_id: int) -> OutboxRow | None:
     return None if got is None else _row(got)
 
 
-def claim(log: MissionLog, vehicles: Sequence[str]) -> tuple[OutboxRow, float] | None:
+def claim(
+    log: MissionLog,
+    vehicles: Sequence[str],
+    *,
+    foreign_after_s: float | None = None,
+    others: Sequence[str] = (),
+) -> tuple[OutboxRow, float] | None:
     """Inside the caller's transaction (:meth:`MissionLog.transaction`): the oldest row waiting
     for one of ``vehicles`` that no other transaction holds, locked until the transaction ends,
-    and the database's clock (None: none waits)."""
+    and the database's clock (None: none waits). With ``foreign_after_s``, also a row for any
+    other vehicle but ``others`` (the vehicles other transmitting consoles have) that waited
+    at least that long (s, the database's clock): the caller refuses it, naming its own."""
     marks = ", ".join("?" * len(vehicles))
+    which = f"vehicle IN ({marks})"
+    args: tuple[str | float, ...] = tuple(vehicles)
     with log.connection() as db, db.writing():
+        if foreign_after_s is not None:
+            theirs = f" AND vehicle NOT IN ({', '.join('?' * len(others))})" if others else ""
+            which = f"({which} OR (created_s <= {db.now_s_sql} - ?{theirs}))"
+            args = (*args, foreign_after_s, *others)
         got = db.execute(
             f"SELECT *, {db.now_s_sql} AS now_s FROM outbox WHERE state = 'waiting' "
-            f"AND vehicle IN ({marks}) ORDER BY id LIMIT 1{db.skip_locked}",
-            tuple(vehicles),
+            f"AND {which} ORDER BY id LIMIT 1{db.skip_locked}",
+            args,
         ).fetchone()
     return None if got is None else (_row(got), float(got["now_s"]))
 
 
-def taken(log: MissionLog, row_id: int, command_id: int, by: str) -> None:
-    """The row is sent as command ``command_id`` (in the claim's transaction)."""
-    _decide(log, row_id, "taken", by, command_id=command_id)
+def taken(
+    log: MissionLog, row_id: int, command_id: int, by: str, commands: Sequence[int] = ()
+) -> None:
+    """The row is sent as command ``command_id`` (in the claim's transaction). ``commands``:
+    every record it made when more than one (a fleet's Surface to all: one per vehicle, the
+    first ``command_id``), kept in ``detail`` as ``{"commands": [ids]}``."""
+    more = {"detail": json.dumps({"commands": list(commands)})} if len(commands) > 1 else {}
+    _decide(log, row_id, "taken", by, command_id=command_id, **more)
 
 
 def refused(

@@ -98,13 +98,16 @@ class TrackStore:
             ).fetchall()
         return [_parsed(dict(r)) for r in rows]
 
-    def newest_track_point(self, dive: int | None = None) -> tuple[dict[str, Any] | None, float]:
+    def newest_track_point(
+        self, dive: int | None = None, vehicle: str | None = None
+    ) -> tuple[dict[str, Any] | None, float]:
         """The newest point of ``dive`` by the vehicle's clock (None: of the newest dive with a
         track), with every column as :meth:`track_rows` gives them and its ``dive`` and
         ``vehicle`` (None: no point), and the database's clock (s since 1970): what a console
         without a transmitter shows of the vehicle another console hears
-        (:mod:`backend.relay.telemetry`). Read on the index ``(dive, t_s)``: one row, not
-        the dive's.
+        (:mod:`backend.relay.telemetry`). ``vehicle``: only a fleet vehicle's points (None:
+        any point). Read on the index ``(dive, t_s)``: one row (a fleet's vehicle: the
+        newest points until one of it), not the dive's.
 
         Raises:
             LogWriteError: the log cannot be read (a database out of reach).
@@ -118,10 +121,12 @@ class TrackStore:
                 if got["dive"] is None:
                     return None, now_s
                 dive = int(got["dive"])
+            which = "" if vehicle is None else " AND vehicle = ?"
+            args = (dive,) if vehicle is None else (dive, vehicle)
             row = db.execute(
-                f"SELECT {', '.join(TRACK_WRITE_COLUMNS)} FROM track WHERE dive = ? "
+                f"SELECT {', '.join(TRACK_WRITE_COLUMNS)} FROM track WHERE dive = ?{which} "
                 "ORDER BY t_s DESC LIMIT 1",
-                (dive,),
+                args,
             ).fetchone()
         return (None if row is None else _parsed(dict(row))), now_s
 

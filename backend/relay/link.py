@@ -8,6 +8,12 @@ their link's health: :mod:`backend.relay.ship`), read from the shared log at mos
 :data:`READ_EVERY_S`. It is ``connected`` while such a console said so within
 :data:`FRESH_S`, and its capability is that console's (acknowledgements come back to this
 console as the states of the records the other console writes).
+
+With a fleet (``NEMESYS_VEHICLES``, the same as the transmitting console's) the link is a
+:class:`station.link_fleet.FleetLink` of the one :class:`RelayLink` and a
+:class:`RelayVehicleLink` per vehicle (:func:`relay_fleet_link`): each reports "relay via" that
+console, and a vehicle it does not say it has is not connected, its problem naming the
+vehicles it has (a command to it would be refused there, naming them too).
 """
 
 from __future__ import annotations
@@ -22,7 +28,9 @@ from backend.relay.model import RelayView
 from backend.settings import RELAY_TARGET
 from codec import Frame
 from station.link import Capability, Link
+from station.link_fleet import FleetLink, SharedTransmitter
 from station.transmit import LinkCheck
+from vehicle_contract.fleet import FleetVehicle
 
 logger = logging.getLogger("backend.relay")
 
@@ -40,10 +48,13 @@ NO_TRANSMITTER: Final = (
 
 
 class RelayLink(Link):
-    """See the module's doc. :meth:`attach` gives it the log once the console opened it."""
+    """See the module's doc. :meth:`attach` gives it the log once the console opened it.
+    ``fleet``: this console's vehicles' names, with a fleet (checked against the transmitting
+    console's in :meth:`test`)."""
 
-    def __init__(self) -> None:
+    def __init__(self, fleet: tuple[str, ...] = ()) -> None:
         super().__init__(RELAY_TARGET)
+        self.fleet = fleet
         self._log: MissionLog | None = None
         self._view = RelayView()
         self._read_at: float | None = None
@@ -99,6 +110,18 @@ class RelayLink(Link):
     async def transmit(self, frame: Frame) -> str | None:
         return NO_TRANSMITTER
 
+    def lacks(self, vehicle: str) -> str | None:
+        """Why the transmitting console will refuse commands to ``vehicle`` (it said which
+        vehicles it has, and this is not one); None: it has it, or has not said."""
+        v = self.view()
+        if v.vehicles is None or vehicle in v.vehicles:
+            return None
+        return (
+            f"console {v.via!r}, holding the transmitter, has no vehicle {vehicle!r} (its "
+            f"vehicles: {', '.join(v.vehicles)}): commands to it are refused there; give this "
+            "console the same fleet (NEMESYS_VEHICLES)"
+        )
+
     async def test(self) -> list[LinkCheck]:
         self._read_at = None  # read now
         v = self.view()
@@ -109,7 +132,47 @@ class RelayLink(Link):
             if v.via is not None
             else "no console holding the transmitter has said so on the mission log"
         )
-        return [LinkCheck("relay", RELAY_TARGET, problem is None, problem, problem or detail)]
+        checks = [LinkCheck("relay", RELAY_TARGET, problem is None, problem, problem or detail)]
+        if self.fleet:
+            lacking = [why for name in self.fleet if (why := self.lacks(name)) is not None]
+            said = f"console {v.via!r} has {', '.join(self.fleet)}"
+            fleet_problem = "; ".join(lacking) or None
+            checks.append(
+                LinkCheck(
+                    "relay fleet", RELAY_TARGET, not lacking, fleet_problem, fleet_problem or said
+                )
+            )
+        return checks
+
+
+class RelayVehicleLink(SharedTransmitter):
+    """A fleet's vehicle on a console without a transmitter: what the :class:`RelayLink`
+    (``relay``) is, unless the transmitting console says it has no such vehicle (then not
+    connected, the problem naming the vehicles it has). Nothing of its own comes back: its
+    telemetry is the shared log's (:class:`backend.relay.telemetry.RelayedTelemetry`)."""
+
+    def __init__(self, relay: RelayLink, name: str) -> None:
+        super().__init__(relay, name)
+        self.relay = relay
+
+    @property
+    def connected(self) -> bool:
+        return self.relay.connected and self.relay.lacks(self.name) is None
+
+    @property
+    def connection_problem(self) -> str | None:
+        return self.relay.connection_problem or self.relay.lacks(self.name)
+
+    @connection_problem.setter
+    def connection_problem(self, value: str | None) -> None:
+        """Set by the base class's constructor only: the relay's are the ones read."""
+
+
+def relay_fleet_link(vehicles: tuple[FleetVehicle, ...]) -> FleetLink:
+    """The link of a console without a transmitter with a fleet: one :class:`RelayLink` (its
+    "frames", which it never sends) and a :class:`RelayVehicleLink` per vehicle."""
+    relay = RelayLink(tuple(v.name for v in vehicles))
+    return FleetLink(relay, {v.name: RelayVehicleLink(relay, v.name) for v in vehicles})
 
 
 def view_of(found: list[outbox.Transmitter], now_s: float) -> RelayView:
@@ -125,6 +188,7 @@ def view_of(found: list[outbox.Transmitter], now_s: float) -> RelayView:
     except ValueError:
         capability = None
     datum = datum_of(h.get("datum"))
+    vehicles = h.get("vehicles")
     return RelayView(
         via=t.console,
         target=t.target,
@@ -136,6 +200,7 @@ def view_of(found: list[outbox.Transmitter], now_s: float) -> RelayView:
         problems=[str(p) for p in problems] if isinstance(problems, list) else [],
         datum_lat_deg=None if datum is None else datum[0],
         datum_lon_deg=None if datum is None else datum[1],
+        vehicles=[str(n) for n in vehicles] if isinstance(vehicles, list) else None,
     )
 
 

@@ -41,6 +41,11 @@ class RelayView(BaseModel):
         "track (null: it has none)",
     )
     datum_lon_deg: float | None = Field(default=None, description="its datum's longitude (deg)")
+    vehicles: list[str] | None = Field(
+        default=None,
+        description='the vehicles it sends to (its fleet\'s names; ["nemesys"]: the single '
+        "vehicle); a command to any other is refused there. Null: not said",
+    )
     telemetry_via: str | None = Field(
         default=None,
         description="the console whose track points in the shared mission log this console's "

@@ -25,6 +25,8 @@ from backend.relay.model import RelayView
 from backend.relay.ship import RelayWorker
 from backend.relay.shore import RelaySender
 from backend.relay.telemetry import RelayedTelemetry
+from station.link import Link
+from station.link_fleet import FleetLink
 
 if TYPE_CHECKING:
     from backend.console import Console
@@ -43,7 +45,7 @@ class RelayRuntime:
         self._task: asyncio.Task[None] | None = None
         control, log = rt.control, rt.log
         assert control is not None and log is not None
-        self.link = rt.link if isinstance(rt.link, RelayLink) else None
+        self.link = relay_of(rt.link)
         if self.link is not None:
             self.link.attach(log)
             self.sender = RelaySender(
@@ -89,7 +91,9 @@ class RelayRuntime:
         keys = ("connected", "capability", "acknowledges", "level", "problems")
         d = self._rt.datum  # the origin of the track's positions, for the relaying consoles
         datum = None if d is None else {"lat_deg": d.lat_deg, "lon_deg": d.lon_deg}
-        return {**h.model_dump(include=set(keys), mode="json"), "datum": datum}
+        # the vehicles it takes commands for (a relaying console with another fleet is told)
+        said = h.model_dump(include=set(keys), mode="json")
+        return {**said, "datum": datum, "vehicles": self._rt.fleet.names}
 
     def view(self) -> RelayView | None:
         """What the page shows of the relay (None: this console holds a transmitter)."""
@@ -103,3 +107,11 @@ class RelayRuntime:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
+
+
+def relay_of(link: Link | None) -> RelayLink | None:
+    """The relay link of a console without a transmitter (a fleet's: its one
+    :class:`RelayLink`); None: this console holds a transmitter."""
+    if isinstance(link, FleetLink):
+        link = link.frames
+    return link if isinstance(link, RelayLink) else None

@@ -27,7 +27,14 @@ connection) and nothing sent; killed after, a ``taken`` row and a record the nex
 503, a failed write) leaves the row waiting too.
 
 Every :data:`BEAT_S` the worker also says in the ``transmitters`` table that this console holds
-a transmitter, with its link's health, for the relaying consoles' pages ("relay via ...").
+a transmitter, with its link's health and its vehicles, for the relaying consoles' pages
+("relay via ...").
+
+The rows it claims are its vehicles', ``"all"`` (a fleet's Surface to all: one frame to
+address 0, one record per vehicle, all their ids kept on the row), and, once a row waited
+:data:`FOREIGN_AFTER_S`, any other vehicle's that no other transmitting console seen lately
+says it has: checked here as any row, the service refuses it naming this console's vehicles
+(a relaying console with another fleet is told so, never left to time out).
 """
 
 from __future__ import annotations
@@ -51,12 +58,14 @@ from backend.commands.service import (
     SendRequest,
     refusal_detail,
 )
+from backend.commands.vehicles import ALL_VEHICLES
 from backend.dives import Dives
 from backend.messages import EventMessage
 from backend.mission_log import outbox
 from backend.mission_log.outbox import OutboxRow
 from backend.mission_log.records import log_event
 from backend.mission_log.store import LogWriteError, MissionLog
+from backend.relay.link import FRESH_S
 from backend.telemetry import TelemetryHub
 from codec import CodecError
 from planner import PlanError
@@ -71,6 +80,10 @@ ROUND_MAX: Final = 20
 EVENT_KIND: Final = "relay"
 #: The status of a row refused as stale.
 STALE_STATUS: Final = 504
+#: A row for a vehicle this console does not have (nor any other transmitting console seen
+#: within :data:`backend.relay.link.FRESH_S`) is taken, to be refused, once it waited this
+#: long (s): a transmitting console that just started has said what it has by then.
+FOREIGN_AFTER_S: Final = 2 * BEAT_S
 
 
 @dataclass(frozen=True)
@@ -84,6 +97,8 @@ class Decision:
     reason: str | None = None
     #: A refusal's JSON when the checks refused (its violations).
     detail: Any = None
+    #: Every record it made (a Surface to all: one per vehicle, ``command_id`` the first).
+    command_ids: tuple[int, ...] = ()
 
 
 class RelayWorker:
@@ -145,9 +160,14 @@ class RelayWorker:
     async def take_waiting(self) -> list[Decision]:
         """Take the rows waiting now (at most :data:`ROUND_MAX`), oldest first."""
         done: list[Decision] = []
+        try:
+            others = self.others()
+        except LogWriteError as err:
+            logger.warning("the relay's outbox not taken from: %s", err)
+            return done
         while len(done) < ROUND_MAX:
             try:
-                decision = await self.take_one()
+                decision = await self.take_one(others)
             except LogWriteError as err:  # rolled back: the row waits for the next sweep
                 logger.warning("the relay's outbox not taken from: %s", err)
                 break
@@ -156,9 +176,24 @@ class RelayWorker:
             done.append(decision)
         return done
 
-    async def take_one(self) -> Decision | None:
+    def others(self) -> tuple[str, ...]:
+        """The vehicles the other transmitting consoles seen lately say they have (their rows
+        are theirs, never refused here).
+
+        Raises:
+            LogWriteError: the log could not be read.
+        """
+        found, now_s = outbox.transmitters(self.log)
+        names: set[str] = set()
+        for t in found:
+            said = t.health.get("vehicles")
+            if t.console != self.console and now_s - t.seen_s <= FRESH_S and isinstance(said, list):
+                names.update(str(n) for n in said)
+        return tuple(sorted(names - {*self.vehicles, ALL_VEHICLES}))
+
+    async def take_one(self, others: tuple[str, ...] = ()) -> Decision | None:
         """Claim, check, record and decide one row in one transaction (the module's doc);
-        None: no row waits.
+        None: no row waits. ``others``: :meth:`others`.
 
         Raises:
             LogWriteError: the log could not be read or written (rolled back, the row still
@@ -166,14 +201,21 @@ class RelayWorker:
         """
         event: dict[str, Any] | None = None
         with self.manager.atomic():
-            got = outbox.claim(self.log, self.vehicles)
+            got = outbox.claim(
+                self.log,
+                (*self.vehicles, ALL_VEHICLES),
+                foreign_after_s=FOREIGN_AFTER_S,
+                others=others,
+            )
             if got is None:
                 return None
             row, now_s = got
             decision = await self._decide(row, now_s - row.created_s)
             if decision.state == "taken":
                 assert decision.command_id is not None
-                outbox.taken(self.log, row.id, decision.command_id, self.console)
+                outbox.taken(
+                    self.log, row.id, decision.command_id, self.console, decision.command_ids
+                )
             else:
                 assert decision.status is not None and decision.reason is not None
                 outbox.refused(
@@ -212,7 +254,8 @@ class RelayWorker:
             return Decision(row.id, "refused", status=422, reason=str(err))
         except RateLimited as err:
             return Decision(row.id, "refused", status=429, reason=str(err))
-        return Decision(row.id, "taken", command_id=outcome.record.id)
+        ids = tuple(r.id for r in outcome.records)
+        return Decision(row.id, "taken", command_id=outcome.record.id, command_ids=ids)
 
     def _told(self, row: OutboxRow, d: Decision) -> str:
         what = "Surface" if row.pattern == "surface" else f"a {row.pattern}"

@@ -10,8 +10,9 @@ up to ``relay_wait_s`` for the decision, woken by the row's notification (the tr
 console's commit) and reading the row again at least every :data:`POLL_S`:
 
 * ``taken``: the record the other console made of it (``origin`` ``relay:<this console>``, the
-  operator who asked), returned as a direct send's is (202); its states reach this console's
-  pages live, as every record of another console does (:mod:`backend.control.sync`);
+  operator who asked; a fleet's Surface to all: one per vehicle, their ids on the row),
+  returned as a direct send's is (202); its states reach this console's pages live, as every
+  record of another console does (:mod:`backend.control.sync`);
 * ``refused``: :class:`RelayRefused`, with the other console's status (422 limits, 409 control
   or an override needed, 429 its rate limit, ...) and its reason and violations;
 * no decision in time: the row is withdrawn (only if it still waits and no console is deciding
@@ -92,8 +93,9 @@ class RelaySender:
         if event is not None:
             event.set()
 
-    async def relay(self, request: SendRequest, accepted: Accepted) -> CommandRecord:
-        """Write ``request`` to the outbox and wait for the answer (see the module's doc).
+    async def relay(self, request: SendRequest, accepted: Accepted) -> tuple[CommandRecord, ...]:
+        """Write ``request`` to the outbox and wait for the answer (see the module's doc): the
+        records the other console made (one; a Surface to all: one per vehicle).
         ``accepted``: what this console's checks found and its operator overrode; with an
         override, also what the transmitting console refused this same command for lately
         (its own limits: the operator was shown them and sent again with override).
@@ -143,7 +145,7 @@ class RelaySender:
         finally:
             del self._waiting[row.id]
 
-    async def _answer(self, row_id: int, event: asyncio.Event) -> CommandRecord:
+    async def _answer(self, row_id: int, event: asyncio.Event) -> tuple[CommandRecord, ...]:
         loop = asyncio.get_running_loop()
         deadline = loop.time() + self.wait_s
         grace = deadline + GRACE_S
@@ -167,12 +169,18 @@ class RelaySender:
                 await asyncio.wait_for(event.wait(), wait)
             event.clear()
 
-    def _decided(self, row: OutboxRow) -> CommandRecord:
+    def _decided(self, row: OutboxRow) -> tuple[CommandRecord, ...]:
         if row.state == "taken":
             assert row.command_id is not None
-            got = self.log.command(row.command_id)
-            assert got is not None, f"outbox row {row.id} names no command {row.command_id}"
-            return command_record(got)
+            ids = [row.command_id]
+            if isinstance(row.detail, dict) and isinstance(row.detail.get("commands"), list):
+                ids = [int(i) for i in row.detail["commands"]]  # a Surface to all's
+            made = []
+            for command_id in ids:
+                got = self.log.command(command_id)
+                assert got is not None, f"outbox row {row.id} names no command {command_id}"
+                made.append(command_record(got))
+            return tuple(made)
         if row.state == "withdrawn":
             raise RelayNoAnswer(f"withdrawn (outbox row {row.id}): {row.reason}; nothing was sent")
         message, violations = refusal_of(row.detail, row.reason or "refused")

@@ -28,6 +28,11 @@ The dive the points are in becomes this console's current dive (:meth:`backend.d
 follow`): its pages' plots follow it, and what this console records (a change of control)
 goes into it. The ship's datum (in its beat: :mod:`backend.relay.ship`) is taken when this
 console has none, so that the positions have a latitude and longitude.
+
+With a fleet (``NEMESYS_VEHICLES``, the ship's fleet) each vehicle is read apart: the newest
+point of the batch's dive that names it (track rows carry ``vehicle``: migration 0009), fed
+to that vehicle's hub, labelled relayed as the single vehicle's; a vehicle the ship writes no
+point of stays unheard (its link says why: :class:`backend.relay.link.RelayVehicleLink`).
 """
 
 from __future__ import annotations
@@ -39,6 +44,7 @@ from typing import TYPE_CHECKING, Any
 
 from backend.chart.geo import Datum
 from backend.chart.reach import with_lat_lon
+from backend.fleet.state import VehicleRuntime
 from backend.mission_log.store import LogWriteError
 from backend.relay.model import RelayView
 from vehicle_contract.messages import STATUS_NUMBERS
@@ -53,45 +59,52 @@ STATUS_EXTRAS = ("mode", "active", "nav_valid", "nav_age_s")
 
 
 class RelayedTelemetry:
-    """The vehicle as console ``rt`` (a relay) reads it from the shared log (the module's
-    doc); ``view``: the relay as last read (the transmitting console's name and datum)."""
+    """The vehicle (a fleet's: each vehicle) as console ``rt`` (a relay) reads it from the
+    shared log (the module's doc); ``view``: the relay as last read (the transmitting
+    console's name and datum)."""
 
     def __init__(self, rt: Console, view: Callable[[], RelayView]) -> None:
         self._rt = rt
         self._view = view
         #: The console the last point came through (None: none read yet).
         self.via: str | None = None
-        #: The last point fed: (dive, its arrival stamp, its time on the vehicle's clock).
-        self._last: tuple[int, str, float] | None = None
-        #: Points fed to the hub (for the tests).
+        #: The last point fed, by vehicle (None: the single vehicle): (dive, its arrival
+        #: stamp, its time on the vehicle's clock).
+        self._last: dict[str | None, tuple[int, str, float]] = {}
+        #: Points fed to the hubs (for the tests).
         self.fed = 0
 
     def notice(self, dive: int | None, by: str | None) -> None:
         """Track points of ``dive`` were committed by console ``by`` (None, None: read the
-        newest dive's again): feed the newest point if it is newer than the last fed. A log
-        that cannot be read is said and left (the next batch, or the database back, reads
-        again)."""
-        log = self._rt.log
-        if log is None:
+        newest dive's again): feed each vehicle's newest point if it is newer than the last
+        fed. A log that cannot be read is said and left (the next batch, or the database
+        back, reads again)."""
+        rt = self._rt
+        if rt.log is None:
             return
-        try:
-            row, now_s = log.newest_track_point(dive)
-        except LogWriteError as err:
-            logger.warning("the relayed track not read: %s", err)
-            return
-        if row is None:
-            return
-        key = (int(row["dive"]), str(row["at"]), float(row["t_s"]))
-        if self._last is not None and key[0] == self._last[0] and key[1:] <= self._last[1:]:
-            return
-        view = self._view()
-        self.via = by or self.via or view.via or "another console"
-        self._follow(key[0], view)
-        self._last = key
-        self._feed(row, max(0.0, now_s - datetime.fromisoformat(key[1]).timestamp()))
+        fleet = rt.fleet
+        for vehicle in fleet.vehicles.values():
+            name = fleet.news_name(vehicle)  # None: the single vehicle, any point
+            try:
+                row, now_s = rt.log.newest_track_point(dive, vehicle=name)
+            except LogWriteError as err:
+                logger.warning("the relayed track not read: %s", err)
+                return
+            if row is None:
+                continue
+            key = (int(row["dive"]), str(row["at"]), float(row["t_s"]))
+            last = self._last.get(name)
+            if last is not None and key[0] == last[0] and key[1:] <= last[1:]:
+                continue
+            view = self._view()
+            self.via = by or self.via or view.via or "another console"
+            self._follow(key[0], view)
+            self._last[name] = key
+            age_s = max(0.0, now_s - datetime.fromisoformat(key[1]).timestamp())
+            self._feed(row, age_s, vehicle)
 
     def _follow(self, dive: int, view: RelayView) -> None:
-        """The ship's dive becomes this console's (a new one: the hub and 3D view start
+        """The ship's dive becomes this console's (a new one: the hubs and 3D view start
         again); its datum is taken when this console has none."""
         rt = self._rt
         if rt.datum is None and view.datum_lat_deg is not None and view.datum_lon_deg is not None:
@@ -101,11 +114,14 @@ class RelayedTelemetry:
             return
         rt.dives.follow(dive)
         rt.hub.reset()
+        for vehicle in rt.fleet.vehicles.values():
+            if vehicle.hub is not rt.hub:
+                vehicle.hub.reset()
         if rt.viewer is not None:
             rt.viewer.reset_track()
         logger.info("following dive %d, as console %r writes it", dive, self.via)
 
-    def _feed(self, row: dict[str, Any], age_s: float) -> None:
+    def _feed(self, row: dict[str, Any], age_s: float, vehicle: VehicleRuntime) -> None:
         rt = self._rt
         status: dict[str, Any] = {key: row[key] for key in STATUS_NUMBERS}
         status.update({k: row[k] for k in STATUS_EXTRAS if row[k] is not None})
@@ -118,7 +134,8 @@ class RelayedTelemetry:
             )
             pose["roll_deg"] = None  # not in the track
         assert self.via is not None
-        rt.hub.set_relayed(pose, status, age_s, self.via)
+        vehicle.hub.set_relayed(pose, status, age_s, self.via)
         self.fed += 1
-        if rt.viewer is not None and pose is not None and None not in (y, z, heading):
+        drawn = rt.viewer is not None and vehicle.drawn and pose is not None
+        if drawn and rt.viewer is not None and None not in (y, z, heading):
             rt.viewer.update_pose(row["t_s"], x, y, z, 0.0, heading)

@@ -44,12 +44,14 @@ def test_a_fleet_fault_is_refused_naming_it(value: str, said: str) -> None:
     assert said in str(err.value)
 
 
-def test_a_fleet_takes_no_single_namespace_and_no_relay() -> None:
+def test_a_fleet_takes_no_single_namespace_and_may_be_relayed() -> None:
     with pytest.raises(ValidationError, match="leave vehicle_namespace empty"):
         Settings(target="tcp://127.0.0.1:9", vehicles="2", vehicle_namespace="auv1")
     url = "postgresql://u@127.0.0.1/nemesys"
-    with pytest.raises(ValidationError, match="leave vehicles empty there"):
-        Settings(vehicles="2", target="relay", database_url=url)
+    # a shore (no transmitter) with the ship's fleet: tests/backend/relay/test_relay_fleet.py
+    assert len(Settings(vehicles="2", target="relay", database_url=url).fleet) == 2
+    with pytest.raises(ValidationError, match="NEMESYS_DATABASE_URL"):
+        Settings(vehicles="2", target="relay")  # a relay needs the shared log, fleet or not
     assert len(Settings(vehicles="2").fleet) == 2  # training: the fleet simulator
 
 
