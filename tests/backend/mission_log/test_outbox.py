@@ -88,6 +88,41 @@ def test_claims_are_oldest_first_for_the_consoles_vehicles_and_decided_once(
         log.close()
 
 
+def test_a_row_for_a_vehicle_no_console_has_is_claimed_once_it_waited_never_anothers(
+    log_backend: LogBackend,
+) -> None:
+    """The ship's claim with ``foreign_after_s`` (backend/relay/ship.py): its own and "all"
+    at once; another vehicle's only once it waited that long and only if no other
+    transmitting console has it (``others``). A Surface to all keeps every record's id."""
+    log = log_backend.open()
+    try:
+        theirs, lost, everyone = put(log, "auv7"), put(log, "auv9"), put(log, "all")
+        dive = log.new_dive("sim")
+        ids = [log.insert_command(dive, command_fields())["id"] for _ in range(3)]
+        mine = ["auv1", "auv2", "all"]
+        with log.transaction():
+            got = outbox.claim(log, mine, foreign_after_s=3600, others=["auv7"])
+            assert got is not None and got[0] == everyone  # not waited long enough: ours only
+            outbox.taken(log, everyone.id, ids[0], "ship", ids)
+        with log.transaction():
+            assert outbox.claim(log, mine, foreign_after_s=3600, others=["auv7"]) is None
+        with log.transaction():
+            got = outbox.claim(log, mine, foreign_after_s=0, others=["auv7"])
+            assert got is not None and got[0] == lost  # auv7 is another console's
+            outbox.refused(log, lost.id, "ship", 422, "no vehicle 'auv9'")
+        with log.transaction():
+            assert outbox.claim(log, mine, foreign_after_s=0, others=["auv7"]) is None
+            assert outbox.claim(log, mine) is None  # without it: its vehicles only
+        with log.transaction():
+            got = outbox.claim(log, mine, foreign_after_s=0)
+            assert got is not None and got[0] == theirs  # nobody else says it has auv7
+        taken = outbox.get(log, everyone.id)
+        assert taken is not None and taken.command_id == ids[0]
+        assert taken.detail == {"commands": ids}
+    finally:
+        log.close()
+
+
 def test_transmitters_are_upserted_and_read_newest_first(log_backend: LogBackend) -> None:
     log = log_backend.open()
     try:
