@@ -13,15 +13,17 @@ plainly that this console is the only one, without buttons. Every wait is on a c
 from __future__ import annotations
 
 import re
+import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 from playwright.sync_api import Browser, Page, expect
+from playwright.sync_api import Error as PlaywrightError
 
 from bench._server import start_console
 from tests.backend.conftest import pg_server, shared_url
-from tests.frontend.conftest import START_TIMEOUT_S, TOKEN, Console, Watched
+from tests.frontend.conftest import ARTIFACTS, START_TIMEOUT_S, TOKEN, Console, Watched
 from tests.frontend.pagekit import POLL_MS, open_sized, sized_page, wait_preview
 
 __all__ = ["pg_server", "shared_url"]
@@ -131,6 +133,7 @@ def test_request_grant_send_refused_release_refuse_and_takeover_across_two_pages
         asked = ship_page.get_by_test_id(f"control-asked-{V}")
         expect(asked).to_contain_text("console shore (operator bob) asks for control")
         expect_buttons(ship_page, "grant", "refuse", "release", "takeover-allowed")
+        snapshot(ship_page, "control_request_waiting_1280x800")
 
         ship_page.get_by_test_id(f"control-grant-{V}").click()
         expect(ship_page.get_by_test_id("control-result")).to_have_text(
@@ -235,3 +238,12 @@ def test_a_single_console_on_sqlite_says_plainly_it_is_in_control(
     box = panel.bounding_box()
     assert box is not None and box["height"] < 60, f"one line, not a panel of rows: {box}"
     watched.assert_clean()
+
+
+def snapshot(page: Page, name: str) -> None:
+    """A best-effort screenshot in test-artifacts/ (the panel as the operator sees it)."""
+    ARTIFACTS.mkdir(exist_ok=True)
+    try:
+        page.screenshot(path=str(ARTIFACTS / f"{name}.png"), timeout=10_000)
+    except PlaywrightError as err:
+        warnings.warn(f"no screenshot {name}: {err}", stacklevel=1)
