@@ -14,6 +14,8 @@ import psycopg
 import pytest
 from fastapi.testclient import TestClient
 
+from backend.mission_log import outbox
+from backend.mission_log.store import MissionLog
 from codec import decode_addressed_frame
 from tests.backend.conftest import AUTH, CIRCLE, MakeClient, console_of, wait_state, wait_until
 from tests.backend.control.consoles import act
@@ -197,4 +199,40 @@ def test_a_shore_whose_fleet_the_ship_lacks_is_told_naming_the_ships_vehicles(
     assert "auv1, auv2" in message, message
     (row,) = outbox_rows(shared_url)
     assert row["state"] == "refused" and row["decided_by"] == "ship" and row["vehicle"] == "auv3"
+    assert sims.transmissions == before
+
+
+def test_a_single_vehicle_shores_row_to_a_fleet_ship_is_refused_naming_its_vehicles(
+    shared_url: str, make_client: MakeClient
+) -> None:
+    """A shore without a fleet writes rows for ``nemesys``, a vehicle the ship's fleet lacks:
+    the ship takes the row once it waited, and refuses it naming its vehicles (never left
+    waiting until the shore gives up); nothing sent."""
+    ship = make_client(console_name="ship", database_url=shared_url, vehicles="2")
+    sims = console_of(ship).fleet_sim
+    assert sims is not None
+    before = sims.transmissions
+    log = MissionLog(shared_url)
+    try:
+        log.name_console("shore")
+        row = outbox.put(
+            log,
+            console="shore",
+            operator="bob",
+            vehicle="nemesys",
+            origin="api",
+            kind="command",
+            pattern="circle",
+            params=CIRCLE,
+            override=False,
+            copies=None,
+            retry_of=None,
+        )
+        decided = wait_until(
+            lambda: (got := outbox.get(log, row.id)) is not None and got.state != "waiting" and got
+        )
+    finally:
+        log.close()
+    assert decided.state == "refused" and decided.status == 422 and decided.decided_by == "ship"
+    assert decided.reason is not None and "auv1, auv2" in decided.reason, decided.reason
     assert sims.transmissions == before
