@@ -191,9 +191,12 @@ class BeliefTracker:
             dive = rt.dive if rt.sim is not None else None
             if rt.sim is None or dive is not None:
                 vehicle = self.vehicle if rt.fleet.configured else None
+                # a console without a transmitter (relay): its commands are the records the
+                # transmitting console made of them, under that console's target
+                target = None if rt.settings.relay else cm.target
                 try:
                     newest = rt.log.commands(
-                        target=cm.target, dive=dive, vehicle=vehicle, limit=RECORDS_WINDOW
+                        target=target, dive=dive, vehicle=vehicle, limit=RECORDS_WINDOW
                     )
                     records = self._records = newest[::-1]
                 except rt.log.read_errors:  # a database out of reach: what was read last

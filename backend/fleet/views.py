@@ -4,6 +4,7 @@ answer, and the ``link`` news of ``/ws``."""
 
 from __future__ import annotations
 
+import contextlib
 from typing import TYPE_CHECKING
 
 from backend.commands.airtime import copies_out_s
@@ -77,11 +78,15 @@ def vehicle_view(console: Console, name: str | None = None) -> VehicleView:
 def _view(console: Console, v: VehicleRuntime) -> dict[str, object]:
     cm = console.commands
     a = cm.addressee(_key(console, v)) if cm is not None else None
+    last_sent = a.last_sent if a else None
+    if console.settings.relay and console.log is not None:  # sent by the transmitting console
+        with contextlib.suppress(*console.log.read_errors):  # out of reach: as known before
+            last_sent = console.log.last_sent(vehicle=_key(console, v)) or last_sent
     return {
         "pose": v.hub.pose,
         "status": v.hub.status,
         "active": a.mirror.active if a else None,
-        "last_sent": a.last_sent if a else None,
+        "last_sent": last_sent,
         "active_path": v.active_path,
         "echo_mismatch": a.mirror.echo_mismatch if a else False,
         "age_s": v.hub.age_s(),

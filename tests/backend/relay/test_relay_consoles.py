@@ -187,6 +187,29 @@ def test_a_shore_override_covers_only_the_violations_its_operator_was_shown(
     assert second["state"] == "taken" and "depth" in second["accepted"]
 
 
+def test_the_shores_belief_and_last_sent_are_its_relayed_command(
+    shared_url: str, tmp_path: Path, make_client: MakeClient
+) -> None:
+    """The shore transmits nothing itself, yet what it sent through the ship is its last sent
+    command, and once the relayed status says the vehicle runs it, the shore believes it runs
+    that record (not "a command of another station")."""
+    ship, shore = ship_and_shore(shared_url, tmp_path, make_client)
+    grant_the_shore(ship, shore)
+    r = shore.post("/api/commands", json={"pattern": "circle", "params": CIRCLE}, headers=AUTH)
+    assert r.status_code == 202, r.text
+    sent = wait_state(shore, r.json()["id"], ("acknowledged",))
+
+    def believed() -> dict[str, Any] | None:
+        view = shore.get("/api/vehicle").json()
+        command = (view.get("belief") or {}).get("command") or {}
+        return view if command.get("id") == sent["id"] else None
+
+    view = wait_until(believed, timeout_s=15.0)
+    assert view["last_sent"]["id"] == sent["id"]
+    assert view["belief"]["command"]["p"] == 1.0
+    assert f"command {sent['id']}" in view["belief"]["command"]["reason"]
+
+
 def test_surface_from_the_shore_is_sent_by_the_ship_whoever_is_in_control(
     shared_url: str, tmp_path: Path, make_client: MakeClient
 ) -> None:
