@@ -73,14 +73,7 @@ def filter_vehicle(console: Console, vehicle: str | None, where: tuple[str, ...]
     vehicle's rows (None); a name must be one of the console's vehicles (422 at ``where``
     naming them, never an empty answer for a misspelt name). Without a fleet the single
     vehicle's name stands for all rows (None)."""
-    if vehicle is None:
-        return None
-    try:
-        return console.checked_vehicle(vehicle)
-    except VehicleRefused as err:
-        raise RequestValidationError(
-            [{"type": "vehicle", "loc": where, "msg": err.message, "input": vehicle}]
-        ) from None
+    return None if vehicle is None else required_vehicle(console, vehicle, where)
 
 
 #: The largest integer SQLite stores (signed 64-bit); beyond it a query would raise
