@@ -19,8 +19,6 @@ import psycopg
 import pytest
 from fastapi.testclient import TestClient
 
-from backend.mission_log import outbox
-from backend.mission_log.store import MissionLog
 from tests.backend.conftest import (
     AUTH,
     CIRCLE,
@@ -30,6 +28,7 @@ from tests.backend.conftest import (
     wait_until,
 )
 from tests.backend.control.consoles import Page, act, order, owner
+from tests.backend.relay.rows import shore_row_decided
 
 pytestmark = pytest.mark.slow
 
@@ -252,27 +251,7 @@ def test_the_ships_gate_judges_the_console_the_command_came_from(
     )
     assert owner(ship) == ("ship", "operator")
     before = frames_at_the_vehicle(ship)
-    log = MissionLog(shared_url)
-    try:
-        log.name_console("shore")
-        row = outbox.put(
-            log,
-            console="shore",
-            operator="bob",
-            vehicle="nemesys",
-            origin="api",
-            kind="command",
-            pattern="circle",
-            params=CIRCLE,
-            override=False,
-            copies=None,
-            retry_of=None,
-        )
-        decided = wait_until(
-            lambda: (got := outbox.get(log, row.id)) is not None and got.state != "waiting" and got
-        )
-    finally:
-        log.close()
+    decided = shore_row_decided(shared_url, "nemesys")
     assert decided.state == "refused" and decided.status == 409 and decided.decided_by == "ship"
     assert decided.reason is not None
     assert "console 'ship' (operator 'operator') is in control" in decided.reason

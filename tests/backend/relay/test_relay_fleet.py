@@ -14,11 +14,10 @@ import psycopg
 import pytest
 from fastapi.testclient import TestClient
 
-from backend.mission_log import outbox
-from backend.mission_log.store import MissionLog
 from codec import decode_addressed_frame
 from tests.backend.conftest import AUTH, CIRCLE, MakeClient, console_of, wait_state, wait_until
 from tests.backend.control.consoles import act
+from tests.backend.relay.rows import shore_row_decided
 
 NAMES = ["auv1", "auv2", "auv3"]
 
@@ -212,27 +211,7 @@ def test_a_single_vehicle_shores_row_to_a_fleet_ship_is_refused_naming_its_vehic
     sims = console_of(ship).fleet_sim
     assert sims is not None
     before = sims.transmissions
-    log = MissionLog(shared_url)
-    try:
-        log.name_console("shore")
-        row = outbox.put(
-            log,
-            console="shore",
-            operator="bob",
-            vehicle="nemesys",
-            origin="api",
-            kind="command",
-            pattern="circle",
-            params=CIRCLE,
-            override=False,
-            copies=None,
-            retry_of=None,
-        )
-        decided = wait_until(
-            lambda: (got := outbox.get(log, row.id)) is not None and got.state != "waiting" and got
-        )
-    finally:
-        log.close()
+    decided = shore_row_decided(shared_url, "nemesys")
     assert decided.state == "refused" and decided.status == 422 and decided.decided_by == "ship"
     assert decided.reason is not None and "auv1, auv2" in decided.reason, decided.reason
     assert sims.transmissions == before
