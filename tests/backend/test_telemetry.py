@@ -36,26 +36,25 @@ class Page:
     async def send_text(self, data: str) -> None:
         self.texts.append(data)
 
-    def telemetry(self) -> list[dict[str, Any]]:
+    def telemetry_models(self) -> list[TelemetryMessage]:
         """Each vehicle's telemetry it got, out of its ``fleet_telemetry`` messages (each
         checked against the message's model)."""
-        out = []
-        for text in self.texts:
-            if json.loads(text)["type"] == "fleet_telemetry":
-                batch = FleetTelemetryMessage.model_validate_json(text)
-                out += [json.loads(message_json(t)) for t in batch.telemetry]
-        return out
-
-    def telemetry_models(self) -> list[TelemetryMessage]:
         return [
             t
             for text in self.texts
+            if json.loads(text)["type"] == "fleet_telemetry"
             for t in FleetTelemetryMessage.model_validate_json(text).telemetry
         ]
 
+    def telemetry(self) -> list[dict[str, Any]]:
+        """:meth:`telemetry_models` as the page reads them."""
+        return [json.loads(message_json(t)) for t in self.telemetry_models()]
 
-def test_one_serialisation_for_every_page(monkeypatch: pytest.MonkeyPatch) -> None:
-    calls: list[object] = []
+
+@pytest.fixture
+def encoded(monkeypatch: pytest.MonkeyPatch) -> list[Any]:
+    """Every message the hub serialises, in turn."""
+    calls: list[Any] = []
     real = message_json
 
     def counting(message: Any) -> str:
@@ -63,6 +62,11 @@ def test_one_serialisation_for_every_page(monkeypatch: pytest.MonkeyPatch) -> No
         return real(message)
 
     monkeypatch.setattr("backend.telemetry.message_json", counting)
+    return calls
+
+
+def test_one_serialisation_for_every_page(encoded: list[Any]) -> None:
+    calls = encoded
     # every page waits one period (0.5 s) for events, then they all want the telemetry at once
     hub = TelemetryHub(rate_hz=2.0)
     hub.set_pose(POSE)
@@ -87,18 +91,11 @@ def test_one_serialisation_for_every_page(monkeypatch: pytest.MonkeyPatch) -> No
     assert 1 <= len(calls) < len(pages) // 2
 
 
-def test_a_fleet_of_ten_serialised_once_for_twenty_pages(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_fleet_of_ten_serialised_once_for_twenty_pages(encoded: list[Any]) -> None:
     """Ten vehicles' hubs fed to the console's hub (as :class:`backend.fleet.state.Fleet`
     wires them), 20 pages: each vehicle's telemetry and each event is encoded once and the
     same text fanned out, not once a page (the fleet's cost must not grow with the pages)."""
-    calls: list[Any] = []
-    real = message_json
-
-    def counting(message: Any) -> str:
-        calls.append(message)
-        return real(message)
-
-    monkeypatch.setattr("backend.telemetry.message_json", counting)
+    calls = encoded
     names = [f"auv{i}" for i in range(1, 11)]
     hub = TelemetryHub(rate_hz=2.0)
     hub.feeds = [TelemetryHub(rate_hz=2.0, vehicle=name) for name in names]
