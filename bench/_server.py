@@ -20,6 +20,7 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TextIO
 from urllib.parse import urlsplit
 
 import httpx
@@ -166,3 +167,19 @@ def _stop(proc: subprocess.Popen[bytes], timeout_s: float) -> None:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+
+
+def shared_log_url(bench: str, out: TextIO) -> str | None:
+    """``NEMESYS_DATABASE_URL``, the PostgreSQL database the consoles of ``bench`` share; None
+    (having said on ``out`` how to give one) when it names none."""
+    from backend.mission_log.database import is_postgres_url
+
+    url = os.environ.get("NEMESYS_DATABASE_URL", "")
+    if is_postgres_url(url):
+        return url
+    out.write(
+        f"bench {bench} needs a PostgreSQL database both consoles share: set "
+        "NEMESYS_DATABASE_URL=postgresql://user:password@127.0.0.1:5432/database "
+        "(an empty one: the consoles make the tables)\n"
+    )
+    return None

@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import asyncio
 import json
-import os
 import tempfile
 import time
 from collections.abc import Sequence
@@ -34,8 +33,8 @@ from typing import TextIO
 import httpx
 from websockets.asyncio.client import ClientConnection, connect
 
-from backend.mission_log.database import is_postgres_url, masked
-from bench._server import ConsoleProcess, start_console
+from backend.mission_log.database import masked
+from bench._server import ConsoleProcess, shared_log_url, start_console
 from bench._timing import ms_cell, percentile, table, verdict
 
 TOKEN = "control-sync-bench-token-0123456789"
@@ -169,13 +168,8 @@ def met(lat: Sequence[float], missed: int) -> bool:
 
 
 def run(out: TextIO, *, quick: bool = False) -> int:
-    url = os.environ.get("NEMESYS_DATABASE_URL", "")
-    if not is_postgres_url(url):
-        out.write(
-            "bench control_sync needs a PostgreSQL database both consoles share: set "
-            "NEMESYS_DATABASE_URL=postgresql://user:password@127.0.0.1:5432/database "
-            "(an empty one: the consoles make the tables)\n"
-        )
+    url = shared_log_url("control_sync", out)
+    if url is None:
         return 2
     with tempfile.TemporaryDirectory(prefix="nemesys-sync-") as tmp:
         lat, missed, count = measure(url, QUICK_CHANGES if quick else CHANGES, Path(tmp))

@@ -23,7 +23,6 @@ to the ship, the record back).
 from __future__ import annotations
 
 import asyncio
-import os
 import random
 import tempfile
 from collections.abc import Sequence
@@ -33,8 +32,8 @@ from typing import Final, TextIO
 
 import httpx
 
-from backend.mission_log.database import is_postgres_url, masked
-from bench._server import ConsoleProcess, start_console
+from backend.mission_log.database import masked
+from bench._server import ConsoleProcess, shared_log_url, start_console
 from bench._timing import ms_cell, percentile, table, verdict
 from bench.console_send import ack_watcher
 
@@ -187,13 +186,8 @@ def met(runs: Sequence[Series]) -> bool:
 
 
 def run(out: TextIO, *, quick: bool = False) -> int:
-    url = os.environ.get("NEMESYS_DATABASE_URL", "")
-    if not is_postgres_url(url):
-        out.write(
-            "bench relay needs a PostgreSQL database both consoles share: set "
-            "NEMESYS_DATABASE_URL=postgresql://user:password@127.0.0.1:5432/database "
-            "(an empty one: the consoles make the tables)\n"
-        )
+    url = shared_log_url("relay", out)
+    if url is None:
         return 2
     with tempfile.TemporaryDirectory(prefix="nemesys-relay-") as tmp:
         runs = measure(url, QUICK_SENDS if quick else SENDS, Path(tmp))
