@@ -19,7 +19,7 @@ from typing import Any
 
 import httpx
 import pytest
-from playwright.sync_api import Browser, Page, Request, sync_playwright
+from playwright.sync_api import Browser, Page, Request, expect, sync_playwright
 from playwright.sync_api import Error as PlaywrightError
 
 from bench._gateway import FrameGateway
@@ -38,6 +38,12 @@ TOKEN = "frontend-test-token-0123456789abcdef"
 #: Chromium flags that give WebGL through SwiftShader on a machine without a GPU.
 CHROMIUM_ARGS = ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 START_TIMEOUT_S = 20.0
+#: How long an ``expect`` waits for its condition (ms), as long as the pages' actions may take
+#: (``set_default_timeout(30_000)``): Playwright's own 5 s was exceeded on this shared 2-core
+#: machine with a core kept busy (a retry's dialog waits for a fresh preview). A condition
+#: met sooner ends the wait at once.
+EXPECT_TIMEOUT_MS = 30_000
+expect.set_options(timeout=EXPECT_TIMEOUT_MS)
 
 
 def chromium_path() -> str:
