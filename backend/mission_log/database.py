@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import contextlib
 import sqlite3
+import time
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -56,6 +57,9 @@ CONNECT_TIMEOUT_S = 5
 MIGRATION_LOCK_KEY = 0x4E454D45  # "NEME"
 #: How the console names itself to the server (pg_stat_activity).
 APPLICATION_NAME = "nemesys-console"
+#: How often a new SQLite file's change to WAL mode is tried again while another connection
+#: makes it (s).
+WAL_RETRY_S = 0.005
 
 Row = Mapping[str, Any]
 
@@ -214,7 +218,7 @@ class SqliteDatabase(LogDatabase):
             str(path), timeout=busy_timeout_s, check_same_thread=False, isolation_level=None
         )
         try:
-            self._db.execute("PRAGMA journal_mode=WAL")
+            _enter_wal(self._db, busy_timeout_s)
             self._db.execute("PRAGMA synchronous=FULL")
             self._db.execute("PRAGMA foreign_keys=ON")
         except BaseException:
@@ -262,6 +266,23 @@ class SqliteDatabase(LogDatabase):
 
     def close(self) -> None:
         self._db.close()
+
+
+def _enter_wal(db: sqlite3.Connection, wait_s: float) -> None:
+    """Put the file in WAL mode (a no-op once it is). A new file's first connection changes
+    its mode under an exclusive lock, and SQLite answers another connection changing it at
+    that moment with "database is locked" at once, without its busy handler: consoles
+    opening one new log together would fail. So the change is tried again for up to
+    ``wait_s`` (s), the connection's own lock wait."""
+    deadline = time.monotonic() + wait_s
+    while True:
+        try:
+            db.execute("PRAGMA journal_mode=WAL")
+            return
+        except sqlite3.OperationalError as err:
+            if "locked" not in str(err) or time.monotonic() >= deadline:
+                raise
+        time.sleep(WAL_RETRY_S)
 
 
 class PostgresDatabase(LogDatabase):

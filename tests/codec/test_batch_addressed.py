@@ -79,6 +79,7 @@ def test_the_twin_decides_as_the_scalar_path(ber: float) -> None:
             assert result.status[i] == ACCEPTED and result.address[i] == dec.address  # type: ignore[attr-defined]
 
 
+@pytest.mark.slow
 def test_a_vehicle_never_executes_another_vehicles_frame_real_receiver() -> None:
     """10^5 frames at BER 1e-2, each through a fresh AddressedReceiver of a vehicle it is not
     for (frames to all excepted: those are every vehicle's): none accepted."""
