@@ -42,7 +42,7 @@ from typing import Any, NamedTuple
 
 from backend.clock import SYSTEM_CLOCK, Clock
 from backend.commands.airtime import IN_TURN, SURFACE_FIRST, TransmitTurns
-from backend.commands.copies import CopyPlanning, OnTheWay
+from backend.commands.copies import OnTheWay
 from backend.commands.delivery import (
     MIN_SURFACE_COPIES,
     SURFACE_DELIVERY_TARGET,
@@ -53,10 +53,11 @@ from backend.commands.delivery import (
 )
 from backend.commands.lifecycle import Event
 from backend.commands.mirror import VehicleMirror
+from backend.commands.supersede import Superseding
 from backend.commands.vehicles import ALL_VEHICLES, SINGLE_VEHICLE, Addressee
 from backend.mission_log.store import LogWriteError, MissionLog, now_iso
 from backend.telemetry import TelemetryHub
-from codec import Encoded, encode_frame
+from codec import Encoded
 from onboard.agent import command_json
 from station.link import Link
 
@@ -82,7 +83,7 @@ class FleetMember(NamedTuple):
     hub: TelemetryHub
 
 
-class CommandManager(CopyPlanning):
+class CommandManager(Superseding):
     """Owns transmissions, acknowledgements, timeouts, and each vehicle's mirror."""
 
     def __init__(
@@ -284,21 +285,11 @@ class CommandManager(CopyPlanning):
         """Deliver the new records ``ids`` (id -> vehicle), one frame for them all (``to_all``:
         a Surface to all), after ending what they supersede (see the module's doc)."""
         newest = {name: cid for cid, name in ids.items()}
-        first = next(iter(self.vehicles))
-        for d in self._deliveries():
-            for cid in self._carries(d):
-                name = self._vehicle_of.get(cid, first)
-                if to_all or name in newest:
-                    by = newest.get(name, min(ids))
-                    self._end(
-                        cid,
-                        Event.SUPERSEDED,
-                        "sent",
-                        reason=f"superseded by command {by}",
-                        superseded_by=by,
-                    )
-            if d.to_all and self._carries(d):
-                self._split(d, f"command {min(ids)} went to {', '.join(newest)}")
+        self._supersede(
+            lambda name: newest.get(name, min(ids)) if to_all or name in newest else None,
+            "",
+            f"command {min(ids)} went to {', '.join(newest)}",
+        )
         self._vehicle_of.update(ids)
         members = {}
         for cid in ids:
@@ -322,36 +313,10 @@ class CommandManager(CopyPlanning):
         )
         for cid in ids:
             self._live[cid] = d
-        d.task = asyncio.create_task(self._deliver(d), name=f"command {min(ids)}")
+        self._start(d)
 
-    def _split(self, d: Delivery, why: str) -> None:
-        """A Surface to all whose frame must not reach one vehicle any more (it was sent a
-        newer command): its other records go on each alone, addressed to its own vehicle,
-        with the copies the Surface had left."""
-        if d.task is not None and d.task is not asyncio.current_task():
-            d.task.cancel()
-        for cid in self._carries(d):
-            v = self.vehicles[self._vehicle_of[cid]]
-            alone = Delivery(
-                cid,
-                encode_frame(d.enc.command, address=v.address),
-                d.kind,
-                d.members[cid],
-                None if d.copies is None else max(1, d.copies - d.tried),
-                d.interval_s,
-                d.ber,
-                d.loss,
-                members={cid: d.members[cid]},
-                next_s=d.next_s,
-            )
-            self._live[cid] = alone
-            self._update(
-                cid,
-                reason=f"the Surface to all goes on addressed to {v.name} alone "
-                f"({why}): frame {alone.enc.frame.hex}",
-            )
-            logger.info("command %s: the Surface to all goes on addressed to %s", cid, v.name)
-            alone.task = asyncio.create_task(self._deliver(alone), name=f"command {cid}")
+    def _start(self, d: Delivery) -> None:
+        d.task = asyncio.create_task(self._deliver(d), name=f"command {d.command_id}")
 
     async def _deliver(self, d: Delivery) -> None:
         while d.more():

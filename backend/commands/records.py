@@ -77,23 +77,6 @@ class CommandRecords:
             return
         self._update(command_id, state=state, **fields)
 
-    def superseded_elsewhere(self, by: int, console: str | None) -> list[int]:
-        """Another console sharing the log wrote command ``by`` (a Surface from anyone, or a
-        command of the console now in control): the one rule across consoles, every older
-        command of this one whose copies are still going out ends ``superseded`` by it, and
-        none of their frames leaves after; returns their ids (LogWriteError: not all were
-        written)."""
-        stopped = [cid for cid in self._live if cid < by]
-        for cid in stopped:
-            self._end(
-                cid,
-                Event.SUPERSEDED,
-                "sent",
-                reason=f"superseded by command {by} from console {console!r}",
-                superseded_by=by,
-            )
-        return stopped
-
     def _update(self, command_id: int, **fields: Any) -> dict[str, Any]:
         record = self.log.update_command(command_id, **fields)
         self._announce(record)

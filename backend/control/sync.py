@@ -35,7 +35,7 @@ from typing import Any, Final
 
 from backend.clock import CONSOLE_UTC
 from backend.commands.health import MissionLogReach
-from backend.commands.records import CommandRecords
+from backend.commands.supersede import Superseding
 from backend.control.desk import ControlDesk
 from backend.messages import CommandMessage, EventMessage
 from backend.mission_log.command_rows import command_row
@@ -62,7 +62,7 @@ class LogSync:
         log: MissionLog,
         hub: TelemetryHub,
         desk: ControlDesk,
-        commands: CommandRecords,
+        commands: Superseding,
         *,
         on_reach: Callable[[], None] = lambda: None,
     ) -> None:
@@ -167,7 +167,7 @@ class LogSync:
         if record.id in self._seen:
             return
         self._seen.append(record.id)
-        stopped = self.commands.superseded_elsewhere(record.id, record.console)
+        stopped = self.commands.superseded_elsewhere(record.id, record.console, record.vehicle)
         if stopped:
             logger.warning(
                 "commands %s superseded by command %s of console %r",

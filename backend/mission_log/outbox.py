@@ -148,12 +148,24 @@ def claim(
 
 
 def taken(
-    log: MissionLog, row_id: int, command_id: int, by: str, commands: Sequence[int] = ()
+    log: MissionLog,
+    row_id: int,
+    command_id: int,
+    by: str,
+    commands: Sequence[int] = (),
+    handed_on: Sequence[int] = (),
 ) -> None:
     """The row is sent as command ``command_id`` (in the claim's transaction). ``commands``:
     every record it made when more than one (a fleet's Surface to all: one per vehicle, the
-    first ``command_id``), kept in ``detail`` as ``{"commands": [ids]}``."""
-    more = {"detail": json.dumps({"commands": list(commands)})} if len(commands) > 1 else {}
+    first ``command_id``), kept in ``detail`` as ``{"commands": [ids]}``; ``handed_on``: the
+    rows it wrote for other transmitting consoles' vehicles (a Surface to all), kept as
+    ``{"handed_on": [row ids]}``."""
+    said: dict[str, list[int]] = {}
+    if len(commands) > 1:
+        said["commands"] = list(commands)
+    if handed_on:
+        said["handed_on"] = list(handed_on)
+    more = {"detail": json.dumps(said)} if said else {}
     _decide(log, row_id, "taken", by, command_id=command_id, **more)
 
 

@@ -31,10 +31,12 @@ a transmitter, with its link's health and its vehicles, for the relaying console
 ("relay via ...").
 
 The rows it claims are its vehicles', ``"all"`` (a fleet's Surface to all: one frame to
-address 0, one record per vehicle, all their ids kept on the row), and, once a row waited
-:data:`FOREIGN_AFTER_S`, any other vehicle's that no other transmitting console seen lately
-says it has: checked here as any row, the service refuses it naming this console's vehicles
-(a relaying console with another fleet is told so, never left to time out).
+address 0, one record per vehicle, all their ids kept on the row; and, for the vehicles other
+transmitting consoles seen lately have, one waiting Surface row each, written in the same
+transaction, so a Surface to all from a relaying console reaches every ship's vehicles),
+and, once a row waited :data:`FOREIGN_AFTER_S`, any other vehicle's that no other transmitting
+console seen lately says it has: checked here as any row, the service refuses it naming this
+console's vehicles (a relaying console with another fleet is told so, never left to time out).
 """
 
 from __future__ import annotations
@@ -213,8 +215,14 @@ class RelayWorker:
             decision = await self._decide(row, now_s - row.created_s)
             if decision.state == "taken":
                 assert decision.command_id is not None
+                handed = self._hand_on(row, others) if row.vehicle == ALL_VEHICLES else ()
                 outbox.taken(
-                    self.log, row.id, decision.command_id, self.console, decision.command_ids
+                    self.log,
+                    row.id,
+                    decision.command_id,
+                    self.console,
+                    decision.command_ids,
+                    handed_on=handed,
                 )
             else:
                 assert decision.status is not None and decision.reason is not None
@@ -234,6 +242,28 @@ class RelayWorker:
         else:
             logger.info("outbox row %d sent as command %s", row.id, decision.command_id)
         return decision
+
+    def _hand_on(self, row: OutboxRow, others: tuple[str, ...]) -> tuple[int, ...]:
+        """A Surface to all reaches the vehicles of every transmitting console, not only this
+        one's: one waiting row per vehicle the others have (:meth:`others`), as the relaying
+        console asked it, written in this transaction; each is taken by the console that has
+        that vehicle. Returns the rows' ids."""
+        return tuple(
+            outbox.put(
+                self.log,
+                console=row.console,
+                operator=row.operator,
+                vehicle=name,
+                origin=row.origin,
+                kind=row.kind,
+                pattern=row.pattern,
+                params=row.params,
+                override=False,
+                copies=row.copies,
+                retry_of=None,
+            ).id
+            for name in others
+        )
 
     async def _decide(self, row: OutboxRow, age_s: float) -> Decision:
         """The row through this console's command service (no yield to the event loop: the

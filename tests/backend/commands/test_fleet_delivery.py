@@ -231,6 +231,62 @@ def test_a_command_after_surface_to_all_splits_it_and_never_follows_an_address_0
     run(tmp_path, ONE_WAY, scenario)
 
 
+#: A command another console sharing the log wrote (its id: after every one of this console's).
+ELSEWHERE = 10_000
+
+
+def test_another_consoles_command_supersedes_only_that_vehicles_commands_here(
+    tmp_path: Path,
+) -> None:
+    """Two transmitting consoles on one log (backend.control.sync): another console's command
+    to auv2 ends this console's auv2 command, not auv1's nor auv3's."""
+
+    async def scenario(rig: FleetRig) -> None:
+        running = {n: await rig.send(n, "circle", CIRCLE, copies=10) for n in NAMES}
+        await rig.until(lambda: len(rig.link.frames) >= 3)
+        stopped = rig.cm.superseded_elsewhere(ELSEWHERE, "ship_b", "auv2")
+        assert stopped == [running["auv2"]["id"]]
+        record = rig.log.command(running["auv2"]["id"])
+        assert record is not None and record["state"] == "superseded"
+        assert record["superseded_by"] == ELSEWHERE and "console 'ship_b'" in record["reason"]
+        sent = len(rig.link.frames)
+        await rig.until(
+            lambda: all(rig.state(running[n]["id"]) == "sent" for n in ("auv1", "auv3"))
+        )
+        assert [f for f in rig.wire()[sent:] if f[1] == 2] == []  # nothing more to auv2
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_another_consoles_command_splits_a_surface_to_all_here(tmp_path: Path) -> None:
+    async def scenario(rig: FleetRig) -> None:
+        records = await rig.surface("all")
+        await rig.until(lambda: len(rig.link.frames) >= 1)
+        sent = len(rig.link.frames)
+        rig.cm.superseded_elsewhere(ELSEWHERE, "ship_b", "auv1")
+        await rig.until(lambda: all(rig.state(r["id"]) in FINAL for r in records))
+        states = {r["vehicle"]: rig.state(r["id"]) for r in records}
+        assert states == {"auv1": "superseded", "auv2": "sent", "auv3": "sent"}
+        later = rig.wire()[sent:]
+        assert later and {f[1] for f in later} == {2, 3}  # each alone: no address 0, none to 1
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
+def test_another_consoles_command_without_a_vehicle_supersedes_every_command_here(
+    tmp_path: Path,
+) -> None:
+    """A console without a fleet names no vehicle: as before, it supersedes everything."""
+
+    async def scenario(rig: FleetRig) -> None:
+        running = [await rig.send(n, "circle", CIRCLE, copies=10) for n in NAMES]
+        await rig.until(lambda: len(rig.link.frames) >= 3)
+        stopped = rig.cm.superseded_elsewhere(ELSEWHERE, "other", None)
+        assert sorted(stopped) == sorted(r["id"] for r in running)
+
+    run(tmp_path, ONE_WAY, scenario)
+
+
 def test_surface_goes_ahead_of_every_copy_waiting_for_the_transmitter(tmp_path: Path) -> None:
     async def scenario(rig: FleetRig) -> None:
         gate = asyncio.Event()

@@ -7,6 +7,7 @@ PostgreSQL; every wait is on a condition."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 from typing import Any
 
@@ -215,3 +216,85 @@ def test_a_single_vehicle_shores_row_to_a_fleet_ship_is_refused_naming_its_vehic
     assert decided.state == "refused" and decided.status == 422 and decided.decided_by == "ship"
     assert decided.reason is not None and "auv1, auv2" in decided.reason, decided.reason
     assert sims.transmissions == before
+
+
+def test_a_shores_surface_all_reaches_every_transmitting_consoles_vehicles(
+    shared_url: str, tmp_path: Path, make_client: MakeClient
+) -> None:
+    """Two ships, each holding a transmitter to its own vehicles (auv1 and auv2; auv3): the
+    shore's Surface to all is taken by one, which surfaces its own vehicles with one address-0
+    frame and hands one Surface row per vehicle of the other on; the other sends each. Every
+    vehicle surfaces, each record ending acknowledged."""
+    two = '[{"name": "auv1", "address": 1}, {"name": "auv2", "address": 2}]'
+    ship_a, shore = ship_and_shore(shared_url, tmp_path, make_client, two, "3")
+    ship_b = make_client(
+        db_path=tmp_path / "ship_b.sqlite3",
+        console_name="ship_b",
+        operator="carol",
+        vehicles='[{"name": "auv3", "address": 3}]',
+        database_url=shared_url,
+        control_timeout_s=5.0,
+    )
+    sims = {"ship": console_of(ship_a).fleet_sim, "ship_b": console_of(ship_b).fleet_sim}
+    assert sims["ship"] is not None and sims["ship_b"] is not None
+
+    # both ships say they hold a transmitter, with their vehicles
+    def beating() -> bool:
+        with psycopg.connect(shared_url) as pg:
+            said = pg.execute("SELECT console, health FROM transmitters").fetchall()
+        return {c: json.loads(h)["vehicles"] for c, h in said} == {
+            "ship": ["auv1", "auv2"],
+            "ship_b": ["auv3"],
+        }
+
+    wait_until(beating, timeout_s=30, what="both ships' transmitters on the log")
+    wait_until(
+        lambda: all(v["pose"] and v["link"]["acknowledges"] for v in vehicles(ship_b).values()),
+        timeout_s=30,
+        what="ship_b's vehicle heard, two-way",
+    )
+
+    r = shore.post("/api/surface", json={"vehicle": "all"}, headers=AUTH)
+    assert r.status_code == 202, r.text
+    taken = outbox_rows(shared_url)[0]
+    assert taken["vehicle"] == "all" and taken["state"] == "taken"
+    first, other = (
+        (sims["ship"], sims["ship_b"])
+        if taken["decided_by"] == "ship"
+        else (
+            sims["ship_b"],
+            sims["ship"],
+        )
+    )
+    assert first is not None and other is not None
+
+    def decided() -> list[dict[str, Any]] | None:
+        rows = outbox_rows(shared_url)[1:]
+        return rows if rows and all(row["state"] != "waiting" for row in rows) else None
+
+    handed = wait_until(decided, timeout_s=30, what="the handed-on rows decided")
+    handed_names = sorted(row["vehicle"] for row in handed)
+    assert [row["id"] for row in handed] == json.loads(taken["detail"])["handed_on"]
+    assert all(row["state"] == "taken" and row["pattern"] == "surface" for row in handed), handed
+    assert all(row["decided_by"] != taken["decided_by"] for row in handed)
+    assert handed_names == (["auv3"] if taken["decided_by"] == "ship" else ["auv1", "auv2"])
+
+    # every vehicle's Surface record, from the shore's operator, ends acknowledged
+    ids = [int(taken["command_id"]), *(int(row["command_id"]) for row in handed)]
+    if isinstance(extra := json.loads(taken["detail"]).get("commands"), list):
+        ids = [*extra, *(int(row["command_id"]) for row in handed)]
+    ended = [wait_state(shore, i, ("acknowledged",), timeout_s=30) for i in ids]
+    assert sorted(c["vehicle"] for c in ended) == NAMES
+    assert all(c["pattern"] == "surface" and c["operator"] == "bob" for c in ended)
+    assert all(c["origin"] == "relay:shore" for c in ended)
+
+    def surfacing() -> bool:
+        flying = [
+            sim.sim(name).agent.active
+            for sim, names in ((sims["ship"], ("auv1", "auv2")), (sims["ship_b"], ("auv3",)))
+            if sim is not None
+            for name in names
+        ]
+        return len(flying) == 3 and all(a is not None and a.pattern == "surface" for a in flying)
+
+    wait_until(surfacing, timeout_s=30, what="all three vehicles surfacing")
