@@ -52,7 +52,7 @@ def link_health(console: Console, name: str | None = None) -> LinkHealth:
         console.ber_choice.copies_from,
         datum_problem=console.datum_watch.problem(console.datum),
         mission_log=console.control.mission_log() if console.control else None,
-        relay=console.relay.view() if console.relay else None,
+        relay=console.relay.view(key) if console.relay else None,
         vehicle=key,
     )
 

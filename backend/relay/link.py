@@ -13,14 +13,16 @@ With a fleet (``NEMESYS_VEHICLES``, the same as the transmitting console's) the 
 :class:`station.link_fleet.FleetLink` of the one :class:`RelayLink` and a
 :class:`RelayVehicleLink` per vehicle (:func:`relay_fleet_link`): each reports "relay via" that
 console, and a vehicle it does not say it has is not connected, its problem naming the
-vehicles it has (a command to it would be refused there, naming them too).
+vehicles it has (a command to it would be refused there, naming them too). With several
+transmitting consoles (two ships, each with its own vehicles), each vehicle's link is the one
+that says it has that vehicle.
 """
 
 from __future__ import annotations
 
 import logging
 import time
-from typing import Final
+from typing import Final, NoReturn
 
 from backend.mission_log import outbox
 from backend.mission_log.store import LogWriteError, MissionLog
@@ -56,26 +58,39 @@ class RelayLink(Link):
         super().__init__(RELAY_TARGET)
         self.fleet = fleet
         self._log: MissionLog | None = None
-        self._view = RelayView()
+        #: Every transmitting console as last read (newest first), each as shown.
+        self._views: list[RelayView] = []
         self._read_at: float | None = None
         self._problem: str | None = None
 
     def attach(self, log: MissionLog) -> None:
         self._log = log
 
-    def view(self) -> RelayView:
-        """The transmitting console as last read (read again when older than
-        :data:`READ_EVERY_S`)."""
+    def _read(self) -> list[RelayView]:
+        """The transmitting consoles as last read (read again when older than
+        :data:`READ_EVERY_S`; a log out of reach: the last ones, no longer fresh)."""
         now = time.monotonic()
         if self._log is not None and (self._read_at is None or now - self._read_at > READ_EVERY_S):
             self._read_at = now
             try:
-                self._view = view_of(*outbox.transmitters(self._log))
+                found, now_s = outbox.transmitters(self._log)
+                self._views = [view_of([t], now_s) for t in found]
                 self._problem = None
-            except LogWriteError as err:  # the last view, no longer known to be fresh
-                self._view = self._view.model_copy(update={"fresh": False})
+            except LogWriteError as err:
+                self._views = [v.model_copy(update={"fresh": False}) for v in self._views]
                 self._problem = f"the transmitting consoles cannot be read: {err.reason}"
-        return self._view
+        return self._views
+
+    def view(self, vehicle: str | None = None) -> RelayView:
+        """The transmitting console this console's commands go through: to ``vehicle``, the
+        one that says it has it (the freshest of them), else, and for the link as a whole,
+        the one seen most recently. Several ships on one log each take their own vehicles'."""
+        views = self._read()
+        if vehicle is not None:
+            having = [v for v in views if v.vehicles is not None and vehicle in v.vehicles]
+            if having:
+                return next((v for v in having if v.fresh), having[0])
+        return views[0] if views else RelayView()
 
     @property
     def connected(self) -> bool:
@@ -83,15 +98,7 @@ class RelayLink(Link):
 
     @property
     def connection_problem(self) -> str | None:
-        v = self.view()
-        if v.fresh:
-            return None
-        if self._problem is not None:
-            return self._problem
-        if v.via is None:
-            return "no console holding the transmitter is on the mission log"
-        age = v.seen_age_s or 0.0
-        return f"console {v.via!r}, holding the transmitter, last seen {age:.0f} s ago"
+        return self.problem_of()
 
     @connection_problem.setter
     def connection_problem(self, value: str | None) -> None:
@@ -99,21 +106,26 @@ class RelayLink(Link):
 
     @property
     def capability(self) -> Capability:
-        v = self.view()
-        return v.capability if v.fresh and v.capability is not None else Capability.UNKNOWN
+        return self.capability_of()
 
     @capability.setter
     def capability(self, value: Capability) -> None:
         """The base class sets it at construction; this link's is the transmitting
         console's."""
 
+    def capability_of(self, vehicle: str | None = None) -> Capability:
+        """What the console taking commands (to ``vehicle``: :meth:`view`) hears back."""
+        v = self.view(vehicle)
+        return v.capability if v.fresh and v.capability is not None else Capability.UNKNOWN
+
     async def transmit(self, frame: Frame) -> str | None:
         return NO_TRANSMITTER
 
     def lacks(self, vehicle: str) -> str | None:
         """Why the transmitting console will refuse commands to ``vehicle`` (it said which
-        vehicles it has, and this is not one); None: it has it, or has not said."""
-        v = self.view()
+        vehicles it has, and this is not one; several: none of them has it); None: one has
+        it, or has not said."""
+        v = self.view(vehicle)
         if v.vehicles is None or vehicle in v.vehicles:
             return None
         return (
@@ -121,6 +133,19 @@ class RelayLink(Link):
             f"vehicles: {', '.join(v.vehicles)}): commands to it are refused there; give this "
             "console the same fleet (NEMESYS_VEHICLES)"
         )
+
+    def problem_of(self, vehicle: str | None = None) -> str | None:
+        """Why the console taking commands (to ``vehicle``: :meth:`view`) does not now; None:
+        it does."""
+        v = self.view(vehicle)
+        if v.fresh:
+            return None if vehicle is None else self.lacks(vehicle)
+        if self._problem is not None:
+            return self._problem
+        if v.via is None:
+            return "no console holding the transmitter is on the mission log"
+        age = v.seen_age_s or 0.0
+        return f"console {v.via!r}, holding the transmitter, last seen {age:.0f} s ago"
 
     async def test(self) -> list[LinkCheck]:
         self._read_at = None  # read now
@@ -157,15 +182,23 @@ class RelayVehicleLink(SharedTransmitter):
 
     @property
     def connected(self) -> bool:
-        return self.relay.connected and self.relay.lacks(self.name) is None
+        return self.relay.problem_of(self.name) is None
 
     @property
     def connection_problem(self) -> str | None:
-        return self.relay.connection_problem or self.relay.lacks(self.name)
+        return self.relay.problem_of(self.name)
 
     @connection_problem.setter
     def connection_problem(self, value: str | None) -> None:
         """Set by the base class's constructor only: the relay's are the ones read."""
+
+    @property
+    def capability(self) -> Capability:
+        return self.relay.capability_of(self.name)
+
+    @capability.setter
+    def capability(self, value: Capability) -> NoReturn:
+        raise AttributeError("a relayed vehicle has its transmitting console's capability")
 
 
 def relay_fleet_link(vehicles: tuple[FleetVehicle, ...]) -> FleetLink:

@@ -95,12 +95,13 @@ class RelayRuntime:
         said = h.model_dump(include=set(keys), mode="json")
         return {**said, "datum": datum, "vehicles": self._rt.fleet.names}
 
-    def view(self) -> RelayView | None:
-        """What the page shows of the relay (None: this console holds a transmitter)."""
+    def view(self, vehicle: str | None = None) -> RelayView | None:
+        """What the page shows of the relay (to a fleet's ``vehicle``: the console that has
+        it); None: this console holds a transmitter."""
         if self.link is None:
             return None
-        via = None if self.telemetry is None else self.telemetry.via
-        return self.link.view().model_copy(update={"telemetry_via": via})
+        via = None if self.telemetry is None else self.telemetry.via_of(vehicle)
+        return self.link.view(vehicle).model_copy(update={"telemetry_via": via})
 
     async def stop(self) -> None:
         if self._task is not None:

@@ -63,11 +63,15 @@ class RelayedTelemetry:
     shared log (the module's doc); ``view``: the relay as last read (the transmitting
     console's name and datum)."""
 
-    def __init__(self, rt: Console, view: Callable[[], RelayView]) -> None:
+    def __init__(self, rt: Console, view: Callable[[str | None], RelayView]) -> None:
         self._rt = rt
         self._view = view
         #: The console the last point came through (None: none read yet).
         self.via: str | None = None
+        #: The console each vehicle's last point came through (None: the single vehicle).
+        self._via: dict[str | None, str] = {}
+        #: The newest dive followed (None: none yet).
+        self._followed: int | None = None
         #: The last point fed, by vehicle (None: the single vehicle): (dive, its arrival
         #: stamp, its time on the vehicle's clock).
         self._last: dict[str | None, tuple[int, str, float]] = {}
@@ -96,22 +100,33 @@ class RelayedTelemetry:
             last = self._last.get(name)
             if last is not None and key[0] == last[0] and key[1:] <= last[1:]:
                 continue
-            view = self._view()
-            self.via = by or self.via or view.via or "another console"
+            view = self._view(name)
+            self.via = by or self._via.get(name) or view.via or "another console"
+            self._via[name] = self.via
             self._follow(key[0], view)
             self._last[name] = key
             age_s = max(0.0, now_s - datetime.fromisoformat(key[1]).timestamp())
             self._feed(row, age_s, vehicle)
 
+    def via_of(self, vehicle: str | None) -> str | None:
+        """The console vehicle ``vehicle``'s last point came through (None: the single
+        vehicle's, or the last point's of any)."""
+        return self._via.get(vehicle, self.via)
+
     def _follow(self, dive: int, view: RelayView) -> None:
-        """The ship's dive becomes this console's (a new one: the hubs and 3D view start
-        again); its datum is taken when this console has none."""
+        """The ship's dive becomes this console's when it is newer (a new one: the hubs and
+        3D view start again; two ships each write their own dive, and the points of the
+        older still show, without going back to it); its datum is taken when this console
+        has none."""
         rt = self._rt
         if rt.datum is None and view.datum_lat_deg is not None and view.datum_lon_deg is not None:
             rt.datum = Datum(view.datum_lat_deg, view.datum_lon_deg)
             logger.info("the datum of console %r taken: %s", view.via, rt.datum)
         if rt.dives is None or rt.dives.current == dive:
             return
+        if self._followed is not None and dive < self._followed:
+            return
+        self._followed = dive
         rt.dives.follow(dive)
         rt.hub.reset()
         for vehicle in rt.fleet.vehicles.values():

@@ -222,9 +222,10 @@ def test_a_shores_surface_all_reaches_every_transmitting_consoles_vehicles(
     shared_url: str, tmp_path: Path, make_client: MakeClient
 ) -> None:
     """Two ships, each holding a transmitter to its own vehicles (auv1 and auv2; auv3): the
-    shore's Surface to all is taken by one, which surfaces its own vehicles with one address-0
-    frame and hands one Surface row per vehicle of the other on; the other sends each. Every
-    vehicle surfaces, each record ending acknowledged."""
+    shore shows each vehicle through its own ship (link and track). Its Surface to all is
+    taken by one ship, which surfaces its own vehicles with one address-0 frame and hands one
+    Surface row per vehicle of the other on; the other sends each. Every vehicle surfaces,
+    each record ending acknowledged."""
     two = '[{"name": "auv1", "address": 1}, {"name": "auv2", "address": 2}]'
     ship_a, shore = ship_and_shore(shared_url, tmp_path, make_client, two, "3")
     ship_b = make_client(
@@ -253,6 +254,25 @@ def test_a_shores_surface_all_reaches_every_transmitting_consoles_vehicles(
         timeout_s=30,
         what="ship_b's vehicle heard, two-way",
     )
+
+    # the shore: each vehicle connected through its own ship, shown from that ship's track
+    ships = {"auv1": "ship", "auv2": "ship", "auv3": "ship_b"}
+
+    def each_via_its_ship() -> bool:
+        views = vehicles(shore)
+        shown = all(v["link"]["connected"] and v["pose"] for v in views.values())
+        via = {
+            n: (v["link"]["relay"]["via"], v["link"]["relay"]["telemetry_via"])
+            for n, v in views.items()
+        }
+        return shown and via == {n: (s, s) for n, s in ships.items()}
+
+    wait_until(each_via_its_ship, timeout_s=30, what="each vehicle relayed via its own ship")
+    assert [v["link"]["relay"]["vehicles"] for v in vehicles(shore).values()] == [
+        ["auv1", "auv2"],
+        ["auv1", "auv2"],
+        ["auv3"],
+    ]
 
     r = shore.post("/api/surface", json={"vehicle": "all"}, headers=AUTH)
     assert r.status_code == 202, r.text
