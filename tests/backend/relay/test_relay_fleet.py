@@ -43,6 +43,15 @@ def outbox_rows(url: str) -> list[dict[str, Any]]:
         return list(cur.execute("SELECT * FROM outbox ORDER BY id").fetchall())
 
 
+def heard_two_way(ship: TestClient) -> None:
+    """Wait until every vehicle of a training ship is heard, two-way."""
+    wait_until(
+        lambda: all(v["pose"] and v["link"]["acknowledges"] for v in vehicles(ship).values()),
+        timeout_s=30,
+        what="the ship's vehicles heard, two-way",
+    )
+
+
 def ship_and_shore(
     shared_url: str, tmp_path: Path, make_client: MakeClient, ship_fleet: str, shore_fleet: str
 ) -> tuple[TestClient, TestClient]:
@@ -56,11 +65,7 @@ def ship_and_shore(
         vehicles=ship_fleet,
         **common,
     )
-    wait_until(
-        lambda: all(v["pose"] and v["link"]["acknowledges"] for v in vehicles(ship).values()),
-        timeout_s=30,
-        what="the ship's vehicles heard, two-way",
-    )
+    heard_two_way(ship)
     shore = make_client(
         db_path=tmp_path / "shore.sqlite3",
         console_name="shore",
@@ -249,11 +254,7 @@ def test_a_shores_surface_all_reaches_every_transmitting_consoles_vehicles(
         }
 
     wait_until(beating, timeout_s=30, what="both ships' transmitters on the log")
-    wait_until(
-        lambda: all(v["pose"] and v["link"]["acknowledges"] for v in vehicles(ship_b).values()),
-        timeout_s=30,
-        what="ship_b's vehicle heard, two-way",
-    )
+    heard_two_way(ship_b)
 
     # the shore: each vehicle connected through its own ship, shown from that ship's track
     ships = {"auv1": "ship", "auv2": "ship", "auv3": "ship_b"}
