@@ -215,6 +215,8 @@ def test_a_killed_console_interrupts_and_retries_on_restart(
     assert done["state"] == "sent", done
     assert done["attempts"] == 2 and done["copies_sent"] == 2
     assert done["reason"] is None and done["hex"] == cmd["hex"]
-    # the listener got the retry's two copies on the restarted console's connection
+    # the listener got the retry's two copies on the restarted console's connection (the
+    # record counts a copy once the console wrote it; the listener's thread reads it after)
     assert listener.connections == 2 and not listener.rejected
+    wait_until(lambda: len(listener.frames(1)) >= 2, what="the retry's two copies received")
     assert listener.frames(1) == [cmd["hex"]] * 2
