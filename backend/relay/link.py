@@ -94,7 +94,7 @@ class RelayLink(Link):
 
     @property
     def connected(self) -> bool:
-        return self.view().fresh
+        return self.problem_of() is None
 
     @property
     def connection_problem(self) -> str | None:
