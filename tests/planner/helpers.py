@@ -294,11 +294,14 @@ def check_timing(p: Plan, cmd: Command) -> None:
             assert dz / dt == pytest.approx(rate, rel=1e-6), f"slowed for nothing at {i}"
     if name not in ("hover", "surface"):
         # the depth ramp runs while the vehicle moves: it may finish in place only at the
-        # end of a finite path, never by stopping in the middle of one
+        # end of a finite path, never by stopping in the middle of one (a segment shorter
+        # than TOL flown at the cruise speed is a tiny step, not a stop: a vehicle 1e-6 m
+        # off the commanded depth ramps it in a 1e-6 m chord)
         stops = [
             (i, round(path.times[i + 1] - path.times[i], 3))
             for i in range(len(path) - 1)
             if horizontal(path, i) < TOL
+            and path.speeds[i] < cruise * (1 - 1e-9)
             and path.times[i + 1] > path.times[i]
             and (i < len(path) - 2 or path.loop_start is not None)
         ]

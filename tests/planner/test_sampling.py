@@ -11,7 +11,7 @@ import itertools
 import math
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from codec import Command, ParamValue
@@ -176,6 +176,14 @@ def round_commands(draw: st.DrawFn) -> Command:
     y=st.floats(-50, 50),
     z=st.floats(0, 20),
     heading=st.floats(0, 360, exclude_max=True),
+)
+# found by the sweep: 1e-6 m off the commanded depth, ramped in a 1e-6 m chord at cruise speed
+@example(
+    cmd=command("circle", speed=0.05, depth=0, radius=1, direction="cw"),
+    x=0.0,
+    y=1.0,
+    z=1e-6,
+    heading=0.0,
 )
 @pytest.mark.slow  # a randomized sweep, ~3 s
 def test_chord_bound_random(cmd: Command, x: float, y: float, z: float, heading: float) -> None:
